@@ -1,0 +1,63 @@
+"""The named physical quantities a spec may set: one name per quantity, its SI unit,
+its allowed range, and how it is written in equations.
+
+The same name is used in spec files, ``--set name=value``, Python keywords and the
+attributes of result files (see DESIGN.md, "Names"). Ranges are physical plausibility
+bounds; a value outside them is rejected with a message naming the field and the range.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A named runtime parameter of a model."""
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    latex: str
+    meaning: str
+    low_inclusive: bool = True
+
+    def range_text(self) -> str:
+        left = "[" if self.low_inclusive else "("
+        return f"{left}{self.low:g}, {self.high:g}] {self.unit}"
+
+    def contains(self, value: float) -> bool:
+        above = value >= self.low if self.low_inclusive else value > self.low
+        return above and value <= self.high
+
+
+QUANTITIES: dict[str, Quantity] = {
+    q.name: q
+    for q in (
+        Quantity("speed_rpm", "rpm", 0.0, 1.0e6, r"n", "shaft speed (rpm; ω = π n / 30 rad/s)"),
+        Quantity("rotor_mass", "kg", 0.0, 1.0e5, r"M_R", "rotor mass carried by the bearing",
+                 low_inclusive=False),
+        Quantity("contact_stiffness", "N/m^1.5", 0.0, 1.0e13, r"k",
+                 "Hertz load-deflection constant, ball and both races combined",
+                 low_inclusive=False),
+        Quantity("damping", "N*s/m", 0.0, 1.0e7, r"c", "viscous damping of the rotor"),
+        Quantity("radial_clearance", "m", -1.0e-3, 1.0e-3, r"\gamma_0",
+                 "radial internal clearance (negative: preload)"),
+        Quantity("radial_load", "N", -1.0e7, 1.0e7, r"P_r",
+                 "constant radial load, acting in +x"),
+        Quantity("unbalance_force", "N", 0.0, 1.0e7, r"P_u", "unbalance force amplitude"),
+        Quantity("inner_race_diameter", "m", 0.0, 10.0, r"D_i", "inner race (groove) diameter",
+                 low_inclusive=False),
+        Quantity("outer_race_diameter", "m", 0.0, 10.0, r"D_o", "outer race (groove) diameter",
+                 low_inclusive=False),
+        Quantity("pitch_diameter", "m", 0.0, 10.0, r"D_m", "pitch circle diameter",
+                 low_inclusive=False),
+        Quantity("ball_diameter", "m", 0.0, 1.0, r"D_b", "ball diameter", low_inclusive=False),
+        Quantity("ball_density", "kg/m^3", 0.0, 1.0e5, r"\rho_b", "ball material density",
+                 low_inclusive=False),
+    )
+}
+
+RPM_TO_RAD_PER_S = "pi/30"
+"""Factor from rpm to rad/s, as written into the equations (ω = π n / 30)."""

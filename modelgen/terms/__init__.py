@@ -1,0 +1,15 @@
+"""Force terms, one module per physical term. ``TERMS`` maps a spec's ``kind`` to its class."""
+
+from modelgen.terms.base import Term
+from modelgen.terms.centrifugal import Centrifugal
+from modelgen.terms.contact import HertzContact
+from modelgen.terms.damping import ViscousDamping
+from modelgen.terms.loads import RadialLoad, Unbalance
+
+TERM_CLASSES: tuple[type[Term], ...] = (
+    HertzContact, Centrifugal, ViscousDamping, RadialLoad, Unbalance,
+)
+TERMS: dict[str, type[Term]] = {cls.model_fields["kind"].default: cls for cls in TERM_CLASSES}
+
+__all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "HertzContact", "RadialLoad", "Term",
+           "Unbalance", "ViscousDamping"]

@@ -1,0 +1,31 @@
+"""External loads on the rotor: constant radial load and rotating unbalance (paper Eq. 11-12)."""
+
+from __future__ import annotations
+
+from typing import ClassVar, Literal
+
+import sympy as sp
+
+from modelgen.symbols import Context
+from modelgen.terms.base import Term
+
+
+class RadialLoad(Term):
+    kind: Literal["radial_load"] = "radial_load"
+
+    needs: ClassVar[tuple[str, ...]] = ("radial_load",)
+    summary: ClassVar[str] = "constant radial load P_r in +x"
+
+    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+        return (ctx.p("radial_load"), sp.Integer(0))
+
+
+class Unbalance(Term):
+    kind: Literal["unbalance"] = "unbalance"
+
+    needs: ClassVar[tuple[str, ...]] = ("unbalance_force", "speed_rpm")
+    summary: ClassVar[str] = "rotating unbalance P_u·(cos ωt, sin ωt)"
+
+    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+        p_u, wt = ctx.p("unbalance_force"), ctx.omega * ctx.t
+        return (p_u * sp.cos(wt), p_u * sp.sin(wt))
