@@ -20,6 +20,7 @@ import tempfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import ClassVar
 
 import casadi
 import sympy as sp
@@ -32,14 +33,20 @@ from modelgen.spec import N_BALLS_RANGE, Spec, load_spec, spec_hash
 from modelgen.symbols import Context
 
 RUNTIME_TEMPLATE = "runtime.py.tmpl"
-PACKAGE_DOC = '"""Generated rotor-bearing models: output of bearingdyn modelgen, never edited by hand.\n\nRegenerate with `bearingdyn generate`; check with `bearingdyn generate --check`.\n"""\n'
+PACKAGE_DOC = (
+    '"""Generated rotor-bearing models: output of bearingdyn modelgen, never edited by hand.'
+    "\n\nRegenerate with `bearingdyn generate`; check with `bearingdyn generate --check`."
+    '\n"""\n'
+)
 
 
 class CasadiPrinter(StrPrinter):
     """Prints SymPy expressions as Python code over ``ca`` (CasADi) and ``math``."""
 
-    _functions = {"sin": "ca.sin", "cos": "ca.cos", "exp": "ca.exp", "tan": "ca.tan",
-                  "Abs": "ca.fabs", "log": "ca.log", "tanh": "ca.tanh"}
+    _functions: ClassVar[dict[str, str]] = {
+        "sin": "ca.sin", "cos": "ca.cos", "exp": "ca.exp", "tan": "ca.tan",
+        "Abs": "ca.fabs", "log": "ca.log", "tanh": "ca.tanh",
+    }
 
     def _print_Function(self, expr: sp.Function) -> str:
         name = type(expr).__name__
@@ -152,6 +159,9 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
                + (", hertz15\n" if "hertz15(" in code else "\n")]
     params = "".join(f"    ({name!r}, {par.value!r}, {par.unit!r}, {par.source!r}),\n"
                      for name, par in spec.parameters.items())
+    ranges = "".join(
+        f"    {name!r}: ({q.low!r}, {q.high!r}, {q.low_inclusive!r}),\n"
+        for name, q in ((n, QUANTITIES[n]) for n in spec.parameters))
     terms = "".join(f"    {t.describe()!r},\n" for t in spec.terms)
     constants = [
         f"NAME = {spec.model.name!r}",
@@ -165,6 +175,7 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
         f"SIMULATION = {spec.simulation.model_dump()!r}",
         f"TERMS = (\n{terms})",
         f"PARAMETERS = (\n    # name, default value, unit, source\n{params})",
+        f"RANGES = {{\n    # name: (low, high, low inclusive); high is inclusive\n{ranges}}}",
     ]
     header = "\n".join(_header_lines(spec, digest, spec_file))
     return (f'"""{spec.model.title}\n\n{header}\n"""\n\n' + "".join(imports) + "\n"

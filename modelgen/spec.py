@@ -158,12 +158,29 @@ def _format_error(err: dict[str, Any]) -> str:
         return f"{loc}: missing required field"
     if kind == "value_error":
         return msg.removeprefix("Value error, ")
-    ctx = err.get("ctx") or {}
-    bounds = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}",
-              "less_than": "< {lt}", "less_than_equal": "<= {le}"}
-    if kind in bounds:
-        return f"{loc}: must be {bounds[kind].format(**ctx)}, got {err.get('input')!r}"
+    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+        return f"{loc}: must be in {_field_range(err['loc'])}, got {err.get('input')!r}"
     return f"{loc}: {msg}" + (f", got {err.get('input')!r}" if "input" in err else "")
+
+
+FIELD_UNITS = {"simulation": "s", "structure": ""}
+"""Units of the bounded fields of each section (simulation times in s)."""
+
+
+def _field_range(loc: tuple) -> str:
+    """'[low, high] unit' of a bounded field, from the schema's own constraints."""
+    section = {"simulation": SimulationDefaults, "structure": Structure}.get(str(loc[0]))
+    info = section.model_fields.get(str(loc[-1])) if section else None
+    low, high, left, right = "-inf", "inf", "(", ")"
+    for rule in info.metadata if info else ():
+        for attr, bracket in (("gt", "("), ("ge", "[")):
+            if getattr(rule, attr, None) is not None:
+                low, left = f"{getattr(rule, attr):g}", bracket
+        for attr, bracket in (("lt", ")"), ("le", "]")):
+            if getattr(rule, attr, None) is not None:
+                high, right = f"{getattr(rule, attr):g}", bracket
+    unit = FIELD_UNITS.get(str(loc[0]), "")
+    return f"{left}{low}, {high}{right}" + (f" {unit}" if unit else "")
 
 
 def _is_union_tag(part: Any) -> bool:

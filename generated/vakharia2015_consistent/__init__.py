@@ -44,6 +44,21 @@ PARAMETERS = (
     ('ball_diameter', 0.004762, 'm', 'paper Table 1'),
     ('ball_density', 7850.0, 'kg/m^3', 'textbook value for bearing steel'),
 )
+RANGES = {
+    # name: (low, high, low inclusive); high is inclusive
+    'speed_rpm': (0.0, 1000000.0, True),
+    'rotor_mass': (0.0, 100000.0, False),
+    'contact_stiffness': (0.0, 10000000000000.0, False),
+    'damping': (0.0, 10000000.0, True),
+    'radial_clearance': (-0.001, 0.001, True),
+    'radial_load': (-10000000.0, 10000000.0, True),
+    'unbalance_force': (0.0, 10000000.0, True),
+    'inner_race_diameter': (0.0, 10.0, False),
+    'outer_race_diameter': (0.0, 10.0, False),
+    'pitch_diameter': (0.0, 10.0, False),
+    'ball_diameter': (0.0, 1.0, False),
+    'ball_density': (0.0, 100000.0, False),
+}
 
 
 def ball_load(c, s, x, y, vx, vy, t, p):

@@ -1,0 +1,17 @@
+"""Errors the user can act on. The CLI prints their message (exit code 2), no traceback."""
+
+
+class BearingdynError(Exception):
+    """Base class of every error bearingdyn reports to the user."""
+
+
+class InputError(BearingdynError, ValueError):
+    """A value given by the user is outside what the model or method allows."""
+
+
+class StaleModelError(BearingdynError):
+    """A generated model does not match its spec any more."""
+
+
+class SimulationError(BearingdynError):
+    """A numerical run failed (blow-up, solver failure)."""

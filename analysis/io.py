@@ -1,0 +1,57 @@
+"""Result files: netCDF (HDF5 via h5netcdf), written atomically and read with clear errors."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import xarray as xr
+
+from analysis.errors import InputError
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it to ``path``.
+
+    A crash mid-write leaves at most a ``.tmp`` file, never a half-written result under the
+    final name.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise InputError(f"output: folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK):
+        raise InputError(f"output: folder '{folder}' is not writable")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
+    """Write ``ds`` to netCDF-4 at ``path`` atomically."""
+    return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"))
+
+
+def load_dataset(path: str | Path) -> xr.Dataset:
+    """Read a result file written by bearingdyn, or raise ``InputError`` saying why not."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"result file: '{path}' does not exist")
+    try:
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            data = ds.load()
+    except Exception as exc:  # h5py/h5netcdf raise many types for a damaged file
+        raise InputError(f"result file: '{path}' is not a readable netCDF file ({exc})") from None
+    missing = [v for v in ("x", "y", "vx", "vy") if v not in data]
+    if "t" not in data.coords or missing:
+        raise InputError(f"result file: '{path}' is not a bearingdyn run "
+                         f"(missing {', '.join(missing) or 't'})")
+    return data

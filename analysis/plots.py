@@ -1,0 +1,105 @@
+"""Matplotlib figures. Functions return figures; saving is the caller's business."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import xarray as xr
+from matplotlib.figure import Figure
+
+from analysis.poincare import poincare_section, section_period
+from analysis.spectrum import Peak, amplitude_spectrum, find_peaks
+
+MICRO = 1e6
+AXIS_NAMES = {"x": ("x", "vx", "X direction"), "y": ("y", "vy", "Y direction")}
+
+
+def display_label(label: str) -> str:
+    """A peak label for print: unicode minus (VC−X)."""
+    return label.replace("-", "\u2212")
+
+
+def _title(ds: xr.Dataset) -> str:
+    return (f"{ds.attrs.get('model', '?')}, $N_b$ = {ds.attrs.get('n_balls', '?')}, "
+            f"{ds.attrs.get('speed_rpm', float('nan')):g} rpm "
+            f"(X = {ds.attrs.get('shaft_hz', float('nan')):.2f} Hz, "
+            f"VC = {ds.attrs.get('vc_hz', float('nan')):.2f} Hz)")
+
+
+def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
+                  f_max: float | None = None) -> None:
+    """Amplitude spectrum of ``var`` (µm) on a log scale, labelled peaks marked."""
+    spec = amplitude_spectrum(ds, var)
+    peaks = find_peaks(ds, var) if peaks is None else peaks
+    f_max = f_max or 2.5 * (ds.attrs["vc_hz"] + ds.attrs["shaft_hz"])
+    sel = spec.sel(frequency=slice(0, f_max))
+    ax.semilogy(sel.frequency, sel * MICRO, lw=0.8, color="C0")
+    for peak in peaks:
+        if peak.frequency_hz > f_max:
+            continue
+        if not peak.label:  # broadband or unnamed: marked, not labelled
+            ax.plot(peak.frequency_hz, peak.amplitude * MICRO, "v", color="0.5", ms=3)
+            continue
+        ax.plot(peak.frequency_hz, peak.amplitude * MICRO, "v", color="C3", ms=4)
+        ax.annotate(display_label(peak.label), (peak.frequency_hz, peak.amplitude * MICRO),
+                    xytext=(0, 4), textcoords="offset points", ha="center", fontsize=7)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel(f"amplitude of {var} (µm)")
+    ax.set_xlim(0, f_max)
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft") -> None:
+    """Stroboscopic Poincaré map: displacement (µm) against velocity (mm/s)."""
+    pts = poincare_section(ds, section)
+    pos, vel, _ = AXIS_NAMES[var]
+    ax.plot(pts[pos] * MICRO, pts[vel] * 1e3, ".", ms=2.5, color="C2")
+    period = section_period(ds, section)
+    ax.set_xlabel(f"{pos} (µm)")
+    ax.set_ylabel(f"{vel} (mm/s)")
+    ax.set_title(f"Poincaré map, {section} section (every {period * 1e3:.3f} ms), "
+                 f"{pts.sizes['k']} points", fontsize=8)
+    ax.grid(True, alpha=0.3)
+
+
+def paper_figure(ds: xr.Dataset, section: str = "shaft") -> Figure:
+    """The paper's Figs. 2-6: spectrum and Poincaré map, X direction (a) and Y (b)."""
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), layout="constrained")
+    for row, var in enumerate(("x", "y")):
+        plot_spectrum(axes[row, 0], ds, var)
+        axes[row, 0].set_title(f"({'ab'[row]}) {AXIS_NAMES[var][2]}: FFT", fontsize=9)
+        plot_poincare(axes[row, 1], ds, var, section)
+    fig.suptitle(_title(ds), fontsize=10)
+    return fig
+
+
+def spectrum_figure(ds: xr.Dataset) -> Figure:
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), layout="constrained")
+    for ax, var in zip(axes, ("x", "y"), strict=True):
+        plot_spectrum(ax, ds, var)
+        ax.set_title(AXIS_NAMES[var][2], fontsize=9)
+    fig.suptitle(_title(ds), fontsize=10)
+    return fig
+
+
+def poincare_figure(ds: xr.Dataset, section: str = "shaft") -> Figure:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), layout="constrained")
+    for ax, var in zip(axes, ("x", "y"), strict=True):
+        plot_poincare(ax, ds, var, section)
+    fig.suptitle(_title(ds), fontsize=10)
+    return fig
+
+
+def save_figure(fig: Figure, path) -> None:
+    """Render ``fig`` to a file (PNG by suffix) and release it."""
+    from analysis.io import atomic_write
+
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=130, format=str(path).rsplit(".", 1)[-1]))
+    plt.close(fig)
+
+
+__all__ = ["display_label", "paper_figure", "plot_poincare", "plot_spectrum",
+           "poincare_figure", "save_figure", "spectrum_figure"]

@@ -1,0 +1,221 @@
+"""Amplitude spectra of simulated responses and their labelled peaks.
+
+A simulation result is an ``xarray.Dataset`` on a uniform time coordinate ``t`` (s) with the
+displacements ``x``, ``y`` (m) and velocities ``vx``, ``vy`` (m/s); its attrs carry the shaft
+frequency ``shaft_hz`` (X) and the varying-compliance frequency ``vc_hz`` (VC), both in Hz.
+Spectral peaks are named as combinations m·X + n·VC ("X", "VC-X", "2VC+X", ...).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.signal
+import xarray as xr
+
+from analysis.errors import InputError
+
+_DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
+
+# A peak must rise above the higher of its two bases by at least this fraction of the height
+# threshold (``min_relative_height`` × largest amplitude): it rejects ripples on the flank of a
+# larger peak while keeping small lines that stand clear of the surrounding spectrum.
+_PROMINENCE_FRACTION = 0.5
+
+# Lower bound of the Hann window's scalloping factor (worst case half a bin: 0.849).
+_SCALLOPING_BOUND = 0.84
+
+# Frequency tolerance of the labels, in frequency bins 1/(N·dt).
+_LABEL_TOLERANCE_BINS = 1.5
+
+
+def _time_step(ds: xr.Dataset) -> float:
+    """The uniform time step of ``ds.t`` (s); raises InputError if ``t`` is not uniform."""
+    t = np.asarray(ds["t"].values, dtype=float)
+    if t.size < 3:
+        raise InputError(f"t: need at least 3 time samples, got {t.size}")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    if not dt > 0 or not np.allclose(np.diff(t), dt, rtol=1e-6, atol=0.0):
+        raise InputError("t: time samples must be increasing and uniformly spaced")
+    return float(dt)
+
+
+def _units(ds: xr.Dataset, var: str) -> str:
+    return str(ds[var].attrs.get("units", _DEFAULT_UNITS.get(var, "")))
+
+
+def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> xr.DataArray:
+    """Single-sided amplitude spectrum of ``ds[var]`` (unit of the variable: m or m/s).
+
+    The mean is removed and the record multiplied by ``scipy.signal.get_window(window, N)``
+    (periodic form). The magnitude of the real FFT is scaled by 2 / sum(window), so that a
+    sinusoid of amplitude A at a bin frequency shows a peak of height A (between bins the
+    window's scalloping loss lowers it, by up to 15 % for Hann). The DC and Nyquist bins are not
+    doubled. Coordinate ``frequency`` in Hz, bin width 1/(N·dt).
+    """
+    if var not in ds.data_vars:
+        raise InputError(f"var: no variable '{var}' in the dataset; "
+                         f"variables: {', '.join(map(str, ds.data_vars))}")
+    dt = _time_step(ds)
+    values = np.asarray(ds[var].values, dtype=float)
+    n = values.size
+    w = scipy.signal.get_window(window, n)
+    amplitude = 2.0 * np.abs(np.fft.rfft((values - values.mean()) * w)) / w.sum()
+    amplitude[0] /= 2.0
+    if n % 2 == 0:
+        amplitude[-1] /= 2.0
+    frequency = np.fft.rfftfreq(n, d=dt)
+    attrs = dict(ds.attrs)
+    attrs.update(units=_units(ds, var), window=str(window))
+    return xr.DataArray(
+        amplitude,
+        dims="frequency",
+        coords={"frequency": ("frequency", frequency, {"units": "Hz"})},
+        name=f"{var}_amplitude",
+        attrs=attrs,
+    )
+
+
+def _combination_label(m: int, n: int) -> str:
+    shaft = "X" if abs(m) == 1 else f"{abs(m)}X"
+    if n == 0:
+        return shaft
+    vc = "VC" if n == 1 else f"{n}VC"
+    if m == 0:
+        return vc
+    return f"{vc}{'+' if m > 0 else '-'}{shaft}"
+
+
+def label_frequency(f_hz: float, shaft_hz: float, vc_hz: float, tol_hz: float,
+                    max_shaft_order: int = 4,
+                    max_vc_order: int = 3) -> tuple[str, int, int] | None:
+    """Name ``f_hz`` (Hz) as the combination m·X + n·VC within ``tol_hz`` (Hz).
+
+    Candidates have integers |m| <= ``max_shaft_order``, 0 <= n <= ``max_vc_order``, (m, n) not
+    both zero and a positive combination frequency (so no "-X"). Among the candidates within
+    the tolerance the lowest order |m| + n wins, ties go to the smallest distance |f - f_mn|.
+    Returns ``(label, m, n)`` with an ASCII label such as "X", "2X", "VC", "VC-2X", "2VC+X",
+    or None when no candidate is within the tolerance.
+    """
+    best: tuple[tuple[int, float, int, int], str, int, int] | None = None
+    for n in range(max_vc_order + 1):
+        for m in range(-max_shaft_order, max_shaft_order + 1):
+            combination = m * shaft_hz + n * vc_hz
+            if combination <= 0:
+                continue
+            distance = abs(f_hz - combination)
+            if distance > tol_hz:
+                continue
+            key = (abs(m) + n, distance, n, abs(m))
+            if best is None or key < best[0]:
+                best = (key, _combination_label(m, n), m, n)
+    return None if best is None else best[1:]
+
+
+@dataclass(frozen=True)
+class Peak:
+    """A spectral line: ``direction`` is the variable ("x" or "y"), ``frequency_hz`` in Hz,
+    ``amplitude`` in the variable's unit (m for x, y), and its combination label m·X + n·VC
+    (``shaft_order`` m, ``vc_order`` n; all None when unlabelled)."""
+
+    direction: str
+    frequency_hz: float
+    amplitude: float
+    label: str | None
+    shaft_order: int | None
+    vc_order: int | None
+
+    def as_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def find_peaks(ds: xr.Dataset, var: str = "x", max_peaks: int = 8,
+               min_relative_height: float = 0.02) -> list[Peak]:
+    """The ``max_peaks`` largest peaks of the Hann amplitude spectrum of ``ds[var]``.
+
+    Peaks come from ``scipy.signal.find_peaks`` on the spectrum without its DC bin, with height
+    >= ``min_relative_height`` × the largest amplitude and a prominence of at least half that
+    height threshold. Each peak frequency is refined by fitting a parabola to the logarithm of
+    the amplitude in the three bins around the maximum (Gaussian interpolation,
+    f = (k + p)·df with p = (a - c) / (2 (a - 2b + c)), a, b, c the log-amplitudes of bins
+    k-1, k, k+1; bias below 0.02 bin for Hann). The amplitude (unit of the variable) is the
+    window-corrected magnitude of the windowed record's Fourier transform evaluated at that
+    refined frequency, so it is free of the window's scalloping loss between bins.
+    Peaks are labelled with :func:`label_frequency` (``shaft_hz`` and ``vc_hz`` from
+    ``ds.attrs``, tolerance 1.5 bins) and returned by descending amplitude.
+    """
+    if isinstance(max_peaks, bool) or not isinstance(max_peaks, (int, np.integer)) \
+            or max_peaks < 1:
+        raise InputError(f"max_peaks: must be an integer >= 1, got {max_peaks!r}")
+    if not 0 < min_relative_height <= 1:
+        raise InputError(f"min_relative_height: must be in (0, 1], got {min_relative_height!r}")
+    for key in ("shaft_hz", "vc_hz"):
+        if key not in ds.attrs:
+            raise InputError(f"{key}: missing from the dataset attrs")
+    spectrum = amplitude_spectrum(ds, var)
+    amplitude = spectrum.values
+    df = float(spectrum["frequency"].values[1])
+    search = amplitude[1:]
+    largest = float(search.max())
+    if not largest > 0:
+        return []
+    threshold = min_relative_height * largest
+    found, properties = scipy.signal.find_peaks(
+        search, height=threshold, prominence=_PROMINENCE_FRACTION * threshold)
+    if found.size == 0:
+        return []
+    # Only peaks that can rank among the ``max_peaks`` largest after refinement: the refined
+    # amplitude is at most 1/0.85 of the highest bin (Hann scalloping loss <= 1.42 dB).
+    heights = properties["peak_heights"]
+    if found.size > max_peaks:
+        cut = np.sort(heights)[-max_peaks]
+        found = found[heights >= _SCALLOPING_BOUND * cut]
+    k = found + 1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b, c = (np.log(amplitude[k + shift]) for shift in (-1, 0, 1))
+        offset = 0.5 * (a - c) / (a - 2.0 * b + c)
+    offset = np.where(np.isfinite(offset) & (np.abs(offset) <= 0.5), offset, 0.0)
+    frequency = (k + offset) * df
+    refined = _amplitude_at(ds, var, frequency)
+
+    order = np.argsort(-refined, kind="stable")[:max_peaks]
+    shaft_hz = float(ds.attrs["shaft_hz"])
+    vc_hz = float(ds.attrs["vc_hz"])
+    peaks = []
+    for i in order:
+        named = label_frequency(float(frequency[i]), shaft_hz, vc_hz,
+                                tol_hz=_LABEL_TOLERANCE_BINS * df)
+        label, m, n = named if named is not None else (None, None, None)
+        peaks.append(Peak(direction=var, frequency_hz=float(frequency[i]),
+                          amplitude=float(refined[i]), label=label, shaft_order=m,
+                          vc_order=n))
+    return peaks
+
+
+def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray:
+    """Window-corrected amplitude of the Hann-windowed, mean-free ``ds[var]`` at each
+    ``frequency`` (Hz): 2·|Σ w_j x_j exp(-2πi f j dt)| / Σ w_j."""
+    dt = _time_step(ds)
+    values = np.asarray(ds[var].values, dtype=float)
+    w = scipy.signal.get_window("hann", values.size)
+    weighted = (values - values.mean()) * w
+    j = np.arange(values.size)
+    return np.array([2.0 * abs(np.dot(weighted, np.exp(-2j * np.pi * f * dt * j))) / w.sum()
+                     for f in frequency])
+
+
+def peak_table(ds: xr.Dataset, directions: tuple[str, ...] = ("x", "y"),
+               **kwargs: Any) -> list[Peak]:
+    """:func:`find_peaks` for each variable in ``directions``, concatenated in that order."""
+    return [peak for var in directions for peak in find_peaks(ds, var, **kwargs)]
+
+
+def major_peak(ds: xr.Dataset, var: str = "x") -> Peak:
+    """The largest peak of the amplitude spectrum of ``ds[var]``."""
+    peaks = find_peaks(ds, var, max_peaks=1)
+    if not peaks:
+        raise InputError(f"{var}: the spectrum has no peak (constant signal?)")
+    return peaks[0]

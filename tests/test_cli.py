@@ -1,0 +1,97 @@
+"""The real ``bearingdyn`` command, run as a user runs it (subprocess, files on disk)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import xarray as xr
+
+from analysis.io import load_dataset
+
+
+@pytest.mark.parametrize(("args", "field", "allowed"), [
+    (["simulate", "vakharia2015", "-o", "r.nc", "--n-balls", "2"], "n_balls", "[3, 64]"),
+    (["simulate", "vakharia2015", "-o", "r.nc", "--dt", "0"], "dt", "> 0"),
+    (["simulate", "vakharia2015", "-o", "r.nc", "--set", "rotor_mass=-1"], "rotor_mass",
+     "(0, 100000] kg"),
+    (["simulate", "vakharia2015", "-o", "r.nc", "--set", "dampign=1"], "dampign",
+     "did you mean 'damping'"),
+    (["simulate", "vakharia2015", "-o", "r.nc", "--speed-rpm", "-5"], "speed_rpm",
+     "[0, 1e+06] rpm"),
+    (["simulate", "no-such-model", "-o", "r.nc"], "model", "available:"),
+    (["spectrum", "missing.nc"], "result file", "does not exist"),
+])
+def test_bad_input_is_one_clear_line(cli, tmp_path, args, field, allowed):
+    res = cli(*args, cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert "Traceback" not in res.stderr
+    line = res.stderr.strip()
+    assert line.startswith("error: ") and "\n" not in line
+    assert field in line and allowed in line
+    assert not (tmp_path / "r.nc").exists()
+
+
+def test_bad_spec_is_one_clear_line(cli, tmp_path):
+    from tests.conftest import SPECS
+
+    text = (SPECS / "vakharia2015.toml").read_text().replace('kind = "unbalance"',
+                                                            'kind = "unbalanse"')
+    spec = tmp_path / "vakharia2015.toml"
+    spec.write_text(text)
+    res = cli("generate", str(spec), "--out", str(tmp_path / "gen"))
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "terms.4.kind: unknown term 'unbalanse' (did you mean 'unbalance'?)" in res.stderr
+
+
+def test_debug_shows_the_traceback(cli, tmp_path):
+    res = cli("--debug", "simulate", "vakharia2015", "-o", "r.nc", "--n-balls", "2",
+              cwd=tmp_path)
+    assert res.returncode != 0 and "Traceback" in res.stderr
+
+
+def test_generate_check_passes_on_committed_tree(cli):
+    res = cli("generate", "--check")
+    assert res.returncode == 0, res.stderr
+    assert "matches its specs" in res.stdout
+
+
+def test_simulate_spectrum_poincare_round_trip(cli, tmp_path):
+    res = cli("simulate", "vakharia2015", "--n-balls", "6", "--duration", "1.2",
+              "--transient", "0.2", "-o", "run.nc", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    ds = load_dataset(tmp_path / "run.nc")
+    assert ds.attrs["n_balls"] == 6 and ds.sizes["t"] == 100001
+    assert not list(tmp_path.glob(".*.tmp")), "no temporary file left behind"
+
+    res = cli("spectrum", "run.nc", "--json", "-o", "spec.png", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    report = json.loads(res.stdout)
+    labels = {p["label"] for p in report["peaks"] if p["direction"] == "x"}
+    assert {"X", "VC"} <= labels
+    assert (tmp_path / "spec.png").read_bytes()[:4] == b"\x89PNG"
+
+    res = cli("poincare", "run.nc", "--section", "cage", "-o", "poin.png", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "points on the cage section" in res.stdout
+    assert (tmp_path / "poin.png").stat().st_size > 10_000
+
+
+def test_models_lists_the_shipped_models(cli):
+    res = cli("models")
+    assert res.returncode == 0
+    for name in ("vakharia2015", "vakharia2015-consistent", "balanced-rotor"):
+        assert name in res.stdout
+
+
+def test_run_writes_the_paper_case(cli, tmp_path):
+    res = cli("run", "-o", "out", "--n-balls", "6", "--n-balls", "10", "--duration", "0.7",
+              "--transient", "0.2", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    out = tmp_path / "out"
+    for nb in (6, 10):
+        assert (out / f"nb{nb}.png").read_bytes()[:4] == b"\x89PNG"
+        assert xr.open_dataset(out / f"nb{nb}.nc", engine="h5netcdf").attrs["n_balls"] == nb
+    table = (out / "peaks.md").read_text()
+    assert "| 6 | 199.3 |" in table and "| 10 | 332.2 |" in table
+    assert json.loads((out / "peaks.json").read_text())[0]["n_balls"] == 6
