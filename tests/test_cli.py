@@ -95,3 +95,16 @@ def test_run_writes_the_paper_case(cli, tmp_path):
     table = (out / "peaks.md").read_text()
     assert "| 6 | 199.3 |" in table and "| 10 | 332.2 |" in table
     assert json.loads((out / "peaks.json").read_text())[0]["n_balls"] == 6
+
+
+def test_atomic_write_follows_the_umask(tmp_path):
+    import os
+
+    from analysis.io import atomic_write
+
+    target = atomic_write(tmp_path / "a.txt", lambda tmp: tmp.write_text("done"))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert target.read_text() == "done"
+    assert target.stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
