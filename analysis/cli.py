@@ -28,7 +28,7 @@ def reports_errors(command):
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
-        from modelgen.spec import SpecError
+        from modelgen.errors import SpecError
 
         try:
             return command(*args, **kwargs)

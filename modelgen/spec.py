@@ -17,6 +17,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from modelgen.errors import SpecError
 from modelgen.quantities import QUANTITIES
 from modelgen.terms import TERM_CLASSES, TERMS, HertzContact
 
@@ -24,15 +25,7 @@ N_BALLS_RANGE = (3, 64)
 """Allowed number of balls (inclusive)."""
 
 SPEC_DIR = "specs"
-
-
-class SpecError(ValueError):
-    """A spec could not be loaded; ``problems`` lists one message per bad field."""
-
-    def __init__(self, source: str, problems: list[str]):
-        self.source = source
-        self.problems = problems
-        super().__init__(f"{source}: " + "; ".join(problems))
+__all__ = ["N_BALLS_RANGE", "Spec", "SpecError", "load_spec", "parse_spec", "spec_hash"]
 
 
 class _Strict(BaseModel):

@@ -56,3 +56,18 @@ def test_static_ball_load_matches_hertz():
     args = list(values.values())
     assert f(1.0, 0.0, 12e-6, 0.0, *args) == pytest.approx(7.055e9 * (2e-6) ** 1.5)
     assert f(np.cos(1.0), np.sin(1.0), 12e-6, 0.0, *args) == 0.0
+
+
+def test_harris_force_matches_harris_empirical_formula():
+    """½ m_b D_m ω_cage² (our term) vs Harris' steel formula 2.26e-11·D³·d_m·n_m² (mm, rpm)."""
+    from modelgen.terms.centrifugal import harris_force
+
+    spec = load_spec("vakharia2015-consistent")[0]
+    eq = assemble(spec)
+    p = spec.parameter_values()
+    ours = float(harris_force(eq.ctx).subs({eq.ctx.p(n): v for n, v in p.items()}))
+    cage_rpm = p["speed_rpm"] * p["inner_race_diameter"] / (
+        p["inner_race_diameter"] + p["outer_race_diameter"])
+    empirical = 2.26e-11 * (p["ball_diameter"] * 1e3) ** 3 * p["pitch_diameter"] * 1e3 \
+        * cage_rpm**2
+    assert ours == pytest.approx(empirical, rel=5e-3)

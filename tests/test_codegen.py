@@ -90,3 +90,21 @@ def test_jacobian_is_finite_where_a_ball_leaves_contact():
     zs = ca.SX.sym("z", 4)
     hess = ca.Function("h", [zs], [ca.jacobian(funcs.jac(0.0, zs, p)[2, 0], zs)])
     assert np.all(np.isfinite(np.asarray(hess(z))))
+
+
+def test_generated_models_run_without_sympy():
+    """The import walls: a generated model and the analysis layer never load SymPy or
+    modelgen's internals (the bare ``modelgen`` package only locates the spec files)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "from analysis import simulate, find_peaks\n"
+            "ds = simulate('vakharia2015', 6, duration=0.05, transient=0.0)\n"
+            "find_peaks(ds, 'x')\n"
+            "bad = [m for m in sys.modules if m.split('.')[0] == 'sympy'\n"
+            "       or m.startswith('modelgen.')]  # the bare package locates spec files\n"
+            "print(bad)\n"
+            "assert not bad, bad\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr + res.stdout
