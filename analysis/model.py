@@ -36,7 +36,7 @@ class Frequencies:
         return {"shaft_hz": self.shaft_hz, "cage_hz": self.cage_hz, "vc_hz": self.vc_hz}
 
 
-@dataclass
+@dataclass(eq=False)  # compared and hashed by identity: load_model caches one per name
 class Model:
     """A generated model with its parameter table (defaults in SI units, speed in rpm)."""
 

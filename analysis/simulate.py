@@ -23,7 +23,8 @@ Method = Literal["rk4", "cvodes"]
 CHUNK_STEPS = 20_000
 """RK4 steps per call into CasADi: bounds memory and lets blow-ups stop a run early."""
 BLOW_UP_FACTOR = 1000.0
-"""A displacement beyond this many clearances (or 1 mm without clearance) is a blow-up."""
+"""A displacement beyond this many clearances is a blow-up (models without a clearance are
+only checked for non-finite states)."""
 RK4_STABILITY_LIMIT = 2.785
 """|λ|·Δt at which classical RK4 stops being stable on the imaginary axis (2√2)."""
 
@@ -96,7 +97,8 @@ def simulate(
     n_saved = n_steps // save_every
     times = np.arange(n_saved + 1) * (save_every * dt)
     p = model.parameter_vector(values)
-    limit = BLOW_UP_FACTOR * max(abs(values.get("radial_clearance", 0.0)), 1e-6)
+    clearance = abs(values.get("radial_clearance", 0.0))
+    limit = BLOW_UP_FACTOR * clearance if clearance > 0 else np.inf  # else: non-finite only
     if method == "rk4":
         states = _run_rk4(model, n, p, z0, dt, save_every, n_saved, limit)
     elif method == "cvodes":

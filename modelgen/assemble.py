@@ -129,8 +129,13 @@ def ball_load(spec: Spec, ctx: Context, skip: type | None = None) -> sp.Expr:
 def assemble(spec: Spec, display: bool = False) -> Equations:
     """Build the symbolic equations of ``spec``. ``display`` keeps ω and ω_cage as symbols."""
     ctx = make_context(list(spec.parameters), display=display)
-    contact: HertzContact = spec.contact()
-    ctx.omega_cage = sp.Symbol("omega_cage", real=True) if display else contact.cage_speed(ctx)
+    contact = spec.contact()
+    if contact is None:
+        ctx.omega_cage = sp.Integer(0)  # no balls
+    elif display:
+        ctx.omega_cage = sp.Symbol("omega_cage", real=True)
+    else:
+        ctx.omega_cage = contact.cage_speed(ctx)
     return Equations(spec=spec, ctx=ctx)
 
 
@@ -144,6 +149,9 @@ def latex_equations(spec: Spec) -> list[str]:
     fx, fy = eq.rotor_force
     tex = lambda e: sp.latex(e, symbol_names=names)  # noqa: E731
     full = assemble(spec)
+    if spec.contact() is None:
+        return [rf"M_R \ddot{{x}} = {tex(fx)}", rf"M_R \ddot{{y}} = {tex(fy)}",
+                r"\omega = \frac{\pi}{30}\, n \quad (n = \text{speed\_rpm})"]
     return [
         rf"M_R \ddot{{x}} = {tex(fx)} - \sum_{{i=1}}^{{N_b}} Q_i \cos\theta_i",
         rf"M_R \ddot{{y}} = {tex(fy)} - \sum_{{i=1}}^{{N_b}} Q_i \sin\theta_i",

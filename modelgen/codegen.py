@@ -170,8 +170,8 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
         f"SPEC_FILE = {spec_file!r}",
         f"SPEC_SHA256 = {digest!r}",
         f"GENERATOR = {versions()!r}",
-        f"DEFAULT_N_BALLS = {spec.structure.n_balls}",
-        f"N_BALLS_RANGE = {N_BALLS_RANGE!r}",
+        f"DEFAULT_N_BALLS = {spec.n_balls}",
+        f"N_BALLS_RANGE = {N_BALLS_RANGE if spec.n_balls else (0, 0)!r}",
         f"SIMULATION = {spec.simulation.model_dump()!r}",
         f"TERMS = (\n{terms})",
         f"PARAMETERS = (\n    # name, default value, unit, source\n{params})",
@@ -185,7 +185,7 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
 def c_source(spec: Spec, module_text: str, digest: str, spec_file: str) -> str:
     """CasADi's C code of rhs, jac and rk4_step at the default number of balls."""
     with _preview_module(spec.model.module, module_text) as module:
-        funcs = module.build(spec.structure.n_balls)
+        funcs = module.build(spec.n_balls)
     with tempfile.TemporaryDirectory() as tmp:
         gen = casadi.CodeGenerator(f"{spec.model.module}.c", {"with_header": False})
         for f in (funcs.rhs, funcs.jac, funcs.rk4_step):
@@ -194,7 +194,7 @@ def c_source(spec: Spec, module_text: str, digest: str, spec_file: str) -> str:
         body = (Path(tmp) / f"{spec.model.module}.c").read_text()
     header = "\n".join(f" * {line}" for line in _header_lines(spec, digest, spec_file))
     return (f"/*\n * {spec.model.title}\n * C source of rhs, jac, rk4_step for n_balls = "
-            f"{spec.structure.n_balls}\n{header}\n */\n{body}")
+            f"{spec.n_balls}\n{header}\n */\n{body}")
 
 
 @contextlib.contextmanager
@@ -229,6 +229,9 @@ def model_card(spec: Spec, digest: str, spec_file: str) -> str:
     terms = "\n".join(f"{i + 1}. `{t.kind}`: {t.describe()}" for i, t in enumerate(spec.terms))
     equations = "\n\n".join(f"$$\n{e}\n$$" for e in eqs)
     sim = ", ".join(f"{k} = {v:g}" for k, v in spec.simulation.model_dump().items())
+    balls = (f"Default number of balls $N_b = {spec.n_balls}$ (structural; any $N_b$ in "
+             f"{N_BALLS_RANGE[0]}…{N_BALLS_RANGE[1]} is built at run time from the same code)."
+             if spec.n_balls else "No balls: the rotor is held by the terms below only.")
     return f"""# {spec.model.name}: {spec.model.title}
 
 {header}
@@ -240,8 +243,7 @@ Reference: {spec.model.reference}
 ## Equations of motion
 
 State $[x, y, \\dot x, \\dot y]$: rotor centre displacement (m) and velocity (m/s); $x$ along the
-radial load. Default number of balls $N_b = {spec.structure.n_balls}$ (structural; any
-$N_b$ in {N_BALLS_RANGE[0]}…{N_BALLS_RANGE[1]} is built at run time from the same code).
+radial load. {balls}
 
 {equations}
 
@@ -261,8 +263,8 @@ Simulation defaults: {sim} (SI units).
 
 - `__init__.py`: the expressions above as CasADi code; `build(n_balls)` returns the
   CasADi Functions `rhs`, `jac`, `rk4_step` and `simulator`.
-- `{spec.model.module}.c`: CasADi's C source of `rhs`, `jac`, `rk4_step` for
-  $N_b = {spec.structure.n_balls}$.
+- `{spec.model.module}.c`: CasADi's C source of `rhs`, `jac`, `rk4_step`
+  ($N_b = {spec.n_balls}$).
 
 To cite this model, give its name, the spec sha256 above and the bearingdyn version.
 """

@@ -54,6 +54,12 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity("pitch_diameter", "m", 0.0, 10.0, r"D_m", "pitch circle diameter",
                  low_inclusive=False),
         Quantity("ball_diameter", "m", 0.0, 1.0, r"D_b", "ball diameter", low_inclusive=False),
+        Quantity("linear_stiffness", "N/m", -1.0e13, 1.0e13, r"k_1",
+                 "linear spring stiffness of the rotor support (cubic_spring term)"),
+        Quantity("cubic_stiffness", "N/m^3", -1.0e25, 1.0e25, r"k_3",
+                 "cubic spring coefficient (cubic_spring term; > 0 hardening)"),
+        Quantity("forcing_amplitude", "N", 0.0, 1.0e7, r"F",
+                 "amplitude of the harmonic force F cos(ωt) in x (harmonic_force term)"),
         Quantity("ball_density", "kg/m^3", 0.0, 1.0e5, r"\rho_b", "ball material density",
                  low_inclusive=False),
     )

@@ -19,6 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from modelgen.errors import SpecError
 from modelgen.quantities import QUANTITIES
+from modelgen.symbols import make_context
 from modelgen.terms import TERM_CLASSES, TERMS, HertzContact
 
 N_BALLS_RANGE = (3, 64)
@@ -50,7 +51,7 @@ class Structure(_Strict):
 
 
 class SimulationDefaults(_Strict):
-    dt: float = Field(1e-5, gt=0, le=1e-3)
+    dt: float = Field(1e-5, gt=0, le=10.0)
     duration: float = Field(1.0, gt=0, le=1e5)
     transient: float = Field(0.0, ge=0, le=1e5)
     x0: float = 1e-6
@@ -70,9 +71,14 @@ TermEntry = Annotated[functools.reduce(operator.or_, TERM_CLASSES), Field(discri
 """One ``[[terms]]`` entry: any term class, chosen by its ``kind``."""
 
 
+_PROBE = make_context(list(QUANTITIES))
+"""Symbols for asking a term whether it has a ball load, before a model's context exists."""
+
+
 class Spec(_Strict):
     model: ModelInfo
-    structure: Structure
+    structure: Structure | None = None
+    """Ball set; required with a ``hertz_contact`` term, absent in models without balls."""
     simulation: SimulationDefaults = SimulationDefaults()
     parameters: dict[str, Parameter]
     terms: list[TermEntry] = Field(min_length=1)  # type: ignore[valid-type]
@@ -92,9 +98,17 @@ class Spec(_Strict):
                 problems.append(f"parameters.{name}.value: must be in {q.range_text()}, "
                                 f"got {par.value:g}")
         contacts = [t for t in self.terms if isinstance(t, HertzContact)]
-        if len(contacts) != 1:
-            problems.append(f"terms: exactly one 'hertz_contact' term is required, "
-                            f"got {len(contacts)}")
+        if contacts and self.structure is None:
+            problems.append("structure: missing; a model with a 'hertz_contact' term needs "
+                            f"[structure] n_balls in [{N_BALLS_RANGE[0]}, {N_BALLS_RANGE[1]}]")
+        if not contacts:
+            if self.structure is not None:
+                problems.append("structure: a model without a 'hertz_contact' term has no "
+                                "balls; remove [structure]")
+            for i, term in enumerate(self.terms):
+                if term.ball_load(_PROBE) is not None:
+                    problems.append(f"terms[{i}] ({term.kind}): acts on the balls and needs "
+                                    "a 'hertz_contact' term")
         kinds = [t.kind for t in self.terms]
         for kind in sorted({k for k in kinds if kinds.count(k) > 1}):
             problems.append(f"terms: '{kind}' appears {kinds.count(kind)} times; at most once")
@@ -122,8 +136,14 @@ class Spec(_Strict):
     def parameter_values(self) -> dict[str, float]:
         return {n: p.value for n, p in self.parameters.items()}
 
-    def contact(self) -> HertzContact:
-        return next(t for t in self.terms if isinstance(t, HertzContact))
+    def contact(self) -> HertzContact | None:
+        """The contact term, or None in a model without balls."""
+        return next((t for t in self.terms if isinstance(t, HertzContact)), None)
+
+    @property
+    def n_balls(self) -> int:
+        """Default number of balls (0 for a model without balls)."""
+        return self.structure.n_balls if self.structure else 0
 
 
 def _all_field_names() -> set[str]:

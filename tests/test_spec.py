@@ -78,7 +78,7 @@ def test_too_few_balls():
 def test_non_positive_time_step():
     data = _data()
     data["simulation"]["dt"] = 0.0
-    assert "simulation.dt: must be in (0, 0.001] s, got 0.0" in _problems(data)
+    assert "simulation.dt: must be in (0, 10] s, got 0.0" in _problems(data)
 
 
 def test_nan_and_unit_and_typo():

@@ -1,4 +1,5 @@
-"""External loads on the rotor: constant radial load and rotating unbalance (paper Eq. 11-12)."""
+"""External loads on the rotor: constant radial load, rotating unbalance (paper Eq. 11-12) and a
+harmonic force in x synchronous with the shaft."""
 
 from __future__ import annotations
 
@@ -29,3 +30,15 @@ class Unbalance(Term):
     def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         p_u, wt = ctx.p("unbalance_force"), ctx.omega * ctx.t
         return (p_u * sp.cos(wt), p_u * sp.sin(wt))
+
+
+class HarmonicForce(Term):
+    """F·cos(ωt) in x (N), ω the shaft speed: a unidirectional synchronous excitation."""
+
+    kind: Literal["harmonic_force"] = "harmonic_force"
+
+    needs: ClassVar[tuple[str, ...]] = ("forcing_amplitude", "speed_rpm")
+    summary: ClassVar[str] = "harmonic force F·cos(ωt) in x"
+
+    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+        return (ctx.p("forcing_amplitude") * sp.cos(ctx.omega * ctx.t), sp.Integer(0))

@@ -1,0 +1,139 @@
+"""Classify a steady response: periodic-n, quasi-periodic or chaotic.
+
+One function, ``classify``, used by every study. It reads the stroboscopic Poincaré points
+of a run and, when the points alone cannot decide, the largest Lyapunov exponent:
+
+1. **periodic-n**: the section repeats after n samples, P_{k+n} = P_k within ``rel_tol``
+   of the orbit size (n = 1 … ``max_period``).
+2. **quasi-periodic, two-frequency torus**: with unbalance the forcing has two frequencies,
+   X and VC, in general incommensurate, so even the simplest response is a closed curve on
+   the shaft section. Such a response is locked to both forcings: its state at each shaft
+   section is a smooth function of the ball-set phase φ_k = frac(VC·t_k) — the double
+   section (shaft period and cage phase) reduces it to points. Test: sorted by φ, successive
+   points are much closer than random pairs.
+3. Otherwise **chaotic** if the largest Lyapunov exponent is positive beyond its 95 %
+   confidence interval and above ``chaos_floor`` × the section's angular frequency, and
+   **quasi-periodic** (a frequency of its own, largest exponent ≈ 0) if not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import xarray as xr
+
+from analysis.poincare import poincare_section
+
+GRAPH_RATIO = 0.2
+"""Sorted-neighbour / random-pair distance below which points lie on a smooth graph of φ."""
+
+
+@dataclass(frozen=True)
+class Classification:
+    nature: str
+    """'periodic-n' (n = period in section samples), 'quasi-periodic' or 'chaotic'."""
+    detail: str
+    section: str
+    n_points: int
+    period: int | None = None
+    largest_exponent: float | None = None
+    """Largest Lyapunov exponent, 1/s (None when the section decided alone)."""
+    ci95: float | None = None
+    graph_ratio: float | None = None
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def default_section(ds: xr.Dataset) -> str:
+    """'vc' for a balanced bearing (single forcing frequency VC), else 'shaft'."""
+    balanced = ds.attrs.get("unbalance_force", 0.0) == 0.0
+    return "vc" if balanced and ds.attrs.get("vc_hz", 0.0) > 0 else "shaft"
+
+
+def _normalised_points(ds: xr.Dataset, pts: xr.Dataset) -> tuple[np.ndarray, float]:
+    """Section points with velocities divided by the section's angular frequency (m), and
+    the orbit size (largest peak-to-peak of x or y over the run, m)."""
+    omega = 2 * np.pi / pts.attrs["section_period_s"]
+    p = np.stack([pts.x.values, pts.y.values, pts.vx.values / omega, pts.vy.values / omega],
+                 axis=1)
+    size = max(float(np.ptp(ds.x.values)), float(np.ptp(ds.y.values)), 1e-300)
+    return p, size
+
+
+def repeat_period(points: np.ndarray, size: float, rel_tol: float,
+                  max_period: int) -> int | None:
+    """Smallest n with |P_{k+n} − P_k| < rel_tol·size for every k, or None."""
+    for n in range(1, max_period + 1):
+        if len(points) < 2 * n + 2:
+            break
+        if np.max(np.linalg.norm(points[n:] - points[:-n], axis=1)) < rel_tol * size:
+            return n
+    return None
+
+
+def graph_ratio(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> float:
+    """Median distance of φ-sorted neighbours over the median distance of random pairs."""
+    order = np.argsort(phase)
+    neighbours = np.linalg.norm(np.diff(points[order], axis=0), axis=1)
+    rng = np.random.default_rng(seed)
+    i, j = rng.integers(0, len(points), (2, 4 * len(points)))
+    pairs = np.linalg.norm(points[i] - points[j], axis=1)
+    return float(np.median(neighbours) / max(np.median(pairs[i != j]), 1e-300))
+
+
+def classify(
+    ds: xr.Dataset,
+    section: str | None = None,
+    exponents: xr.Dataset | None = None,
+    *,
+    rel_tol: float = 1e-3,
+    max_period: int = 16,
+    chaos_floor: float = 0.01,
+    lyapunov_duration: float | None = None,
+) -> Classification:
+    """Classify the motion in ``ds`` (a run from ``simulate``, transient dropped).
+
+    ``exponents`` (from ``analysis.lyapunov.lyapunov``) is computed from the run's own model,
+    parameters and final state when needed and not given (``lyapunov_duration`` seconds,
+    default: the run's length).
+    """
+    section = section or default_section(ds)
+    pts = poincare_section(ds, section)
+    points, size = _normalised_points(ds, pts)
+    n = repeat_period(points, size, rel_tol, max_period)
+    if n is not None:
+        return Classification(f"periodic-{n}", f"{n} distinct point(s) on the {section} "
+                              "section", section, len(points), period=n)
+    ratio = None
+    two_forcings = ds.attrs.get("unbalance_force", 0.0) > 0 and ds.attrs.get("vc_hz", 0) > 0
+    if two_forcings and section == "shaft":
+        ratio = graph_ratio(points, np.mod(pts.t.values * ds.attrs["vc_hz"], 1.0))
+        if ratio < GRAPH_RATIO:
+            return Classification("quasi-periodic", "two-frequency torus locked to X and VC "
+                                   "(points on a smooth curve of the ball-set phase)",
+                                   section, len(points), graph_ratio=ratio)
+    if exponents is None:
+        exponents = _exponents_of_run(ds, lyapunov_duration)
+    lam, ci = float(exponents.exponents[0]), float(exponents.ci95[0])
+    floor = chaos_floor * 2 * np.pi / pts.attrs["section_period_s"]
+    if lam - ci > 0 and lam > floor:
+        return Classification("chaotic", f"largest Lyapunov exponent {lam:.4g} ± {ci:.2g} 1/s "
+                              "(95 %) > 0", section, len(points), largest_exponent=lam,
+                              ci95=ci, graph_ratio=ratio)
+    return Classification("quasi-periodic", f"a frequency of its own: largest Lyapunov "
+                          f"exponent {lam:.3g} ± {ci:.2g} 1/s ≈ 0", section, len(points),
+                          largest_exponent=lam, ci95=ci, graph_ratio=ratio)
+
+
+def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
+    from analysis.lyapunov import lyapunov
+    from analysis.model import load_model
+
+    model = load_model(ds.attrs["model"])
+    values = {name: float(ds.attrs[name]) for name in model.parameter_names}
+    state = tuple(float(ds[v][-1]) for v in ("x", "y", "vx", "vy"))
+    length = float(ds.t[-1] - ds.t[0])
+    return lyapunov(model, int(ds.attrs["n_balls"]) or None, duration=duration or length,
+                    transient=0.0, dt=float(ds.attrs["dt"]), initial_state=state, **values)

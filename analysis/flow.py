@@ -1,0 +1,118 @@
+"""Flow maps over a forcing period, built in CasADi so that AD gives their derivatives.
+
+``Period`` names the period of a periodic orbit as an expression of the parameters:
+``vc`` (1/VC, the balanced rotor), ``shaft`` (1/X), ``vc:k`` / ``shaft:k`` (k of them), or
+``ratio:p/q`` (p VC periods = q shaft revolutions; the caller makes the ratio exact, see
+``analysis.periodic.commensurate``). ``flow_map`` integrates N fixed RK4 steps of
+h = T(p)/N from (z0, t0) and returns the end state, the monodromy matrix ∂z_T/∂z0 and
+∂z_T/∂p, all by algorithmic differentiation through the integrator (the derivative of the
+discrete RK4 map, not finite differences).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import cache
+
+import casadi as ca
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.model import Model
+
+PERIOD_KINDS = ("vc", "shaft", "ratio")
+
+
+@dataclass(frozen=True)
+class Period:
+    """A forcing period: ``count`` periods of ``kind`` (``vc`` or ``shaft``), or the common
+    period of a ratio VC/X = p/q (``kind = "ratio"``, p VC periods = q revolutions)."""
+
+    kind: str
+    count: int = 1
+    ratio: Fraction | None = None
+    divisor: int = 1
+    """Segments per period (multiple shooting integrates T/divisor at a time)."""
+
+    @classmethod
+    def parse(cls, text: str) -> Period:
+        """``"vc"``, ``"shaft"``, ``"vc:2"``, ``"shaft:3"`` or ``"ratio:37/15"``."""
+        kind, _, arg = text.strip().partition(":")
+        if kind not in PERIOD_KINDS:
+            raise InputError(f"period: must be vc, shaft, vc:k, shaft:k or ratio:p/q, "
+                             f"got {text!r}")
+        try:
+            if kind == "ratio":
+                ratio = Fraction(arg)
+                if ratio <= 0:
+                    raise ValueError
+                return cls("ratio", 1, ratio)
+            count = int(arg) if arg else 1
+            if count < 1:
+                raise ValueError
+        except (ValueError, ZeroDivisionError):
+            raise InputError(f"period: the number in {text!r} must be a positive integer "
+                             "(or p/q with p, q > 0 for ratio)") from None
+        return cls(kind, count)
+
+    def __str__(self) -> str:
+        if self.kind == "ratio":
+            return f"ratio:{self.ratio}"
+        return self.kind if self.count == 1 else f"{self.kind}:{self.count}"
+
+    def doubled(self) -> Period:
+        """Twice this period (the period-2 orbit after a period doubling)."""
+        return Period(self.kind, 2 * self.count, self.ratio, self.divisor)
+
+    def segment(self, segments: int) -> Period:
+        """One of ``segments`` equal parts of this period."""
+        return Period(self.kind, self.count, self.ratio, self.divisor * segments)
+
+    def seconds(self, model: Model, n_balls: int, p):
+        """The period in s, as a CasADi expression of ``p`` (or a float for numeric p)."""
+        omega = model.module.shaft_speed(p)
+        if self.kind == "shaft":
+            base = 2 * math.pi / omega
+        elif self.kind == "vc":
+            base = 2 * math.pi / (n_balls * model.module.cage_speed(p))
+        else:
+            base = self.ratio.denominator * 2 * math.pi / omega
+        return base * self.count / self.divisor
+
+
+def period_seconds(model: Model, n_balls: int, period: Period, values: dict) -> float:
+    value = float(period.seconds(model, n_balls, model.parameter_vector(values)))
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"period: {period} is not defined for these parameters "
+                         f"(got T = {value!r} s; is the speed zero, or are there no balls?)")
+    return value
+
+
+@cache
+def flow_map(model: Model, n_balls: int, period: Period, n_steps: int) -> ca.Function:
+    """``flow(z0, t0, p) -> (zT, dzT/dz0, dzT/dp)`` over one period with n_steps RK4 steps."""
+    step = model.functions(n_balls).rk4_step
+    zt, p, h = ca.MX.sym("zt", 5), ca.MX.sym("p", len(model.parameter_names)), ca.MX.sym("h")
+    advance = ca.Function("advance", [zt, p, h],
+                          [ca.vertcat(step(zt[4], zt[:4], p, h), zt[4] + h)])
+    run = advance.fold(n_steps)
+    z0, t0 = ca.MX.sym("z0", 4), ca.MX.sym("t0")
+    h_value = period.seconds(model, n_balls, p) / n_steps
+    z_end = run(ca.vertcat(z0, t0), ca.repmat(p, 1, n_steps),
+                ca.repmat(h_value, 1, n_steps))[:4]
+    return ca.Function("flow", [z0, t0, p],
+                       [z_end, ca.jacobian(z_end, z0), ca.jacobian(z_end, p)],
+                       ["z0", "t0", "p"], ["zT", "monodromy", "dzT_dp"])
+
+
+def steps_per_period(model: Model, n_balls: int, period: Period, values: dict,
+                     dt: float) -> int:
+    """Number of RK4 steps so that the step is at most ``dt`` (s)."""
+    return max(1, math.ceil(period_seconds(model, n_balls, period, values) / dt - 1e-9))
+
+
+def evaluate(flow: ca.Function, z0, t0: float, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    z_end, mono, dp = flow(z0, t0, p)
+    return np.asarray(z_end).ravel(), np.asarray(mono), np.asarray(dp)
