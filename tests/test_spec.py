@@ -9,7 +9,7 @@ import tomli_w
 
 from modelgen.spec import SpecError, load_spec, parse_spec, shipped_spec_names
 
-SHIPPED = ["balanced-rotor", "vakharia2015", "vakharia2015-consistent"]
+SHIPPED = ["balanced-rotor", "duffing", "vakharia2015", "vakharia2015-consistent"]
 
 
 def test_shipped_specs_load():
