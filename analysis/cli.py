@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 
 from analysis.errors import BearingdynError, InputError
@@ -189,6 +190,167 @@ def poincare(
 
         save_figure(poincare_figure(ds, section), output)
         typer.echo(f"wrote {output}", err=as_json)
+
+
+def _parameters(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
+    params = parse_sets(sets)
+    if speed_rpm is not None:
+        params["speed_rpm"] = speed_rpm
+    return params
+
+
+def _save_figure(fig, output: Path | None, err: bool = False) -> None:
+    if output:
+        from analysis.plots import save_figure
+
+        save_figure(fig, output)
+        typer.echo(f"wrote {output}", err=err)
+
+
+NBallsOption = Annotated[int | None, typer.Option(help="Number of balls.")]
+SpeedOption = Annotated[float | None, typer.Option(help="Shaft speed, rpm.")]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON.")]
+
+
+@app.command()
+@reports_errors
+def lyapunov(
+    model: Annotated[str, typer.Argument(help="Model name.")],
+    n_balls: NBallsOption = None,
+    speed_rpm: SpeedOption = None,
+    sets: SetOption = None,
+    duration: Annotated[float, typer.Option(help="Averaging time after the transient, s.")] = 5.0,
+    transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
+    dt: Annotated[float | None, typer.Option(help="RK4 step, s.")] = None,
+    renorm_every: Annotated[int, typer.Option(help="RK4 steps between QR steps.")] = 100,
+    as_json: JsonOption = False,
+    output: Annotated[Path | None, typer.Option("-o", "--output",
+                                                help="Figure of the running estimates.")] = None,
+):
+    """Lyapunov spectrum (4 exponents, 1/s) from the tangent dynamics of the RK4 map."""
+    from analysis.lyapunov import lyapunov as run_lyapunov
+
+    res = run_lyapunov(model, n_balls, duration=duration, transient=transient, dt=dt,
+                       renorm_every=renorm_every, **_parameters(speed_rpm, sets))
+    data = {"exponents": res.exponents.values.tolist(), "ci95": res.ci95.values.tolist(),
+            "sum_of_exponents": res.attrs["sum_of_exponents"],
+            "mean_divergence": res.attrs["mean_divergence"], "n_balls": res.attrs["n_balls"]}
+    if as_json:
+        typer.echo(json.dumps(data, indent=2))
+    else:
+        for k, (lam, ci) in enumerate(zip(data["exponents"], data["ci95"], strict=True), 1):
+            typer.echo(f"λ{k} = {lam:12.5g} ± {ci:.2g} 1/s (95 %)")
+        typer.echo(f"sum = {data['sum_of_exponents']:.6g} 1/s; mean divergence "
+                   f"{data['mean_divergence']:.6g} 1/s")
+    if output:
+        from analysis.plots import lyapunov_figure
+
+        _save_figure(lyapunov_figure(res), output, err=as_json)
+
+
+@app.command()
+@reports_errors
+def floquet(
+    model: Annotated[str, typer.Argument(help="Model name.")],
+    n_balls: NBallsOption = None,
+    speed_rpm: SpeedOption = None,
+    sets: SetOption = None,
+    period: Annotated[str, typer.Option(
+        help="vc, shaft, vc:k, shaft:k or ratio:p/q (VC/X = p/q made exact).")] = "vc",
+    segments: Annotated[int, typer.Option(help="Shooting segments (1: single).")] = 1,
+    dt: Annotated[float, typer.Option(help="Largest RK4 step, s.")] = 1e-5,
+    settle: Annotated[float, typer.Option(help="Simulated time for the guess, s.")] = 0.5,
+    as_json: JsonOption = False,
+):
+    """Periodic orbit by Newton shooting, its Floquet multipliers and stability."""
+    from analysis.periodic import shoot
+
+    orbit = shoot(model, n_balls, period, segments=segments, dt=dt, settle=settle,
+                  **_parameters(speed_rpm, sets))
+    if as_json:
+        typer.echo(json.dumps(orbit.as_dict(), indent=2))
+        return
+    typer.echo(f"{orbit.model}, N_b = {orbit.n_balls}, period {orbit.period} = "
+               f"{orbit.period_s:.6g} s ({orbit.n_steps} RK4 steps): {orbit.message}")
+    typer.echo(f"z0 = {np.array2string(orbit.z0, precision=6)} (m, m/s) at t0 = {orbit.t0:g} s")
+    for mu in orbit.multipliers:
+        typer.echo(f"  μ = {mu.real:+.6f} {mu.imag:+.6f}i   |μ| = {abs(mu):.6f}")
+    typer.echo(f"stability: {orbit.stability} (spectral radius {orbit.spectral_radius:.6f})")
+
+
+@app.command()
+@reports_errors
+def classify(
+    run_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn simulate`.")],
+    section: Annotated[str | None, typer.Option(
+        help="shaft, cage or vc (default: vc for a balanced bearing, else shaft).")] = None,
+    as_json: JsonOption = False,
+):
+    """Periodic-n, quasi-periodic or chaotic (computes the largest Lyapunov exponent when
+    the Poincaré points alone cannot tell)."""
+    from analysis.classify import classify as run_classify
+    from analysis.io import load_dataset
+
+    result = run_classify(load_dataset(run_file), section)
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=2))
+    else:
+        typer.echo(f"{result.nature}: {result.detail} ({result.n_points} points, "
+                   f"{result.section} section)")
+
+
+@app.command("continue")
+@reports_errors
+def continue_(
+    model: Annotated[str, typer.Argument(help="Model name.")],
+    param: Annotated[str, typer.Option(help="Runtime parameter to vary.")],
+    start: Annotated[float, typer.Option("--from", help="Start value (parameter unit).")],
+    stop: Annotated[float, typer.Option("--to", help="End value (parameter unit).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the branch.")],
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    period: Annotated[str, typer.Option(help="vc, shaft, vc:k, shaft:k, ratio:p/q.")] = "vc",
+    dt: Annotated[float, typer.Option(help="Largest RK4 step, s.")] = 1e-5,
+    settle: Annotated[float, typer.Option(help="Simulated time for the first guess, s.")] = 0.5,
+    max_points: Annotated[int, typer.Option(help="Points per branch.")] = 200,
+    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
+    switch_pd: Annotated[bool, typer.Option(
+        "--switch-pd", help="Also continue the period-2 branch from the first PD.")] = False,
+    plot: Annotated[Path | None, typer.Option(help="Figure of the branch(es).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+):
+    """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection."""
+    from analysis import continuation as cont
+    from analysis.io import save_dataset
+
+    progress = None if quiet else typer.echo
+    branch = cont.continue_orbits(model, n_balls, param=param, start=start, stop=stop,
+                                  period=period, dt=dt, settle=settle, max_points=max_points,
+                                  ds_max=ds_max, progress=progress, **parse_sets(sets))
+    branches = [branch]
+    if switch_pd:
+        pds = np.nonzero(branch.special.values == "PD")[0]
+        if len(pds) == 0:
+            typer.echo("no period doubling on the branch: nothing to switch to", err=True)
+        else:
+            two = cont.switch_period_doubling(branch, int(pds[0]), dt=None)
+            if not two.converged:
+                typer.echo(f"branch switching failed: {two.message}", err=True)
+            else:
+                branches.append(cont.continue_from_orbit(
+                    two, param=param, stop=stop, dt=dt, max_points=max_points,
+                    ds_max=ds_max, progress=progress, label=f"period {two.period}"))
+    for i, br in enumerate(branches):
+        path = output if i == 0 else output.with_name(f"{output.stem}-period2{output.suffix}")
+        save_dataset(br, path)
+        specials = [f"{k} at {br[param].values[j]:.6g}" for j, k in
+                    enumerate(br.special.values) if k]
+        typer.echo(f"wrote {path}: {br.sizes['point']} orbits ({br.attrs['branch']}), "
+                   f"{br.attrs['status']}; special points: {', '.join(specials) or 'none'}")
+    if plot:
+        from analysis.plots import branch_figure
+
+        _save_figure(branch_figure(branches), plot)
 
 
 @app.command()

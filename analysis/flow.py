@@ -90,13 +90,19 @@ def period_seconds(model: Model, n_balls: int, period: Period, values: dict) -> 
     return value
 
 
-@cache
-def flow_map(model: Model, n_balls: int, period: Period, n_steps: int) -> ca.Function:
-    """``flow(z0, t0, p) -> (zT, dzT/dz0, dzT/dp)`` over one period with n_steps RK4 steps."""
+def _advance(model: Model, n_balls: int) -> tuple[ca.Function, ca.MX]:
+    """One RK4 step on [z; t] as a Function of (zt, p, h), and a parameter symbol."""
     step = model.functions(n_balls).rk4_step
     zt, p, h = ca.MX.sym("zt", 5), ca.MX.sym("p", len(model.parameter_names)), ca.MX.sym("h")
     advance = ca.Function("advance", [zt, p, h],
                           [ca.vertcat(step(zt[4], zt[:4], p, h), zt[4] + h)])
+    return advance, p
+
+
+@cache
+def flow_map(model: Model, n_balls: int, period: Period, n_steps: int) -> ca.Function:
+    """``flow(z0, t0, p) -> (zT, dzT/dz0, dzT/dp)`` over one period with n_steps RK4 steps."""
+    advance, p = _advance(model, n_balls)
     run = advance.fold(n_steps)
     z0, t0 = ca.MX.sym("z0", 4), ca.MX.sym("t0")
     h_value = period.seconds(model, n_balls, p) / n_steps
@@ -116,3 +122,14 @@ def steps_per_period(model: Model, n_balls: int, period: Period, values: dict,
 def evaluate(flow: ca.Function, z0, t0: float, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     z_end, mono, dp = flow(z0, t0, p)
     return np.asarray(z_end).ravel(), np.asarray(mono), np.asarray(dp)
+
+
+@cache
+def orbit_states(model: Model, n_balls: int, period: Period, n_steps: int) -> ca.Function:
+    """``orbit(z0, t0, p) -> Z`` (4 × n_steps): the states after each RK4 step of one period."""
+    advance, p = _advance(model, n_balls)
+    z0, t0 = ca.MX.sym("z0", 4), ca.MX.sym("t0")
+    h_value = period.seconds(model, n_balls, p) / n_steps
+    states = advance.mapaccum(n_steps)(ca.vertcat(z0, t0), ca.repmat(p, 1, n_steps),
+                                       ca.repmat(h_value, 1, n_steps))
+    return ca.Function("orbit", [z0, t0, p], [states[:4, :]], ["z0", "t0", "p"], ["Z"])

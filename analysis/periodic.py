@@ -114,14 +114,16 @@ def _prepare(model: Model | str, n_balls: int | None, period: str | Period,
 
 def default_guess(model: Model, n_balls: int, per: Period, values: dict[str, float],
                   settle: float, dt: float) -> tuple[np.ndarray, float]:
-    """The state after simulating ``settle`` seconds, at a whole number of periods."""
+    """The state after simulating about ``settle`` seconds, taken at a whole number n of
+    periods, and the section time 0: the system is T-periodic, so the state at t = nT is a
+    state at forcing phase 0 (keeping t0 = nT would make the section phase depend on T)."""
     period_s = period_seconds(model, n_balls, per, values)
     n_periods = max(1, round(settle / period_s))
     t_end = n_periods * period_s
     steps = steps_per_period(model, n_balls, per, values, dt) * n_periods
     ds = simulate(model, n_balls, duration=t_end, transient=0.0, dt=t_end / steps,
                   save_every=steps, **values)
-    return np.array([float(ds[v][-1]) for v in ("x", "y", "vx", "vy")]), t_end
+    return np.array([float(ds[v][-1]) for v in ("x", "y", "vx", "vy")]), 0.0
 
 
 def shoot(

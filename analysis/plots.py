@@ -7,6 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
+import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
@@ -101,5 +102,67 @@ def save_figure(fig: Figure, path) -> None:
     plt.close(fig)
 
 
-__all__ = ["display_label", "paper_figure", "plot_poincare", "plot_spectrum",
-           "poincare_figure", "save_figure", "spectrum_figure"]
+SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}
+
+
+def branch_figure(branches: list[xr.Dataset]) -> Figure:
+    """Continuation diagram: parameter vs orbit amplitude; stable solid, unstable dashed,
+    special points (LP fold, PD period doubling, NS Neimark–Sacker, BP branch point)."""
+    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    for i, br in enumerate(branches):
+        param = br.attrs["param"]
+        lam, amp, stable = br[param].values, br.amplitude.values, br.stable.values
+        color = f"C{i}"
+        # one line per run of equal stability (short dashed pieces would look solid)
+        cuts = np.nonzero(np.diff(stable))[0] + 1
+        for run in np.split(np.arange(len(lam)), cuts):
+            run = np.append(run, run[-1] + 1) if run[-1] + 1 < len(lam) else run
+            ax.plot(lam[run], amp[run], color=color, ls="-" if stable[run[0]] else "--",
+                    lw=1.4)
+        ax.plot([], [], color=color, label=br.attrs.get("branch", f"branch {i + 1}"))
+        for j, kind in enumerate(br.special.values):
+            if kind:
+                ax.plot(lam[j], amp[j], SPECIAL_MARKERS.get(str(kind), "o"), color="k", ms=6)
+                ax.annotate(str(kind), (lam[j], amp[j]), xytext=(4, 4),
+                            textcoords="offset points", fontsize=8)
+    first = branches[0]
+    unit = first[first.attrs["param"]].attrs.get("units", "")
+    ax.set_xlabel(f"{first.attrs['param']} ({unit})")
+    ax.set_ylabel("orbit amplitude, half peak-to-peak x (m)")
+    ax.plot([], [], "k-", label="stable")
+    ax.plot([], [], "k--", label="unstable")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax.set_title(f"{first.attrs['model']}: periodic orbits ({first.attrs['period']}) "
+                 "continued in " + first.attrs["param"], fontsize=9)
+    return fig
+
+
+def lyapunov_figure(result: xr.Dataset) -> Figure:
+    """Running estimates of the Lyapunov exponents against time (convergence check)."""
+    fig, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    for k in result.index.values:
+        ax.plot(result.t, result.running.sel(index=k),
+                label=f"λ{k} = {float(result.exponents.sel(index=k)):.4g} ± "
+                      f"{float(result.ci95.sel(index=k)):.2g} 1/s")
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("running estimate (1/s)")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax.set_title(_title(result) + f"; Σλ = {result.attrs['sum_of_exponents']:.5g}, "
+                 f"mean divergence {result.attrs['mean_divergence']:.5g} 1/s", fontsize=8)
+    return fig
+
+
+__all__ = [
+    "branch_figure",
+    "display_label",
+    "lyapunov_figure",
+    "paper_figure",
+    "plot_poincare",
+    "plot_spectrum",
+    "poincare_figure",
+    "save_figure",
+    "spectrum_figure",
+]
