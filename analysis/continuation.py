@@ -252,8 +252,9 @@ def _continue_from(model: Model, first: PeriodicOrbit, param: str, start: float,
                    tol: float, progress, label: str = "") -> xr.Dataset:
     per = Period.parse(first.period) if isinstance(first.period, str) else first.period
     values = dict(first.values)
-    n_steps = steps_per_period(model, first.n_balls, per, {**values, param: max(
-        start, stop) if param == "speed_rpm" else start}, dt)
+    # the step must stay below dt along the whole range (the period depends on λ)
+    n_steps = max(steps_per_period(model, first.n_balls, per, {**values, param: end}, dt)
+                  for end in (start, stop))
     prob = _Problem(model, first.n_balls, per, model.parameter_names.index(param), values,
                     first.t0, n_steps, np.ones(4), abs(stop - start))
     prob.s_z = orbit_scale(prob, first.z0)
