@@ -112,6 +112,8 @@ def simulate(
     dt: Annotated[float | None, typer.Option(help="RK4 step and output spacing, s.")] = None,
     method: Annotated[str, typer.Option(help="rk4 (fixed step) or cvodes.")] = "rk4",
     save_every: Annotated[int, typer.Option(help="Keep every n-th step.")] = 1,
+    no_compile: Annotated[bool, typer.Option(
+        "--no-compile", help="Run RK4 in the CasADi VM instead of compiled C.")] = False,
 ):
     """Integrate a model and write the motion (x, y, vx, vy over t) to netCDF."""
     from analysis.io import save_dataset
@@ -122,7 +124,7 @@ def simulate(
         params["speed_rpm"] = speed_rpm
     start = time.perf_counter()
     ds = run(model, n_balls, duration=duration, transient=transient, dt=dt, method=method,
-             save_every=save_every, **params)
+             save_every=save_every, compiled=not no_compile, **params)
     wall = time.perf_counter() - start
     save_dataset(ds, output)
     typer.echo(f"wrote {output}: {ds.attrs['model']}, N_b = {ds.attrs['n_balls']}, "
@@ -353,6 +355,109 @@ def continue_(
         _save_figure(branch_figure(branches), plot)
 
 
+ExecutorOption = Annotated[str, typer.Option(
+    "--executor", help="serial, processes (all cores) or dask (a LocalCluster).")]
+WorkersOption = Annotated[int | None, typer.Option(help="Worker processes (default: cores).")]
+SchedulerOption = Annotated[str | None, typer.Option(
+    help="Address of a running Dask scheduler, tcp://host:port.")]
+QuietOption = Annotated[bool, typer.Option("--quiet", help="No progress output.")]
+
+
+def _executor(kind: str, workers: int | None, scheduler: str | None):
+    from analysis.executors import make_executor
+
+    return make_executor(kind, workers, scheduler)
+
+
+@app.command()
+@reports_errors
+def sweep(
+    model: Annotated[str, typer.Argument(help="Model name.")],
+    param: Annotated[str, typer.Option(help="Parameter on the grid (or n_balls).")],
+    start: Annotated[float, typer.Option("--from", help="First value.")],
+    stop: Annotated[float, typer.Option("--to", help="Last value.")],
+    num: Annotated[int, typer.Option(help="Number of grid values.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    direction: Annotated[str, typer.Option(help="up, down or both.")] = "up",
+    follow: Annotated[bool, typer.Option(
+        help="Start each value from the previous end state (shows hysteresis).")] = True,
+    transient: Annotated[float, typer.Option(help="Dropped time per value, s.")] = 1.0,
+    samples: Annotated[int, typer.Option(help="Poincaré points per value.")] = 200,
+    section: Annotated[str, typer.Option(help="shaft, cage or vc.")] = "shaft",
+    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    quiet: QuietOption = False,
+):
+    """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
+    from analysis.sweep import Axis, ProgressReporter, Setting, bifurcation_diagram
+
+    setting = Setting(model, n_balls, parse_sets(sets), transient, samples, section, dt)
+    ex = _executor(executor, workers, scheduler)
+    try:
+        ds = bifurcation_diagram(setting, Axis.linear(param, start, stop, num), output,
+                                 direction=direction, follow=follow, executor=ex,
+                                 progress=ProgressReporter(f"sweep {param}", quiet))
+    finally:
+        ex.close()
+    typer.echo(f"wrote {output}: {ds.sizes[param]} values × {ds.sizes['direction']} "
+               f"direction(s), {samples} section points each ({ex.name})")
+
+
+@app.command()
+@reports_errors
+def chart(
+    model: Annotated[str, typer.Argument(help="Model name.")],
+    x: Annotated[str, typer.Option(help="x axis name:start:stop:count, e.g. "
+                                        "speed_rpm:1000:10000:200.")],
+    y: Annotated[str, typer.Option(help="y axis, e.g. n_balls:5:12.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    transient: Annotated[float, typer.Option(help="Dropped time per point, s.")] = 1.0,
+    revolutions: Annotated[int, typer.Option(help="Recorded shaft revolutions.")] = 200,
+    lyapunov: Annotated[bool, typer.Option(help="Largest Lyapunov exponent at every "
+                                                "point.")] = True,
+    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    quiet: QuietOption = False,
+    table: Annotated[bool, typer.Option("--table", help="Print the chart as a table.")] = False,
+):
+    """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
+    from analysis.sweep import Axis, ProgressReporter, Setting, chart_table, stability_chart
+
+    setting = Setting(model, n_balls, parse_sets(sets), transient, revolutions, "shaft", dt,
+                      lyapunov)
+    ex = _executor(executor, workers, scheduler)
+    try:
+        ds = stability_chart(setting, Axis.parse(x), Axis.parse(y), output, executor=ex,
+                             progress=ProgressReporter("chart", quiet))
+    finally:
+        ex.close()
+    typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
+               f"points ({ex.name})")
+    if table:
+        typer.echo(chart_table(ds))
+
+
+@app.command()
+@reports_errors
+def plot(
+    result: Annotated[Path, typer.Argument(help="Any bearingdyn netCDF result.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file (PNG, PDF, SVG).")],
+):
+    """Draw the natural figure of a result file (run, branch, diagram or chart)."""
+    from analysis.io import open_result
+    from analysis.plots import any_figure
+
+    _save_figure(any_figure(open_result(result)), output)
+
+
 @app.command()
 @reports_errors
 def run(
@@ -372,6 +477,27 @@ def run(
                              progress=typer.echo, **parse_sets(sets))
     typer.echo("\n" + peak_table_markdown(results))
     typer.echo(f"results in {out_dir}/ (nb<N>.nc, nb<N>.png, peaks.md, peaks.json)")
+
+
+@app.command()
+@reports_errors
+def bench(
+    repeat: Annotated[int, typer.Option(help="Runs per path; the table shows medians.")] = 5,
+    duration: Annotated[float, typer.Option(help="Simulated time of the timed run, s.")] = 1.0,
+    memory_duration: Annotated[float, typer.Option(
+        help="Simulated time of the peak-memory run, s (0: skip).")] = 100.0,
+):
+    """Speed and memory benchmark (about 2 min): compiled RK4, CasADi VM, NumPy, SciPy, numba."""
+    from analysis.bench import format_result, run_benchmark
+
+    if repeat < 1:
+        raise InputError(f"--repeat: must be >= 1, got {repeat}")
+    if not duration > 0 or memory_duration < 0:
+        raise InputError(f"--duration: must be > 0 s and --memory-duration >= 0 s, got "
+                         f"{duration:g} and {memory_duration:g}")
+    res = run_benchmark(repeat, duration, memory_duration,
+                        progress=lambda msg: typer.echo(msg, err=True))
+    typer.echo(format_result(res))
 
 
 if __name__ == "__main__":

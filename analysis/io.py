@@ -43,16 +43,21 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"))
 
 
-def load_dataset(path: str | Path) -> xr.Dataset:
-    """Read a result file written by bearingdyn, or raise ``InputError`` saying why not."""
+def open_result(path: str | Path) -> xr.Dataset:
+    """Read any bearingdyn result file (run, branch, diagram, chart) into memory."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"result file: '{path}' does not exist")
     try:
         with xr.open_dataset(path, engine="h5netcdf") as ds:
-            data = ds.load()
+            return ds.load()
     except Exception as exc:  # h5py/h5netcdf raise many types for a damaged file
         raise InputError(f"result file: '{path}' is not a readable netCDF file ({exc})") from None
+
+
+def load_dataset(path: str | Path) -> xr.Dataset:
+    """Read a simulation run written by bearingdyn, or raise ``InputError`` saying why not."""
+    data = open_result(path)
     missing = [v for v in ("x", "y", "vx", "vy") if v not in data]
     if "t" not in data.coords or missing:
         raise InputError(f"result file: '{path}' is not a bearingdyn run "

@@ -102,6 +102,77 @@ def save_figure(fig: Figure, path) -> None:
     plt.close(fig)
 
 
+NATURE_COLORS = {1: "#2a9d8f", 2: "#8ab17d", 3: "#e9c46a", 4: "#5e7fd6", 5: "#e76f51"}
+NATURE_NAMES = {1: "periodic-1", 2: "periodic-2", 3: "periodic-n (n ≥ 3)",
+                4: "quasi-periodic", 5: "chaotic"}
+
+
+def diagram_figure(ds: xr.Dataset) -> Figure:
+    """Orbit diagram: grid parameter against the Poincaré samples of x and y (µm); the up-
+    and down-sweeps in different colours (hysteresis)."""
+    param = ds.attrs["param"]
+    fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True, layout="constrained")
+    for ax, var in zip(axes, ("x", "y"), strict=True):
+        for d, direction in enumerate(ds.direction.values):
+            values = ds[var].isel(direction=d)
+            grid = np.repeat(ds[param].values, values.sizes["k"])
+            ax.plot(grid, values.values.ravel() * MICRO, ",", color=f"C{d}", alpha=0.7)
+            ax.plot([], [], "o", ms=3, color=f"C{d}", label=f"sweep {direction}")
+        ax.set_ylabel(f"{var} on the {ds.attrs['section']} section (µm)")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=8)
+    unit = "rpm" if param == "speed_rpm" else ds.attrs.get(f"{param}_unit", "")
+    axes[1].set_xlabel(f"{param}" + (f" ({unit})" if unit else ""))
+    fig.suptitle(f"{ds.attrs['model']}, $N_b$ = {ds.attrs['n_balls']}: bifurcation diagram "
+                 f"({ds.sizes['k']} section points per value)", fontsize=10)
+    return fig
+
+
+def chart_figure(ds: xr.Dataset) -> Figure:
+    """Stability chart: the class of the motion on the grid (colours with a legend), and
+    the largest Lyapunov exponent."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    xname, yname = ds.attrs["x"], ds.attrs["y"]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
+    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
+    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    axes[0].pcolormesh(ds[xname], ds[yname], ds.nature_code, cmap=cmap, norm=norm,
+                       shading="nearest")
+    present = sorted(set(np.unique(ds.nature_code.values).tolist()))
+    axes[0].legend(handles=[Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k])
+                            for k in present], fontsize=8, loc="upper right")
+    axes[0].set_title("nature of the response", fontsize=9)
+    mesh = axes[1].pcolormesh(ds[xname], ds[yname], ds.lyapunov, cmap="RdBu_r",
+                              shading="nearest",
+                              vmin=-np.nanmax(np.abs(ds.lyapunov.values)),
+                              vmax=np.nanmax(np.abs(ds.lyapunov.values)))
+    fig.colorbar(mesh, ax=axes[1], label="largest Lyapunov exponent (1/s)")
+    axes[1].set_title("largest Lyapunov exponent", fontsize=9)
+    from matplotlib.ticker import MaxNLocator
+
+    for ax in axes:
+        ax.set_xlabel(xname + (" (rpm)" if xname == "speed_rpm" else ""))
+        ax.set_ylabel(yname)
+        if yname == "n_balls":
+            ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
+    return fig
+
+
+def any_figure(ds: xr.Dataset) -> Figure:
+    """The natural figure of any bearingdyn result file."""
+    kind = ds.attrs.get("kind")
+    if kind == "diagram":
+        return diagram_figure(ds)
+    if kind == "chart":
+        return chart_figure(ds)
+    if "special" in ds and "param" in ds.attrs:
+        return branch_figure([ds])
+    return paper_figure(ds)
+
+
 SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}
 
 

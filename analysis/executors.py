@@ -1,0 +1,126 @@
+"""One interface for running independent tasks: serially, in local processes, or on Dask.
+
+``executor.run(fn, tasks)`` yields ``(task, result)`` pairs as tasks finish, in any order.
+``fn`` must be a module-level function (it is pickled to other processes) and ``tasks``
+picklable. Failed tasks are retried (``retries`` times); a worker process that dies costs a
+retry of its task, not the sweep.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any, Protocol
+
+from analysis.errors import InputError
+
+
+class Executor(Protocol):
+    name: str
+
+    def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
+        """Yield (task, fn(task)) as tasks complete."""
+
+    def close(self) -> None: ...
+
+
+class SerialExecutor:
+    """Runs tasks one after the other in this process."""
+
+    name = "serial"
+
+    def run(self, fn, tasks):
+        for task in tasks:
+            yield task, fn(task)
+
+    def close(self) -> None:
+        pass
+
+
+class ProcessExecutor:
+    """Local worker processes (``concurrent.futures``); a broken pool is rebuilt and the
+    unfinished tasks resubmitted (up to ``retries`` times each)."""
+
+    def __init__(self, workers: int | None = None, retries: int = 2):
+        self.workers = workers or os.cpu_count() or 1
+        self.retries = retries
+        self.name = f"processes ({self.workers})"
+
+    def run(self, fn, tasks):
+        tasks = list(tasks)
+        todo, attempts = list(range(len(tasks))), [0] * len(tasks)
+        while todo:
+            broken = []
+            with cf.ProcessPoolExecutor(self.workers) as pool:
+                futures = {pool.submit(fn, tasks[i]): i for i in todo}
+                for future in cf.as_completed(futures):
+                    i = futures[future]
+                    try:
+                        result = future.result()
+                    except cf.process.BrokenProcessPool:  # a worker died: retry its tasks
+                        broken.append(i)
+                        continue
+                    yield tasks[i], result
+            for i in broken:
+                attempts[i] += 1
+                if attempts[i] > self.retries:
+                    raise RuntimeError(f"task {tasks[i]!r} lost its worker "
+                                       f"{attempts[i]} times")
+            todo = broken
+
+    def close(self) -> None:
+        pass
+
+
+class DaskExecutor:
+    """A Dask distributed cluster: an existing scheduler (``tcp://host:port``) or a
+    ``LocalCluster`` started here with ``workers`` single-threaded worker processes."""
+
+    def __init__(self, scheduler: str | None = None, workers: int | None = None,
+                 retries: int = 2):
+        from distributed import Client, LocalCluster
+
+        self.retries = retries
+        self.cluster = None
+        if scheduler:
+            try:
+                self.client = Client(scheduler, timeout="20s")
+            except OSError as exc:
+                raise InputError(f"--scheduler: cannot reach {scheduler} ({exc})") from None
+            self.name = f"dask {scheduler}"
+        else:
+            n = workers or os.cpu_count() or 1
+            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                        host="127.0.0.1", dashboard_address=None)
+            self.client = Client(self.cluster)
+            self.name = f"dask LocalCluster ({n} workers)"
+
+    def run(self, fn, tasks):
+        from distributed import as_completed
+
+        tasks = list(tasks)
+        futures = {self.client.submit(fn, task, retries=self.retries, pure=False): i
+                   for i, task in enumerate(tasks)}
+        for future in as_completed(futures):
+            yield tasks[futures[future]], future.result()
+
+    def close(self) -> None:
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def make_executor(kind: str = "processes", workers: int | None = None,
+                  scheduler: str | None = None) -> Executor:
+    """``serial``, ``processes`` (default: all cores) or ``dask`` (``scheduler`` address,
+    or a LocalCluster with ``workers`` workers)."""
+    if scheduler:
+        return DaskExecutor(scheduler=scheduler)
+    if kind == "serial":
+        return SerialExecutor()
+    if kind == "processes":
+        return ProcessExecutor(workers)
+    if kind == "dask":
+        return DaskExecutor(workers=workers)
+    raise InputError(f"--executor: must be serial, processes or dask, got {kind!r}")
