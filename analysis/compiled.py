@@ -1,0 +1,318 @@
+"""RK4 in blocks of steps, compiled to a shared library and cached, or in the CasADi VM.
+
+A long run is a sequence of calls into *blocks*: CasADi Functions that take the state after
+step ``n`` and return the states after the next ``size`` RK4 steps (one column each).
+The block sizes are fixed (``BLOCK_SIZES``: 10 000, 1000, 100, 10, 1), so any number of steps
+is covered by at most 36 calls besides the full blocks, and a model needs one compilation
+for every run, whatever its duration or decimation.
+
+The step counter ``n`` travels with the state, ``[x, y, vx, vy, n]``, and the time of step
+``n`` is ``t0 + n·h``: exact to one rounding however long the run, and the same whichever
+blocks cover it, so a result does not depend on how the run was cut into calls.
+
+Compiled path: CasADi writes the C source of the blocks (and of ``rhs``, ``rhs_jac``,
+``rk4_step``); the system C compiler turns it into a shared library in the user cache
+directory (``BEARINGDYN_CACHE``, default ``platformdirs.user_cache_dir("bearingdyn")``),
+named by the SHA-256 of the source, the compiler command, its flags and the CasADi version;
+``casadi.external`` loads it. The library is written under a temporary name and renamed, so
+concurrent processes (sweep workers) never see half a file. A cached library that does not
+load or does not reproduce the VM's ``rk4_step`` is rebuilt. Without a working compiler the
+blocks run in the CasADi virtual machine, after one warning. Both paths evaluate the same
+operations in the same order: their results agree to rounding (bit for bit with the
+default flags on x86-64).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shlex
+import shutil
+import subprocess
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+BLOCK_SIZES = (10_000, 1000, 100, 10, 1)
+"""RK4 steps per block, largest first; each is ten of the next."""
+DEFAULT_CC = "gcc"
+DEFAULT_CFLAGS = ("-O3", "-fno-math-errno", "-fno-semantic-interposition",
+                  "-ffp-contract=off")
+"""-O3 without fast-math: the same IEEE operations as the VM. -fno-math-errno lets sqrt
+inline (no errno branch; values unchanged); -fno-semantic-interposition lets CasADi's
+helper functions inline in a -fPIC library; -ffp-contract=off keeps a*b+c two roundings
+even when BEARINGDYN_CFLAGS adds -march=native (FMA), so compiled and VM results stay
+identical. No -march=native by default: a cache directory shared by machines of different
+CPUs (a cluster home directory) must not hand one of them instructions it lacks."""
+LAYOUT_VERSION = "1"
+"""Bumped when the layout of the compiled library changes (part of the cache key)."""
+_SELF_TEST_RTOL = 1e-12
+
+
+class CompileError(RuntimeError):
+    """The C compiler is missing or failed."""
+
+
+def cache_dir() -> Path:
+    """Folder of the compiled libraries: $BEARINGDYN_CACHE or the user cache directory."""
+    env = os.environ.get("BEARINGDYN_CACHE")
+    if env:
+        return Path(env).expanduser()
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("bearingdyn")) / "compiled"
+
+
+def compiler_command() -> list[str]:
+    """The C compiler and its flags: $BEARINGDYN_CC (else $CC, else gcc), $BEARINGDYN_CFLAGS
+    (else ``DEFAULT_CFLAGS``)."""
+    cc = os.environ.get("BEARINGDYN_CC") or os.environ.get("CC") or DEFAULT_CC
+    flags = os.environ.get("BEARINGDYN_CFLAGS")
+    return [*shlex.split(cc), *(shlex.split(flags) if flags is not None else DEFAULT_CFLAGS)]
+
+
+def rk4_blocks(funcs: Any) -> dict[int, ca.Function]:
+    """The block Functions of a model's ``rk4_step``, by size.
+
+    ``rk4_block<size>(zn [5], p, h, t0) -> Z [5 x size]``: ``zn = [x, y, vx, vy, n]`` is the
+    state (m, m/s) after step ``n``; column ``j`` of ``Z`` is the state after step
+    ``n + j + 1``; step ``k`` runs from ``t0 + k·h`` to ``t0 + (k + 1)·h`` (s). The
+    subexpressions of a step that depend on ``p``, ``h`` and ``t0`` only (cage speed, the
+    rotations of the cage angle by ω_cage·h/2 and ω_cage·h, …) are computed once per call
+    (``casadi.extract_parametric``): the same operations as per step, so the same values.
+    """
+    n_par = funcs.rk4_step.size1_in(2)
+    zn, p = ca.SX.sym("zn", 5), ca.SX.sym("p", n_par)
+    h, t0 = ca.SX.sym("h"), ca.SX.sym("t0")
+    z_next = funcs.rk4_step(t0 + zn[4] * h, zn[:4], p, h)
+    step, extracted, values = ca.extract_parametric(ca.vertcat(z_next, zn[4] + 1),
+                                                    ca.vertcat(p, h, t0))
+    q = ca.vertcat(*extracted)
+    constants = ca.Function("rk4_constants", [p, h, t0], [ca.vertcat(*values)])
+    inner = {1: ca.Function("rk4_steps1", [zn, p, h, t0, q], [step])}
+    names, blocks = ["zn", "p", "h", "t0"], {}
+    for size in sorted(BLOCK_SIZES):
+        zn_m, p_m = ca.MX.sym("zn", 5), ca.MX.sym("p", n_par)
+        h_m, t0_m, q_m = ca.MX.sym("h"), ca.MX.sym("t0"), ca.MX.sym("q", q.numel())
+        if size > 1:  # ten calls of the next smaller size
+            parts, current = [], zn_m
+            for _ in range(10):
+                parts.append(inner[size // 10](current, p_m, h_m, t0_m, q_m))
+                current = parts[-1][:, -1]
+            inner[size] = ca.Function(f"rk4_steps{size}", [zn_m, p_m, h_m, t0_m, q_m],
+                                      [ca.horzcat(*parts)])
+        out = inner[size](zn_m, p_m, h_m, t0_m, constants(p_m, h_m, t0_m))
+        blocks[size] = ca.Function(f"rk4_block{size}", [zn_m, p_m, h_m, t0_m], [out], names,
+                                   ["Z"])
+    return blocks
+
+
+def _library_functions(funcs: Any) -> list[ca.Function]:
+    blocks = rk4_blocks(funcs)
+    return [funcs.rhs, funcs.jac, funcs.rk4_step, *(blocks[s] for s in BLOCK_SIZES)]
+
+
+def _c_source(functions: list[ca.Function], prefix: str) -> str:
+    cg = ca.CodeGenerator(f"{prefix}.c", {"with_header": False})
+    for f in functions:
+        cg.add(f)
+    return cg.dump()
+
+
+def _compile(source: str, target: Path, command: list[str]) -> None:
+    """Compile ``source`` to the shared library ``target`` (written atomically)."""
+    exe = shutil.which(command[0])
+    if exe is None:
+        raise CompileError(f"C compiler '{command[0]}' not found")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
+        src = Path(tmp) / f"{target.stem}.c"
+        src.write_text(source)
+        so = Path(tmp) / target.name
+        try:
+            res = subprocess.run([exe, *command[1:], "-shared", "-fPIC", "-o", str(so),
+                                  str(src), "-lm"], capture_output=True, text=True,
+                                 timeout=600)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise CompileError(f"C compiler '{command[0]}' failed: {exc}") from None
+        if res.returncode != 0:
+            tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-5:])
+            raise CompileError(f"C compiler '{command[0]}' failed (exit {res.returncode}):"
+                               f"\n{tail}")
+        os.replace(src, target.with_suffix(".c"))
+        os.replace(so, target)
+
+
+@dataclass
+class Library:
+    """Functions of one model and number of balls, compiled or in the VM."""
+
+    backend: str
+    """``"compiled"`` or ``"casadi-vm"``."""
+    blocks: dict[int, ca.Function]
+    rhs: ca.Function
+    jac: ca.Function
+    rk4_step: ca.Function
+    path: Path | None = None
+    """The shared library (compiled backend)."""
+
+
+@dataclass
+class _Registry:
+    libraries: dict[tuple, Library] = field(default_factory=dict)
+    compilations: int = 0
+    warned: bool = False
+
+
+_REGISTRY = _Registry()
+
+
+def compilations() -> int:
+    """How many libraries this process has compiled (loads from the cache do not count)."""
+    return _REGISTRY.compilations
+
+
+def _fallback_warning(reason: str) -> None:
+    if not _REGISTRY.warned:
+        _REGISTRY.warned = True
+        warnings.warn(
+            f"bearingdyn: {reason}; running RK4 in the CasADi virtual machine (same results, "
+            f"about 10x slower). Install a C compiler (gcc) or point BEARINGDYN_CC at one; "
+            f"pass compiled=False (--no-compile) to silence this.", RuntimeWarning,
+            stacklevel=3)
+
+
+def vm_library(funcs: Any) -> Library:
+    """The block functions evaluated by the CasADi virtual machine."""
+    return Library("casadi-vm", rk4_blocks(funcs), funcs.rhs, funcs.jac, funcs.rk4_step)
+
+
+def library(model: Any, n_balls: int, compiled: bool = True) -> Library:
+    """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``n_balls`` balls.
+
+    ``compiled``: load the shared library from the cache, or build it there once; when no
+    compiler works, warn once and use the VM. ``compiled=False``: the VM. Memoised per
+    process.
+    """
+    command = compiler_command() if compiled else []
+    memo = (model.name, model.spec_sha256, n_balls, tuple(command), str(cache_dir()))
+    if memo not in _REGISTRY.libraries:
+        funcs = model.functions(n_balls)
+        lib = None
+        if compiled:
+            try:
+                lib = _compiled_library(model, n_balls, funcs, command)
+            except CompileError as exc:
+                _fallback_warning(str(exc))
+        _REGISTRY.libraries[memo] = lib or vm_library(funcs)
+    return _REGISTRY.libraries[memo]
+
+
+def _compiled_library(model: Any, n_balls: int, funcs: Any, command: list[str]) -> Library:
+    functions = _library_functions(funcs)
+    stem = f"bd_{model.name.replace('-', '_')}_nb{n_balls}"
+    source = _c_source(functions, stem)
+    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
+                         .encode()).hexdigest()
+    path = cache_dir() / f"{stem}_{key[:20]}.so"
+    p = model.parameter_vector(model.defaults)
+    if path.exists():
+        lib = _checked_load(path, functions, p)
+        if lib is not None:
+            return lib
+        # unreadable or wrong (a crash while writing it, a bad copy): build it again
+    _compile(source, path, command)
+    _REGISTRY.compilations += 1
+    lib = _checked_load(path, functions, p)
+    if lib is None:
+        raise CompileError(f"the library built by '{command[0]}' does not reproduce the "
+                           f"CasADi VM (check BEARINGDYN_CFLAGS: no fast-math)")
+    return lib
+
+
+def _checked_load(path: Path, functions: list[ca.Function], p: np.ndarray) -> Library | None:
+    """The library at ``path``, or None when it does not load or its ``rk4_step`` and
+    10-step block do not reproduce the VM's (``functions``) on a test state."""
+    z = np.array([1.3e-5, -4e-6, 2e-3, -1e-3])
+    tests = {2: (0.1234, z, p, 1e-5), len(functions) - 2: (np.append(z, 7.0), p, 1e-5, 0.1)}
+    try:
+        loaded = [ca.external(f.name(), str(path)) for f in functions]
+        for i, args in tests.items():
+            want = np.asarray(functions[i](*args))
+            got = np.asarray(loaded[i](*args))
+            if not np.all(np.abs(got - want) <= _SELF_TEST_RTOL * np.abs(want).max()):
+                return None  # the externals are freed here: a rebuilt file loads afresh
+    except RuntimeError:  # not a library, or one with other functions or shapes
+        return None
+    rhs, jac, step, *blocks = loaded
+    return Library("compiled", dict(zip(BLOCK_SIZES, blocks, strict=True)), rhs, jac, step,
+                   path)
+
+
+def block_plan(n_steps: int) -> list[int]:
+    """Block sizes covering ``n_steps`` steps: full blocks of the largest size, then the
+    remainder digit by digit."""
+    plan = []
+    for size in BLOCK_SIZES:
+        count, n_steps = divmod(n_steps, size)
+        plan += [size] * count
+    return plan
+
+
+class Runner:
+    """Calls a library's blocks through preallocated buffers (no per-call conversions)."""
+
+    def __init__(self, lib: Library, p: np.ndarray, h: float, t0: float = 0.0):
+        self.backend = lib.backend
+        self._zn = np.zeros(5)
+        self._p = np.ascontiguousarray(p, dtype=float)
+        self._h, self._t0 = np.array([float(h)]), np.array([float(t0)])
+        self._calls: dict[int, tuple[Any, np.ndarray, Any]] = {}
+        for size, fn in lib.blocks.items():
+            buf, call = fn.buffer()
+            out = np.empty((size, 5))  # CasADi's column-major 5 x size
+            for i, arr in enumerate((self._zn, self._p, self._h, self._t0)):
+                buf.set_arg(i, memoryview(arr))
+            buf.set_res(0, memoryview(out))
+            self._calls[size] = (buf, out, call)
+
+    def blocks(self, z0: np.ndarray, n_steps: int) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield ``(n, states)`` per block: ``states[j]`` is ``[x, y, vx, vy, n + j + 1]``
+        after step ``n + j + 1``. The array is reused by the next block: copy what you keep.
+        """
+        self._zn[:4] = z0
+        self._zn[4] = 0.0
+        done = 0
+        for size in block_plan(n_steps):
+            _, out, call = self._calls[size]
+            call()
+            yield done, out
+            self._zn[:] = out[-1]
+            done += size
+
+
+def run_rk4(lib: Library, p: np.ndarray, z0: np.ndarray, h: float, n_steps: int,
+            save_every: int = 1, t0: float = 0.0,
+            check: Callable[[np.ndarray], None] | None = None) -> np.ndarray:
+    """``n_steps`` RK4 steps of ``h`` seconds from ``z0`` at ``t0``; the states after every
+    ``save_every``-th step, shape (4, 1 + n_steps // save_every), ``z0`` first.
+
+    ``check(states)`` sees every block as it is done (rows ``[x, y, vx, vy, n]``, ``n`` the
+    step after which the row holds) and may raise to stop the run.
+    """
+    out = np.empty((4, 1 + n_steps // save_every))
+    out[:, 0] = z0
+    for done, block in Runner(lib, p, h, t0).blocks(z0, n_steps):
+        first = -(done + 1) % save_every  # row of the first step to keep
+        kept = block[first::save_every, :4]
+        start = (done + first + 1) // save_every
+        out[:, start:start + len(kept)] = kept.T
+        if check is not None:
+            check(block)
+    return out

@@ -1,0 +1,122 @@
+"""The compiled RK4 path: same results as the VM, cached across loads, safe fallbacks."""
+
+from __future__ import annotations
+
+import shutil
+import warnings
+
+import numpy as np
+import pytest
+
+from analysis import compiled
+from analysis.model import load_model
+from analysis.simulate import simulate
+
+MODEL, N_BALLS = "vakharia2015", 8
+CALM = dict(damping=2000.0)
+"""Non-chaotic setting: the rotor settles (see docs/numerics.md)."""
+
+
+@pytest.fixture(scope="module")
+def built_cache(tmp_path_factory):
+    """A cache directory holding the compiled library of MODEL, N_BALLS."""
+    root = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("BEARINGDYN_CACHE", str(root))
+        mp.setattr(compiled, "_REGISTRY", compiled._Registry())
+        lib = compiled.library(load_model(MODEL), N_BALLS)
+    assert lib.backend == "compiled" and lib.path.parent == root
+    return root
+
+
+@pytest.fixture
+def cache(built_cache, tmp_path, monkeypatch):
+    """A private copy of the built cache and a fresh in-process registry."""
+    root = tmp_path / "cache"
+    shutil.copytree(built_cache, root)
+    monkeypatch.setenv("BEARINGDYN_CACHE", str(root))
+    monkeypatch.delenv("BEARINGDYN_CC", raising=False)
+    monkeypatch.delenv("BEARINGDYN_CFLAGS", raising=False)
+    monkeypatch.setattr(compiled, "_REGISTRY", compiled._Registry())
+    return root
+
+
+def _library_file(root):
+    (path,) = root.glob("*.so")
+    return path
+
+
+def _run(**kwargs):
+    return simulate(MODEL, N_BALLS, duration=0.05, transient=0.0, save_every=7,
+                    **CALM, **kwargs)
+
+
+def test_compiled_and_vm_results_are_identical(cache):
+    fast, vm = _run(), _run(compiled=False)
+    assert compiled.library(load_model(MODEL), N_BALLS).backend == "compiled"
+    for var in ("x", "y", "vx", "vy"):
+        a, b = fast[var].values, vm[var].values
+        assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max()
+
+
+def test_cached_library_is_reused_without_compiling(cache):
+    path = _library_file(cache)
+    mtime = path.stat().st_mtime_ns
+    lib = compiled.library(load_model(MODEL), N_BALLS)
+    assert lib.backend == "compiled" and lib.path == path
+    assert compiled.compilations() == 0
+    assert path.stat().st_mtime_ns == mtime
+    assert compiled.library(load_model(MODEL), N_BALLS) is lib  # memoised in the process
+
+
+def test_missing_compiler_falls_back_to_the_vm_with_one_warning(cache, monkeypatch):
+    monkeypatch.setenv("BEARINGDYN_CC", "/nonexistent/bin/cc")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        first = _run()
+        second = simulate(MODEL, 6, duration=0.01, transient=0.0)
+    messages = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+    assert len(messages) == 1 and "/nonexistent/bin/cc" in messages[0]
+    assert "virtual machine" in messages[0]
+    assert compiled.compilations() == 0 and second.sizes["t"] == 1001
+    np.testing.assert_array_equal(first.x.values, _run(compiled=False).x.values)
+
+
+def test_corrupted_library_is_rebuilt(cache):
+    path = _library_file(cache)
+    path.write_bytes(b"\x7fELF but not really a shared library")
+    lib = compiled.library(load_model(MODEL), N_BALLS)
+    assert lib.backend == "compiled" and compiled.compilations() == 1
+    assert path.stat().st_size > 1000
+    np.testing.assert_array_equal(_run().x.values, _run(compiled=False).x.values)
+
+
+def test_library_of_another_model_under_the_name_is_rebuilt(cache):
+    """A library that loads but computes something else fails the self-test."""
+    path = _library_file(cache)
+    other = compiled.library(load_model("balanced-rotor"), N_BALLS)
+    assert compiled.compilations() == 1
+    shutil.copyfile(other.path, path)
+    lib = compiled.library(load_model(MODEL), N_BALLS)
+    assert lib.backend == "compiled" and compiled.compilations() == 2
+
+
+def test_result_does_not_depend_on_how_the_run_is_cut_into_blocks(cache):
+    """Time is t0 + n·h from the step counter: a longer run repeats a shorter one exactly."""
+    short = simulate(MODEL, N_BALLS, duration=0.01234, transient=0.0, **CALM)
+    long = simulate(MODEL, N_BALLS, duration=0.02, transient=0.0, **CALM)
+    np.testing.assert_array_equal(short.x.values, long.x.values[:short.sizes["t"]])
+
+
+def test_decimation_across_blocks_keeps_every_nth_step(cache):
+    full = simulate(MODEL, N_BALLS, duration=0.12345, transient=0.0, **CALM)
+    thin = simulate(MODEL, N_BALLS, duration=0.12345, transient=0.0, save_every=7, **CALM)
+    np.testing.assert_array_equal(thin.vy.values, full.vy.values[::7])
+    np.testing.assert_allclose(thin.t.values, full.t.values[::7], rtol=1e-15)
+
+
+@pytest.mark.parametrize("n_steps", [0, 1, 9, 10, 11, 12345, 30_001])
+def test_block_plan_covers_the_steps_in_few_calls(n_steps):
+    plan = compiled.block_plan(n_steps)
+    assert sum(plan) == n_steps and plan == sorted(plan, reverse=True)
+    assert len(plan) - plan.count(compiled.BLOCK_SIZES[0]) <= 36
