@@ -460,6 +460,43 @@ def plot(
 
 @app.command()
 @reports_errors
+def reproduce(
+    model: Annotated[str, typer.Argument(help="The paper's model.")] = "vakharia2015",
+    out_dir: Annotated[Path, typer.Option("-o", "--out-dir", help="Report folder.")] = Path(
+        "bearingdyn-reproduction"),
+    quick: Annotated[bool, typer.Option(
+        "--quick", help="Short runs and two values per sensitivity parameter (a smoke test; "
+                        "verdicts less reliable).")] = False,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    quiet: QuietOption = False,
+):
+    """Reproduce the paper: Table 2 and Figs. 2-6 side by side with the paper, sensitivity
+    to the omitted parameters, provenance (report.md, report.html, table2.json)."""
+    from analysis.report import write_reproduction
+    from analysis.reproduce import SENSITIVITY
+    from analysis.reproduce import reproduce as run_reproduce
+    from analysis.sweep import ProgressReporter
+
+    kwargs = {}
+    if quick:
+        kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
+                      sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()})
+    ex = _executor(executor, workers, scheduler)
+    try:
+        rep = run_reproduce(out_dir, model, executor=ex, log=None if quiet else typer.echo,
+                            progress_factory=lambda label: ProgressReporter(label, quiet),
+                            **kwargs)
+    finally:
+        ex.close()
+    paths = write_reproduction(rep, out_dir)
+    typer.echo(f"wrote {paths['markdown']}, {paths['html']}, {paths['json']} "
+               f"({rep.wall_s:.0f} s)")
+
+
+@app.command()
+@reports_errors
 def run(
     out_dir: Annotated[Path, typer.Option("-o", "--out-dir", help="Output folder.")] = Path(
         "bearingdyn-out"),

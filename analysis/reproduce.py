@@ -1,0 +1,175 @@
+"""Reproduce the seed paper: its Table 2 and Figs. 2-6 next to what the equations give, and how
+the verdicts depend on the parameters the paper does not state.
+
+``reproduce()`` computes; ``analysis.report.write_reproduction`` renders the report folder.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import xarray as xr
+
+from analysis.classify import classify
+from analysis.executors import Executor
+from analysis.io import save_dataset
+from analysis.lyapunov import lyapunov
+from analysis.model import load_model
+from analysis.simulate import simulate
+from analysis.spectrum import Peak, find_peaks
+from analysis.sweep import Axis, Setting, stability_chart
+
+
+@dataclass(frozen=True)
+class PaperRow:
+    """One row of the paper's Table 2 (labels in our ASCII form, e.g. ``VC-X``)."""
+
+    major_x: str
+    major_y: str
+    others_x: tuple[str, ...]
+    others_y: tuple[str, ...]
+    nature: str
+    """chaotic, quasi-periodic, or multi-orbit periodic (the paper's words)."""
+
+
+PAPER_TABLE2: dict[int, PaperRow] = {
+    6: PaperRow("2X", "X", ("X", "VC-X", "2X", "VC", "VC+X"), ("VC-X", "VC"), "chaotic"),
+    7: PaperRow("X", "X", ("2X", "VC"), ("VC-X",), "quasi-periodic"),
+    8: PaperRow("X", "X", ("2X", "VC-X", "VC", "VC+X"), (), "quasi-periodic"),
+    9: PaperRow("X", "X", ("2X", "VC"), (), "quasi-periodic"),
+    10: PaperRow("X", "X", ("2X", "VC-X", "VC"), (), "multi-orbit periodic"),
+}
+"""Table 2 of the paper, transcribed. N_b = 5 is only in the conclusions: 'chaotic'."""
+PAPER_NATURE = {5: "chaotic", **{n: row.nature for n, row in PAPER_TABLE2.items()}}
+
+SENSITIVITY: dict[str, tuple[float, ...]] = {
+    "damping": (50.0, 100.0, 200.0, 300.0, 400.0),
+    "rotor_mass": (0.3, 0.6, 0.9, 1.2),
+    "contact_stiffness": tuple(7.055e9 * f for f in (0.8, 0.9, 1.0, 1.1, 1.2)),
+}
+"""Plausible ranges of the quantities the paper omits (N·s/m, kg, N/m^1.5)."""
+
+
+def nature_matches(paper: str, ours: str) -> bool:
+    """Whether our class agrees with the paper's word for it."""
+    if paper == "multi-orbit periodic":
+        return ours.startswith("periodic-") and ours != "periodic-1"
+    return ours == paper
+
+
+@dataclass
+class Row:
+    """Our result for one N_b, with the paper's row (None for N_b outside Table 2)."""
+
+    n_balls: int
+    peaks: dict[str, list[Peak]]
+    nature: str
+    detail: str
+    lyapunov: float
+    ci95: float
+    figure: Path
+    netcdf: Path
+    paper: PaperRow | None = None
+
+    def major(self, var: str) -> str:
+        return _name(self.peaks[var][0]) if self.peaks[var] else "-"
+
+    def others(self, var: str) -> list[str]:
+        names: list[str] = []
+        for p in self.peaks[var][1:]:
+            if p.label and _name(p) not in names and _name(p) != self.major(var):
+                names.append(_name(p))
+        return names
+
+    def marks(self) -> dict[str, bool | None]:
+        """Per column: True (matches the paper), False, or None (no paper value)."""
+        if self.paper is None:
+            nature = PAPER_NATURE.get(self.n_balls)
+            return {"nature": None if nature is None else nature_matches(nature, self.nature)}
+        p = self.paper
+        return {"major_x": self.major("x") == p.major_x, "major_y": self.major("y") == p.major_y,
+                "others_x": set(p.others_x) <= set(self.others("x")) | {self.major("x")},
+                "others_y": set(p.others_y) <= set(self.others("y")) | {self.major("y")},
+                "nature": nature_matches(p.nature, self.nature)}
+
+
+def _name(peak: Peak) -> str:
+    return peak.label or f"{peak.frequency_hz:.0f} Hz"
+
+
+@dataclass
+class Reproduction:
+    model: str
+    rows: list[Row]
+    sensitivity: dict[str, xr.Dataset] = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+
+    def reproduced_ranges(self) -> dict[str, list[float]]:
+        """For each varied parameter, the values at which every N_b gets the paper's class."""
+        out = {}
+        for name, chart in self.sensitivity.items():
+            ok = []
+            for value in chart[name].values:
+                col = chart.sel({name: value})
+                if all(nature_matches(PAPER_NATURE[int(nb)], str(col.sel(n_balls=nb).nature.item()))
+                       for nb in chart.n_balls.values if int(nb) in PAPER_NATURE):
+                    ok.append(float(value))
+            out[name] = ok
+        return out
+
+
+def reproduce(
+    out_dir: str | Path,
+    model: str = "vakharia2015",
+    n_balls: Sequence[int] = (5, 6, 7, 8, 9, 10),
+    *,
+    duration: float = 3.0,
+    transient: float = 1.0,
+    revolutions: int = 200,
+    sensitivity: dict[str, Sequence[float]] | None = None,
+    executor: Executor | None = None,
+    log: Callable[[str], None] | None = None,
+    progress_factory: Callable[[str], Callable[[int, int], None]] | None = None,
+) -> Reproduction:
+    """Simulate the paper's case for each N_b (``duration`` s, the first ``transient`` s
+    dropped), classify it with its largest Lyapunov exponent, and chart the verdicts over
+    the ``sensitivity`` ranges (default ``SENSITIVITY``). Results go to ``out_dir``."""
+    from analysis.plots import paper_figure, save_figure
+
+    start = time.perf_counter()
+    out = Path(out_dir)
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    mdl = load_model(model)
+    rows = []
+    for nb in n_balls:
+        ds = simulate(mdl, nb, duration=duration, transient=transient)
+        exps = lyapunov(mdl, nb, duration=duration - transient, transient=0.0,
+                        n_exponents=1, initial_state=tuple(float(ds[v][0]) for v in
+                                                           ("x", "y", "vx", "vy")))
+        verdict = classify(ds, exponents=exps)
+        nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
+        save_dataset(ds, nc)
+        save_figure(paper_figure(ds), png)
+        rows.append(Row(nb, {v: find_peaks(ds, v) for v in ("x", "y")}, verdict.nature,
+                        verdict.detail, float(exps.exponents[0]), float(exps.ci95[0]), png,
+                        nc, PAPER_TABLE2.get(nb)))
+        if log:
+            log(f"N_b = {nb}: {verdict.nature} (λ1 = {rows[-1].lyapunov:.3g} ± "
+                f"{rows[-1].ci95:.2g} 1/s)")
+    charts = {}
+    setting = Setting(model, None, {}, transient, revolutions)
+    for name, values in (SENSITIVITY if sensitivity is None else sensitivity).items():
+        progress = progress_factory(f"sensitivity {name}") if progress_factory else None
+        charts[name] = stability_chart(setting, Axis(name, tuple(float(v) for v in values)),
+                                       Axis("n_balls", tuple(float(n) for n in n_balls)),
+                                       out / "runs" / f"sensitivity-{name}.nc",
+                                       executor=executor, progress=progress)
+    return Reproduction(model, rows, charts,
+                        {"duration": duration, "transient": transient,
+                         "revolutions": revolutions, "n_balls": list(n_balls)},
+                        time.perf_counter() - start)
+
