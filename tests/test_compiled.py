@@ -120,3 +120,39 @@ def test_block_plan_covers_the_steps_in_few_calls(n_steps):
     plan = compiled.block_plan(n_steps)
     assert sum(plan) == n_steps and plan == sorted(plan, reverse=True)
     assert len(plan) - plan.count(compiled.BLOCK_SIZES[0]) <= 36
+
+
+# The benchmark (analysis/bench.py): its hand-written paths compute the same model.
+
+def test_benchmark_reference_matches_the_generated_model():
+    from analysis import bench
+
+    model = load_model(bench.MODEL)
+    for values in (model.defaults, model.parameters(bench.CALM)):
+        bench.check_reference(model, values, bench.N_BALLS)
+
+
+def test_benchmark_rk4_paths_agree_with_the_compiled_one():
+    from analysis import bench
+
+    model = load_model(bench.MODEL)
+    values = model.parameters(bench.CALM)
+    ref = bench.Reference.from_parameters(values, bench.N_BALLS)
+    z0 = np.array([1e-6, 1e-6, 0.0, 0.0])
+    lib = compiled.library(model, bench.N_BALLS)
+    want = compiled.run_rk4(lib, model.parameter_vector(values), z0, bench.DT, 300).T
+    runs = [bench.numpy_rk4(ref, z0, bench.DT, 300)]
+    if (kernel := bench.numba_rk4()) is not None:
+        runs.append(kernel(ref, z0, bench.DT, 300))
+    for got in runs:  # same formulas, different rounding: agreement to rounding
+        assert np.all(np.abs(got - want) <= 1e-12 * np.abs(want).max(axis=0))
+
+
+def test_bench_command_prints_the_table(cli):
+    res = cli("bench", "--repeat", "1", "--duration", "0.002", "--memory-duration", "0.01")
+    assert res.returncode == 0, res.stderr
+    for text in ("| (a) bearingdyn RK4", "| (d) SciPy solve_ivp", "target (d)/(a) >= 300",
+                 "target <= 1e-09 met", "peak memory of a 0.01 s run"):
+        assert text in res.stdout
+    bad = cli("bench", "--repeat", "0")
+    assert bad.returncode == 2 and "--repeat" in bad.stderr
