@@ -130,23 +130,23 @@ def _compile(source: str, target: Path, command: list[str]) -> None:
     exe = shutil.which(command[0])
     if exe is None:
         raise CompileError(f"C compiler '{command[0]}' not found")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
-        src = Path(tmp) / f"{target.stem}.c"
-        src.write_text(source)
-        so = Path(tmp) / target.name
-        try:
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
+            src = Path(tmp) / f"{target.stem}.c"
+            src.write_text(source)
+            so = Path(tmp) / target.name
             res = subprocess.run([exe, *command[1:], "-shared", "-fPIC", "-o", str(so),
                                   str(src), "-lm"], capture_output=True, text=True,
                                  timeout=600)
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            raise CompileError(f"C compiler '{command[0]}' failed: {exc}") from None
-        if res.returncode != 0:
-            tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-5:])
-            raise CompileError(f"C compiler '{command[0]}' failed (exit {res.returncode}):"
-                               f"\n{tail}")
-        os.replace(src, target.with_suffix(".c"))
-        os.replace(so, target)
+            if res.returncode != 0:
+                tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-5:])
+                raise CompileError(f"C compiler '{command[0]}' failed (exit "
+                                   f"{res.returncode}):\n{tail}")
+            os.replace(src, target.with_suffix(".c"))
+            os.replace(so, target)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        raise CompileError(f"could not build {target.name} in {target.parent}: {exc}") from None
 
 
 @dataclass
@@ -183,8 +183,9 @@ def _fallback_warning(reason: str) -> None:
         _REGISTRY.warned = True
         warnings.warn(
             f"bearingdyn: {reason}; running RK4 in the CasADi virtual machine (same results, "
-            f"about 10x slower). Install a C compiler (gcc) or point BEARINGDYN_CC at one; "
-            f"pass compiled=False (--no-compile) to silence this.", RuntimeWarning,
+            f"about 10x slower). Install a C compiler (gcc), or point BEARINGDYN_CC at one and "
+            f"BEARINGDYN_CACHE at a writable folder; compiled=False (--no-compile) silences "
+            f"this.", RuntimeWarning,
             stacklevel=3)
 
 

@@ -69,14 +69,20 @@ def test_cached_library_is_reused_without_compiling(cache):
     assert compiled.library(load_model(MODEL), N_BALLS) is lib  # memoised in the process
 
 
-def test_missing_compiler_falls_back_to_the_vm_with_one_warning(cache, monkeypatch):
-    monkeypatch.setenv("BEARINGDYN_CC", "/nonexistent/bin/cc")
+@pytest.mark.parametrize(("variable", "value", "reason"), [
+    ("BEARINGDYN_CC", "/nonexistent/bin/cc", "'/nonexistent/bin/cc' not found"),
+    ("BEARINGDYN_CACHE", "{tmp}/a-file/cache", "could not build"),  # a file in the way
+])
+def test_missing_compiler_falls_back_to_the_vm_with_one_warning(cache, monkeypatch, tmp_path,
+                                                                variable, value, reason):
+    (tmp_path / "a-file").write_text("")
+    monkeypatch.setenv(variable, value.format(tmp=tmp_path))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         first = _run()
         second = simulate(MODEL, 6, duration=0.01, transient=0.0)
     messages = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
-    assert len(messages) == 1 and "/nonexistent/bin/cc" in messages[0]
+    assert len(messages) == 1 and reason in messages[0]
     assert "virtual machine" in messages[0]
     assert compiled.compilations() == 0 and second.sizes["t"] == 1001
     np.testing.assert_array_equal(first.x.values, _run(compiled=False).x.values)
