@@ -1,0 +1,263 @@
+"""The documentation site: it builds strictly, its images exist, its commands are real.
+
+The site is built with ``mkdocs build --strict`` (CI installs the ``docs`` extra and builds it
+before the tests too). The other checks read the Markdown sources and the typer app, so they
+need no MkDocs.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import shlex
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+import typer.main
+
+from analysis.cli import app
+from tests.conftest import ROOT
+
+DOCS = ROOT / "docs"
+PAGES = sorted(DOCS.rglob("*.md"))
+MODEL_CARDS = sorted((ROOT / "generated").glob("*/MODEL.md"))
+GROUP = typer.main.get_command(app)
+COMMANDS = {name: cmd for name, cmd in GROUP.commands.items() if not cmd.hidden}
+SHELL_LANGUAGES = {"", "bash", "sh", "shell", "console"}
+
+FENCE = re.compile(r"^```([\w-]*)[^\n]*\n(.*?)^```[ \t]*$", re.M | re.S)
+IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)|<img[^>]*\ssrc=\"([^\"]+)\"")
+INLINE_COMMAND = re.compile(r"(?<!`)`(bearingdyn [^`\n]+)`")
+
+
+def _rel(path: Path) -> str:
+    return path.relative_to(ROOT).as_posix()
+
+
+def _missing_docs_tools() -> str | None:
+    for module, package in (("mkdocs", "mkdocs"), ("material", "mkdocs-material"),
+                            ("mkdocstrings_handlers.python", "mkdocstrings[python]")):
+        try:
+            found = importlib.util.find_spec(module) is not None
+        except ModuleNotFoundError:
+            found = False
+        if not found:
+            return package
+    return None
+
+
+# --------------------------------------------------------------------------- the site
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    missing = _missing_docs_tools()
+    if missing:
+        pytest.skip(f"{missing} is not installed: python3 -m pip install -e '.[docs]' "
+                    "(CI installs it)")
+    out = tmp_path_factory.mktemp("site")
+    env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
+    res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict",
+                          "--site-dir", str(out)], cwd=ROOT, env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert res.returncode == 0, f"mkdocs build --strict failed:\n{res.stdout}\n{res.stderr}"
+    return out
+
+
+def test_site_builds_strictly(site):
+    assert (site / "index.html").exists()
+    assert (site / "getting-started" / "index.html").exists()
+
+
+def test_site_has_a_guide_page_with_options_for_every_command(site):
+    for name, cmd in COMMANDS.items():
+        page = site / "guide" / name / "index.html"
+        assert page.exists(), f"no guide page for `bearingdyn {name}`"
+        html = page.read_text(encoding="utf-8")
+        assert "bearingdyn:options" not in html
+        for param in cmd.params:
+            for opt in param.opts:
+                if opt.startswith("-"):
+                    assert opt in html, f"guide/{name}: option {opt} not shown"
+
+
+def test_site_shows_every_model_card(site):
+    assert MODEL_CARDS
+    for card in MODEL_CARDS:
+        page = site / "models" / card.parent.name / "index.html"
+        assert page.exists(), f"no page for {_rel(card)}"
+        sha = re.search(r"spec sha256: ([0-9a-f]{64})", card.read_text(encoding="utf-8"))
+        assert sha and sha.group(1) in page.read_text(encoding="utf-8")
+
+
+def test_site_has_the_api_reference_from_docstrings(site):
+    modules = ["analysis.simulate", "analysis.spectrum", "analysis.poincare",
+               "analysis.lyapunov", "analysis.periodic", "analysis.continuation",
+               "analysis.classify", "analysis.sweep", "analysis.executors", "analysis.model",
+               "analysis.io", "modelgen.spec", "modelgen.assemble", "modelgen.codegen",
+               "modelgen.terms"]
+    for module in modules:
+        package, name = module.split(".")
+        page = site / "api" / package / name / "index.html"
+        assert page.exists(), f"no API page for {module}"
+        text = page.read_text(encoding="utf-8")
+        assert f'id="{module}"' in text, f"{module} not rendered by mkdocstrings"
+    simulate = (site / "api" / "analysis" / "simulate" / "index.html").read_text("utf-8")
+    assert "Integrate" in simulate and "initial_state" in simulate
+
+
+def test_site_math_is_left_to_mathjax(site):
+    html = (site / "model" / "index.html").read_text(encoding="utf-8")
+    assert 'class="arithmatex"' in html
+    assert "mathjax" in html.lower()
+    assert (site / "javascripts" / "mathjax.js").exists()
+
+
+# --------------------------------------------------------------------------- sources
+
+
+def _images(page: Path) -> list[tuple[int, str]]:
+    text = page.read_text(encoding="utf-8")
+    return [(m.start(), m.group(1) or m.group(2)) for m in IMAGE.finditer(text)]
+
+
+def test_every_image_referenced_from_the_docs_exists():
+    checked = 0
+    for page in [*PAGES, *MODEL_CARDS]:
+        for _, target in _images(page):
+            if re.match(r"^[a-z]+:", target):
+                continue
+            path = (page.parent / target.split("#")[0]).resolve()
+            assert path.is_file(), f"{_rel(page)}: image {target} does not exist"
+            assert path.is_relative_to(DOCS), f"{_rel(page)}: image {target} is outside docs/"
+            checked += 1
+    assert checked > 0
+
+
+def test_every_figure_follows_the_command_that_makes_it():
+    """An image in a page comes after a code block that runs a `bearingdyn` command."""
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        for start, target in _images(page):
+            before = [body for lang, body, end in _fences(text) if end <= start
+                      and lang in SHELL_LANGUAGES]
+            assert any(_commands(body) for body in before), (
+                f"{_rel(page)}: figure {target} is not preceded by the bearingdyn command "
+                "that makes it")
+
+
+def _fences(text: str) -> list[tuple[str, str, int]]:
+    return [(m.group(1).lower(), m.group(2), m.end()) for m in FENCE.finditer(text)]
+
+
+def _commands(body: str) -> list[list[str]]:
+    """The `bearingdyn …` command lines of a shell code block, as token lists."""
+    body = re.sub(r"\\\n\s*", " ", body)  # continued lines
+    found = []
+    for line in body.splitlines():
+        line = line.strip().removeprefix("$ ")
+        for part in re.split(r"&&|\|\||;", line):
+            part = part.strip()
+            if not part.startswith("bearingdyn"):
+                continue
+            try:
+                tokens = shlex.split(part, comments=True)
+            except ValueError:
+                tokens = part.split("#", 1)[0].split()
+            if tokens and tokens[0] == "bearingdyn":
+                found.append(tokens[1:])
+    return found
+
+
+def _option_names(cmd) -> set[str]:
+    names = {"--help"}
+    for param in cmd.params:
+        names.update(o for o in (*param.opts, *param.secondary_opts) if o.startswith("-"))
+    return names
+
+
+def _check_command(tokens: list[str], where: str) -> str | None:
+    """None when ``bearingdyn <tokens>`` names a real command and real options."""
+    global_options = _option_names(GROUP)
+    while tokens and tokens[0] in global_options:
+        tokens = tokens[1:]
+    if not tokens or re.match(r"^[<…\[]|^\.\.\.", tokens[0]):
+        return None  # `bearingdyn --debug <command> …`: a placeholder
+    name, args = tokens[0], tokens[1:]
+    if name not in COMMANDS:
+        return f"{where}: `bearingdyn {name}` is not a command ({', '.join(COMMANDS)})"
+    known = _option_names(COMMANDS[name])
+    for arg in args:
+        for alt in arg.strip("[]").split("|"):
+            alt = alt.strip("[]").split("=", 1)[0]
+            if alt.startswith("-") and not re.match(r"^-\d|^-\.\d", alt) and alt not in known:
+                return f"{where}: `bearingdyn {name}` has no option {alt}"
+    return None
+
+
+def test_every_quoted_bearingdyn_command_exists():
+    """Every `bearingdyn …` in a shell code block or an inline code span of the docs (and the
+    README) names a registered command, with options that command has."""
+    errors, checked = [], 0
+    for page in [*PAGES, ROOT / "README.md"]:
+        text = page.read_text(encoding="utf-8")
+        for lang, body, _ in _fences(text):
+            if lang in SHELL_LANGUAGES:
+                for tokens in _commands(body):
+                    checked += 1
+                    errors.append(_check_command(tokens, _rel(page)))
+        prose = FENCE.sub("", text)
+        for m in INLINE_COMMAND.finditer(prose):
+            for tokens in _commands(m.group(1)):
+                checked += 1
+                errors.append(_check_command(tokens, _rel(page)))
+    errors = [e for e in errors if e]
+    assert not errors, "\n".join(errors)
+    assert checked > 30
+
+
+def test_command_checker_catches_wrong_commands_and_options():
+    assert _check_command(["simulate", "m", "--n-balls", "6", "-o", "r.nc"], "t") is None
+    assert _check_command(["--debug", "<command>", "…"], "t") is None
+    assert _check_command(["spectrum", "r.nc", "[--json]", "[-o", "f.png]"], "t") is None
+    assert _check_command(["continue", "m", "--from", "-3", "--to", "5"], "t") is None
+    assert "not a command" in _check_command(["simulat", "m"], "t")
+    assert "no option --n-ball" in _check_command(["simulate", "m", "--n-ball", "6"], "t")
+
+
+def test_guide_pages_name_existing_commands_and_show_their_options():
+    guide = sorted((DOCS / "guide").glob("*.md"))
+    assert (DOCS / "guide" / "index.md") in guide
+    for page in guide:
+        if page.stem == "index":
+            continue
+        assert page.stem in COMMANDS, f"{_rel(page)}: no command `bearingdyn {page.stem}`"
+        text = page.read_text(encoding="utf-8")
+        assert f"<!-- bearingdyn:options {page.stem} -->" in text, (
+            f"{_rel(page)}: the options marker is missing")
+
+
+def test_getting_started_quotes_the_readmes_two_commands():
+    readme = [body.strip() for lang, body, _ in _fences((ROOT / "README.md").read_text())
+              if lang == "bash"][:2]
+    ours = [body.strip() for lang, body, _ in
+            _fences((DOCS / "getting-started.md").read_text(encoding="utf-8")) if lang == "bash"]
+    assert len(readme) == 2
+    for command in readme:
+        assert command in ours, f"getting-started.md does not quote {command!r}"
+
+
+def test_ci_installs_the_docs_extra_and_builds_the_site_strictly_outside_the_tree():
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert re.search(r"pip install .*\[[\w,]*docs[\w,]*\]", ci)
+    assert re.search(r"mkdocs build --strict\b.*--site-dir", ci)
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]["docs"]
+    assert any(d.startswith("mkdocs-material") for d in extra)
+    assert any(d.startswith("mkdocstrings[python]") for d in extra)
+    assert "site/" in (ROOT / ".gitignore").read_text().splitlines()
+    assert not (DOCS / "models").exists()  # the model pages exist in the built site only
