@@ -13,6 +13,8 @@
 - **Navigation.** Those pages are appended to the "User guide" and "Model cards" sections of
   ``mkdocs.yml``'s nav, and a top-level page of ``docs/`` that the nav does not name is added
   before "User guide" under its first heading, so a new page is never left out.
+- **API pages.** ``<!-- bearingdyn:submodules <package> -->`` becomes one mkdocstrings block
+  per module of the package (``modelgen.terms``: one module per physical term).
 - **Links to the repository.** A page may link a file outside ``docs/`` that exists in the
   repository (``../tests/test_x.py``): right on GitHub, but not part of the site. Such a link
   is shown as the file's path in code instead (``tests/test_x.py``); a link to a file that
@@ -43,6 +45,7 @@ GUIDE_SECTION = "User guide"
 MODELS_SECTION = "Model cards"
 OPTIONS_MARKER = re.compile(r"^<!-- bearingdyn:options (\S+) -->[ \t]*$", re.M)
 COMMANDS_MARKER = re.compile(r"^<!-- bearingdyn:commands -->[ \t]*$", re.M)
+SUBMODULES_MARKER = re.compile(r"^<!-- bearingdyn:submodules ([\w.]+) -->[ \t]*$", re.M)
 
 MATHJAX_CONFIG = """\
 window.MathJax = {
@@ -132,6 +135,21 @@ def stub_page(name: str, cmd) -> str:
     help_text = _escape_html_outside_code(" ".join((cmd.help or "").split()))
     return (f"# `bearingdyn {name}`\n\n{help_text}\n\n## Usage and options\n\n"
             f"<!-- bearingdyn:options {name} -->\n")
+
+
+# --------------------------------------------------------------------------- API pages
+
+
+def submodules_markdown(package: str) -> str:
+    """One mkdocstrings block per public submodule of ``package`` (``base`` first), so that a
+    new module shows up in the API reference without editing its page."""
+    folder = ROOT.joinpath(*package.split("."))
+    names = sorted(p.stem if p.is_file() else p.name for p in folder.iterdir()
+                   if not p.name.startswith("_")
+                   and (p.suffix == ".py" or (p / "__init__.py").exists()))
+    names.sort(key=lambda n: n != "base")
+    return "\n".join(f"::: {package}.{name}\n    options:\n      heading_level: 2\n"
+                     for name in names)
 
 
 # --------------------------------------------------------------------------- model cards
@@ -292,6 +310,7 @@ def on_page_markdown(markdown, page, config, files):
         return options_markdown(name)
 
     markdown = repository_links(markdown, page.file.src_uri, Path(config.docs_dir))
+    markdown = SUBMODULES_MARKER.sub(lambda m: submodules_markdown(m.group(1)), markdown)
     markdown = OPTIONS_MARKER.sub(options, markdown)
     return COMMANDS_MARKER.sub(lambda _m: commands_markdown(), markdown)
 
