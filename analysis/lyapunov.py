@@ -1,8 +1,9 @@
 """Lyapunov exponents from the tangent dynamics of the RK4 map (Benettin's method).
 
 The state is advanced with the same fixed-step RK4 as ``simulate``; a set of tangent
-vectors Q (4 × k) is advanced with the Jacobian of each RK4 step (CasADi AD: the exact
-derivative of the discrete map) and re-orthonormalised by a QR factorisation every
+vectors Q (4 × k) is advanced with the Jacobian of each RK4 step (CasADi forward-mode AD,
+``jtimes``: the exact derivative of the discrete map applied to Q, without forming the
+Jacobian) and re-orthonormalised by a QR factorisation every
 ``renorm_every`` steps. The exponents are the time averages of log|R_ii| (1/s). Everything,
 QR included, runs inside one CasADi call per block of renormalisations.
 
@@ -38,10 +39,9 @@ def _tangent_block(model: Model, n_balls: int, n_vectors: int, renorm_every: int
     z, t, h = ca.SX.sym("z", 4), ca.SX.sym("t"), ca.SX.sym("h")
     p, q = ca.SX.sym("p", n_par), ca.SX.sym("q", 4, n_vectors)
     z_next = funcs.rk4_step(t, z, p, h)
-    jac = ca.jacobian(z_next, z)
     state = ca.vertcat(z, t, ca.vec(q))
     step = ca.Function("tangent_step", [state, p, h],
-                       [ca.vertcat(z_next, t + h, ca.vec(ca.mtimes(jac, q)))])
+                       [ca.vertcat(z_next, t + h, ca.vec(ca.jtimes(z_next, z, q)))])
     fold = step.fold(renorm_every)
     s, pm, hm = ca.MX.sym("s", state.shape[0]), ca.MX.sym("p", n_par), ca.MX.sym("h")
     moved = fold(s, ca.repmat(pm, 1, renorm_every), ca.repmat(hm, 1, renorm_every))
