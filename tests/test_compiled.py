@@ -17,12 +17,19 @@ CALM = dict(damping=2000.0)
 """Non-chaotic setting: the rotor settles (see docs/numerics.md)."""
 
 
+_COMPILER_VARIABLES = ("BEARINGDYN_CC", "BEARINGDYN_CFLAGS", "CC")
+
+
 @pytest.fixture(scope="module")
 def built_cache(tmp_path_factory):
     """A cache directory holding the compiled library of MODEL, N_BALLS."""
+    if shutil.which(compiled.DEFAULT_CC) is None:
+        pytest.skip(f"no C compiler ({compiled.DEFAULT_CC})")
     root = tmp_path_factory.mktemp("cache")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("BEARINGDYN_CACHE", str(root))
+        for name in _COMPILER_VARIABLES:
+            mp.delenv(name, raising=False)
         mp.setattr(compiled, "_REGISTRY", compiled._Registry())
         lib = compiled.library(load_model(MODEL), N_BALLS)
     assert lib.backend == "compiled" and lib.path.parent == root
@@ -30,15 +37,21 @@ def built_cache(tmp_path_factory):
 
 
 @pytest.fixture
-def cache(built_cache, tmp_path, monkeypatch):
-    """A private copy of the built cache and a fresh in-process registry."""
+def fresh(tmp_path, monkeypatch):
+    """An empty cache folder, the default compiler and a fresh in-process registry."""
     root = tmp_path / "cache"
-    shutil.copytree(built_cache, root)
     monkeypatch.setenv("BEARINGDYN_CACHE", str(root))
-    monkeypatch.delenv("BEARINGDYN_CC", raising=False)
-    monkeypatch.delenv("BEARINGDYN_CFLAGS", raising=False)
+    for name in _COMPILER_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
     monkeypatch.setattr(compiled, "_REGISTRY", compiled._Registry())
     return root
+
+
+@pytest.fixture
+def cache(built_cache, fresh):
+    """``fresh`` with a copy of the built cache in it."""
+    shutil.copytree(built_cache, fresh)
+    return fresh
 
 
 def _library_file(root):
@@ -71,9 +84,11 @@ def test_cached_library_is_reused_without_compiling(cache):
 
 @pytest.mark.parametrize(("variable", "value", "reason"), [
     ("BEARINGDYN_CC", "/nonexistent/bin/cc", "'/nonexistent/bin/cc' not found"),
-    ("BEARINGDYN_CACHE", "{tmp}/a-file/cache", "could not build"),  # a file in the way
+    pytest.param("BEARINGDYN_CACHE", "{tmp}/a-file/cache", "could not build",  # file in the way
+                 marks=pytest.mark.skipif(shutil.which(compiled.DEFAULT_CC) is None,
+                                          reason="no C compiler")),
 ])
-def test_missing_compiler_falls_back_to_the_vm_with_one_warning(cache, monkeypatch, tmp_path,
+def test_missing_compiler_falls_back_to_the_vm_with_one_warning(fresh, monkeypatch, tmp_path,
                                                                 variable, value, reason):
     (tmp_path / "a-file").write_text("")
     monkeypatch.setenv(variable, value.format(tmp=tmp_path))
