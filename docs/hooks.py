@@ -79,12 +79,17 @@ document$.subscribe(() => {
 
 @functools.cache
 def cli_group():
-    """The click group behind ``bearingdyn`` (typer builds it from ``analysis.cli.app``)."""
+    """The click group behind ``bearingdyn`` (typer builds it from ``analysis.cli.app``).
+
+    Cached for one build: ``on_config`` clears the cache and the CLI module is reloaded, so
+    ``mkdocs serve`` shows an edited command without a restart."""
+    import importlib
+
     import typer.main
 
-    from analysis.cli import app
+    import analysis.cli
 
-    return typer.main.get_command(app)
+    return typer.main.get_command(importlib.reload(analysis.cli).app)
 
 
 def cli_commands() -> dict:
@@ -256,6 +261,7 @@ def repository_links(markdown: str, src_uri: str, docs_dir: Path) -> str:
 
 
 def on_config(config):
+    cli_group.cache_clear()
     nav = config.nav
     if nav is None:
         return config
