@@ -317,3 +317,48 @@ def run_rk4(lib: Library, p: np.ndarray, z0: np.ndarray, h: float, n_steps: int,
         if check is not None:
             check(block)
     return out
+
+
+def compiled_function(fn: ca.Function, test_args: tuple | None = None,
+                      compiled: bool = True) -> ca.Function:
+    """``fn`` compiled to C through the same cache as the RK4 blocks, or ``fn`` itself when
+    ``compiled`` is False or no compiler works (one warning).
+
+    The library is keyed by the SHA-256 of its C source, the compiler command and the CasADi
+    version. With ``test_args`` the loaded function must reproduce ``fn`` on them (else it is
+    rebuilt). Memoised per process by the function object.
+    """
+    if not compiled:
+        return fn
+    memo = ("function", id(fn), str(cache_dir()))
+    if memo in _REGISTRY.libraries:
+        return _REGISTRY.libraries[memo]
+    command = compiler_command()
+    stem = f"bd_fn_{fn.name()}"
+    source = _c_source([fn], stem)
+    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
+                         .encode()).hexdigest()
+    path = cache_dir() / f"{stem}_{key[:20]}.so"
+
+    def load() -> ca.Function | None:
+        try:
+            ext = ca.external(fn.name(), str(path))
+            if test_args is not None:
+                for want, got in zip(fn(*test_args), ext(*test_args), strict=True):
+                    want, got = np.asarray(want), np.asarray(got)
+                    if not np.all(np.abs(got - want) <= _SELF_TEST_RTOL * np.abs(want).max()):
+                        return None
+            return ext
+        except RuntimeError:
+            return None
+
+    result = load() if path.exists() else None
+    if result is None:
+        try:
+            _compile(source, path, command)
+            _REGISTRY.compilations += 1
+            result = load()
+        except (CompileError, OSError) as exc:
+            _fallback_warning(str(exc))
+    _REGISTRY.libraries[memo] = result or fn
+    return _REGISTRY.libraries[memo]

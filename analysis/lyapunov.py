@@ -22,6 +22,7 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
+from analysis.compiled import compiled_function
 from analysis.errors import InputError
 from analysis.model import Model, load_model
 from analysis.simulate import run_attrs, simulate
@@ -74,6 +75,7 @@ def lyapunov(
     n_exponents: int = 4,
     renorm_every: int = 100,
     initial_state: tuple[float, float, float, float] | None = None,
+    compiled: bool = True,
     **parameters: float,
 ) -> xr.Dataset:
     """Lyapunov exponents (1/s), largest first, averaged over ``duration`` seconds after a
@@ -82,7 +84,8 @@ def lyapunov(
     Returns a Dataset with ``exponents`` (dim ``index``), their 95 % confidence half-widths
     ``ci95`` (batch means over ten blocks), ``running`` (the running estimates over time,
     dims ``t`` × ``index``, to judge convergence) and the mean phase-space divergence
-    ``mean_divergence`` (1/s) as an attribute, next to the run's provenance.
+    ``mean_divergence`` (1/s) as an attribute, next to the run's provenance. ``compiled``:
+    the tangent block runs as C (``analysis.compiled``), else in the CasADi VM.
     """
     model = load_model(model) if isinstance(model, str) else model
     n = model.check_n_balls(n_balls)
@@ -107,12 +110,11 @@ def lyapunov(
         t0 = 0.0
     n_renorm = max(BLOCKS, round(duration / (dt * renorm_every)))
     n_renorm -= n_renorm % BLOCKS
-    per_call = min(n_renorm, 1000)
-    while n_renorm % per_call:
-        per_call -= 1
-    block = _tangent_block(model, n, n_exponents, renorm_every, per_call)
+    per_call = BLOCKS  # one block shape for every duration: one compilation per model
     p = model.parameter_vector(values)
     state = np.concatenate([z0, [t0], np.eye(4)[:, :n_exponents].T.ravel()])
+    block = compiled_function(_tangent_block(model, n, n_exponents, renorm_every, per_call),
+                              (state, p, dt), compiled)
     logs, traces, jac = [], [], model.functions(n).jac
     for _ in range(n_renorm // per_call):
         out_state, out_logs = block(state, p, dt)

@@ -45,3 +45,10 @@ def test_running_estimate_reports_convergence():
     res = lyapunov("vakharia2015", 6, duration=0.3, transient=0.1)
     assert res.running.dims == ("t", "index") and res.running.sizes["t"] == 300
     np.testing.assert_allclose(res.running.isel(t=-1), res.exponents)
+
+
+def test_compiled_tangent_block_equals_the_vm():
+    kw = dict(duration=0.2, transient=0.05)
+    vm = lyapunov("vakharia2015", 7, compiled=False, **kw)
+    c = lyapunov("vakharia2015", 7, compiled=True, **kw)
+    np.testing.assert_array_equal(vm.exponents.values, c.exponents.values)
