@@ -12,7 +12,6 @@ import math
 
 import numpy as np
 import xarray as xr
-from scipy.interpolate import CubicHermiteSpline
 
 from analysis.errors import InputError
 
@@ -38,6 +37,35 @@ def section_period(ds: xr.Dataset, section: str) -> float:
     if not (math.isfinite(frequency) and frequency > 0):
         raise InputError(f"{key}: must be a positive frequency in Hz, got {ds.attrs[key]!r}")
     return 1.0 / frequency
+
+
+def _gradient_at(t: np.ndarray, f: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """``numpy.gradient(f, t, axis=0, edge_order=2)`` evaluated at the indices ``j`` only."""
+    n = t.size
+    out = np.empty((j.size, f.shape[1]))
+    inner = (j > 0) & (j < n - 1)
+    jj = j[inner]
+    h0, h1 = (t[jj] - t[jj - 1])[:, None], (t[jj + 1] - t[jj])[:, None]
+    out[inner] = (h0**2 * f[jj + 1] - h1**2 * f[jj - 1] + (h1**2 - h0**2) * f[jj]) / (
+        h0 * h1 * (h0 + h1))
+    for edge, window in ((0, slice(0, 3)), (n - 1, slice(n - 3, n))):
+        at = j == edge
+        if np.any(at):
+            out[at] = np.gradient(f[window], t[window], axis=0, edge_order=2)[
+                0 if edge == 0 else -1]
+    return out
+
+
+def _hermite(t: np.ndarray, y: np.ndarray, dy: np.ndarray, i: np.ndarray,
+             t_eval: np.ndarray) -> np.ndarray:
+    """Cubic Hermite interpolation on the intervals [t_i, t_i+1] (the formula of
+    ``scipy.interpolate.CubicHermiteSpline``, evaluated only where needed). ``dy`` is the
+    derivative at every sample (n × m) or at (i, i + 1) stacked (2 × k × m)."""
+    h = (t[i + 1] - t[i])[:, None]
+    s = ((t_eval - t[i]) / (t[i + 1] - t[i]))[:, None]
+    d0, d1 = (dy[i], dy[i + 1]) if dy.ndim == 2 else (dy[0], dy[1])
+    return ((2 * s**3 - 3 * s**2 + 1) * y[i] + (s**3 - 2 * s**2 + s) * h * d0
+            + (-2 * s**3 + 3 * s**2) * y[i + 1] + (s**3 - s**2) * h * d1)
 
 
 def poincare_section(ds: xr.Dataset, section: str = "shaft", phase: float = 0.0) -> xr.Dataset:
@@ -77,10 +105,11 @@ def poincare_section(ds: xr.Dataset, section: str = "shaft", phase: float = 0.0)
 
     position = np.column_stack([ds["x"].values, ds["y"].values]).astype(float)
     velocity = np.column_stack([ds["vx"].values, ds["vy"].values]).astype(float)
-    acceleration = np.gradient(velocity, t, axis=0, edge_order=2)
     t_eval = np.clip(t_k, t[0], t[-1])
-    pos_k = CubicHermiteSpline(t, position, velocity, axis=0)(t_eval)
-    vel_k = CubicHermiteSpline(t, velocity, acceleration, axis=0)(t_eval)
+    i = np.clip(np.searchsorted(t, t_eval, side="right") - 1, 0, t.size - 2)
+    pos_k = _hermite(t, position, velocity, i, t_eval)
+    vel_k = _hermite(t, velocity, np.stack([_gradient_at(t, velocity, i),
+                                            _gradient_at(t, velocity, i + 1)]), i, t_eval)
 
     nearest = np.clip(np.searchsorted(t, t_k), 1, t.size - 1)
     nearest = np.where(np.abs(t[nearest - 1] - t_k) <= np.abs(t[nearest] - t_k),
