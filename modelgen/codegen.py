@@ -28,7 +28,6 @@ from sympy.printing.str import StrPrinter
 
 import modelgen
 from modelgen.assemble import Equations, assemble, latex_equations
-from modelgen.quantities import QUANTITIES
 from modelgen.spec import N_BALLS_RANGE, Spec, load_spec, spec_hash
 from modelgen.symbols import Context
 
@@ -77,9 +76,14 @@ class CasadiPrinter(StrPrinter):
             return f"hertz15({self._print(sp.Max(*other))})"
         if exp == sp.Rational(1, 2):
             return f"ca.sqrt({self._print(base)})"
+        if exp == -sp.Rational(1, 2):
+            return f"1 / ca.sqrt({self._print(base)})"
         if exp == -1:
             return f"1 / ({self._print(base)})"
         return super()._print_Pow(expr, rational)
+
+    def _print_Exp1(self, expr: sp.Expr) -> str:
+        return "math.e"
 
     def _print_Pi(self, expr: sp.Expr) -> str:
         return "math.pi"
@@ -161,7 +165,7 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
                      for name, par in spec.parameters.items())
     ranges = "".join(
         f"    {name!r}: ({q.low!r}, {q.high!r}, {q.low_inclusive!r}),\n"
-        for name, q in ((n, QUANTITIES[n]) for n in spec.parameters))
+        for name, q in ((n, spec.quantity(n)) for n in spec.parameters))
     terms = "".join(f"    {t.describe()!r},\n" for t in spec.terms)
     constants = [
         f"NAME = {spec.model.name!r}",
@@ -223,7 +227,7 @@ def model_card(spec: Spec, digest: str, spec_file: str) -> str:
     eqs = latex_equations(spec)
     header = "\n".join(f"- {line}" for line in _header_lines(spec, digest, spec_file))
     rows = "\n".join(
-        f"| `{n}` | ${QUANTITIES[n].latex}$ | {p.value:g} | {p.unit} | {p.source} |"
+        f"| `{n}` | ${spec.quantity(n).latex}$ | {p.value:g} | {p.unit} | {p.source} |"
         for n, p in spec.parameters.items()
     )
     terms = "\n".join(f"{i + 1}. `{t.kind}`: {t.describe()}" for i, t in enumerate(spec.terms))

@@ -65,5 +65,16 @@ QUANTITIES: dict[str, Quantity] = {
     )
 }
 
+TAKEN_NAMES = frozenset({
+    # generated code: modules and helpers its functions use, their parameter vector
+    "ca", "math", "sys", "p", "hertz15",
+    # attributes of result files besides the parameters (analysis.simulate.run_attrs)
+    "model", "spec_sha256", "n_balls", "bearingdyn_version", "generator", "casadi_version",
+    "method", "dt", "save_every", "duration", "transient", "x0", "y0", "vx0", "vy0", "rtol",
+    "atol", "shaft_hz", "cage_hz", "vc_hz",
+})
+"""Names that are not quantities but already mean something where parameter names go (the
+generated code, result-file attributes): a user-declared parameter cannot take them."""
+
 RPM_TO_RAD_PER_S = "pi/30"
 """Factor from rpm to rad/s, as written into the equations (ω = π n / 30)."""

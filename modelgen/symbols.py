@@ -55,7 +55,8 @@ class Context:
 
     def latex_names(self) -> dict[sp.Symbol, str]:
         names = {getattr(self, k): v for k, v in LATEX_NAMES.items()}
-        names.update({sym: QUANTITIES[n].latex for n, sym in self.params.items()})
+        names.update({sym: QUANTITIES[n].latex for n, sym in self.params.items()
+                      if n in QUANTITIES})  # user-declared parameters: SymPy's own LaTeX
         return names
 
 

@@ -4,14 +4,15 @@ from modelgen.terms.base import Term
 from modelgen.terms.centrifugal import Centrifugal
 from modelgen.terms.contact import HertzContact
 from modelgen.terms.damping import ViscousDamping
+from modelgen.terms.expression import ExpressionTerm
 from modelgen.terms.loads import HarmonicForce, RadialLoad, Unbalance
 from modelgen.terms.springs import CubicSpring
 
 TERM_CLASSES: tuple[type[Term], ...] = (
     HertzContact, Centrifugal, ViscousDamping, RadialLoad, Unbalance, CubicSpring,
-    HarmonicForce,
+    HarmonicForce, ExpressionTerm,
 )
 TERMS: dict[str, type[Term]] = {cls.model_fields["kind"].default: cls for cls in TERM_CLASSES}
 
-__all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "CubicSpring", "HarmonicForce", "HertzContact",
-           "RadialLoad", "Term", "Unbalance", "ViscousDamping"]
+__all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "CubicSpring", "ExpressionTerm", "HarmonicForce",
+           "HertzContact", "RadialLoad", "Term", "Unbalance", "ViscousDamping"]

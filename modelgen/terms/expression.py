@@ -1,0 +1,124 @@
+"""A custom force term written in the spec as expressions (``kind = "expression"``).
+
+    [[terms]]
+    kind = "expression"
+    description = "cubic support spring"
+    fx = "-k3*x**3"              # N, force on the rotor in x
+    fy = "-k3*y**3"              # N, force on the rotor in y
+    ball = "cb*(vx*c + vy*s)"    # N, radial load of every ball, only while it is in contact
+
+``fx``, ``fy`` (rotor force, N) may use the state ``x, y`` (m), ``vx, vy`` (m/s), the time
+``t`` (s), ``omega`` (shaft speed, rad/s), ``pi`` and the model's parameters. ``ball`` (the
+radial load of one ball on the rotor, N, positive pushing it back towards the bearing
+centre) may also use ``c = cos θ_i``, ``s = sin θ_i`` and ``delta``, the contact deflection
+δ_i = x c + y s − γ_0 (m). The ball load is gated: it acts only while δ_i > 0, and it is added
+to the Hertz load before the sum is clamped at zero (a ball never pulls). Parameters that
+are not built-in quantities are declared in the spec with a unit and a range
+(``low``, ``high``). The strings are read by ``modelgen.expressions`` (a whitelist over
+Python's syntax tree); nothing in them is ever executed.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar, Literal
+
+import sympy as sp
+from pydantic import ValidationInfo, field_validator, model_serializer, model_validator
+
+from modelgen.expressions import check_expression, parse_expression
+from modelgen.symbols import STATE_NAMES, Context
+from modelgen.terms.base import Term
+from modelgen.terms.contact import deflection
+
+ROTOR_SYMBOLS = (*STATE_NAMES, "t", "omega")
+"""Names every force expression may use besides parameters (and ``pi``)."""
+BALL_SYMBOLS = ("c", "s", "delta")
+"""Names only the per-ball expression ``ball`` may use."""
+IMPLIED_PARAMETERS = {"delta": "radial_clearance", "omega": "speed_rpm"}
+"""Parameters a symbol is computed from."""
+
+
+class ExpressionTerm(Term):
+    kind: Literal["expression"] = "expression"
+    description: str = ""
+    """What the term models, in words (for the model card)."""
+    fx: str | None = None
+    """Force on the rotor in x, N."""
+    fy: str | None = None
+    """Force on the rotor in y, N."""
+    ball: str | None = None
+    """Radial load of each ball in contact, N (gated)."""
+
+    summary: ClassVar[str] = "custom expression"
+
+    @field_validator("fx", "fy", "ball")
+    @classmethod
+    def _whitelisted(cls, text: str | None, info: ValidationInfo) -> str | None:
+        if text is None:
+            return None
+        names = check_expression(text)
+        ball_only = sorted(names & set(BALL_SYMBOLS))
+        if info.field_name != "ball" and ball_only:
+            raise ValueError(f"'{ball_only[0]}' is a per-ball symbol; it may be used in "
+                             "'ball' only")
+        return text
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> ExpressionTerm:
+        if self.fx is None and self.fy is None and self.ball is None:
+            raise ValueError("an expression term needs at least one of fx, fy, ball")
+        return self
+
+    @model_serializer(mode="wrap")
+    def _omit_unset(self, handler):
+        """Leave out the expressions not given, so a dump is valid TOML (no None)."""
+        return {k: v for k, v in handler(self).items() if v is not None}
+
+    def expressions(self) -> dict[str, str]:
+        """The given expression strings by field name."""
+        return {k: v for k, v in (("fx", self.fx), ("fy", self.fy), ("ball", self.ball))
+                if v is not None}
+
+    def names(self) -> dict[str, frozenset[str]]:
+        """Names each expression uses that must be parameters (not symbols)."""
+        symbols = {*ROTOR_SYMBOLS, *BALL_SYMBOLS}
+        return {k: check_expression(v) - symbols for k, v in self.expressions().items()}
+
+    def required_parameters(self) -> tuple[str, ...]:
+        used: set[str] = set().union(*(check_expression(v) for v in self.expressions().values()))
+        implied = {IMPLIED_PARAMETERS[n] for n in used if n in IMPLIED_PARAMETERS}
+        symbols = {*ROTOR_SYMBOLS, *BALL_SYMBOLS}
+        return tuple(sorted((used - symbols) | implied))
+
+    def _symbols(self, ctx: Context, ball: bool) -> dict[str, sp.Expr]:
+        table: dict[str, sp.Expr] = {n: getattr(ctx, n) for n in (*STATE_NAMES, "t")}
+        table["omega"] = ctx.omega
+        if ball:
+            table.update(c=ctx.c, s=ctx.s)
+            if "radial_clearance" in ctx.params:
+                table["delta"] = deflection(ctx)
+        table.update(ctx.params)
+        return table
+
+    def parse(self, field: str, ctx: Context) -> sp.Expr:
+        """The SymPy expression of ``field`` (fx, fy or ball; 0 when not given), N."""
+        text = getattr(self, field)
+        if text is None:
+            return sp.Integer(0)
+        return parse_expression(text, self._symbols(ctx, ball=field == "ball"))
+
+    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr] | None:
+        if self.fx is None and self.fy is None:
+            return None
+        return self.parse("fx", ctx), self.parse("fy", ctx)
+
+    def ball_load(self, ctx: Context) -> sp.Expr | None:
+        if self.ball is None:
+            return None
+        return sp.Heaviside(deflection(ctx), 0) * self.parse("ball", ctx)
+
+    def describe(self) -> str:
+        parts = [f"F_x = {self.fx}" if self.fx else "", f"F_y = {self.fy}" if self.fy else "",
+                 f"ball load in contact Q_i = {self.ball}" if self.ball else ""]
+        what = f"{self.description}: " if self.description else ""
+        return f"{what}custom expression, " + ", ".join(p for p in parts if p)
