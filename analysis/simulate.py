@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
+from analysis.checks import check_rk4_step
 from analysis.compiled import library, run_rk4
 from analysis.errors import InputError, SimulationError
 from analysis.model import Model, load_model
@@ -88,6 +89,7 @@ def simulate(
     transient = float(sim["transient"] if transient is None else transient)
     dt = float(sim["dt"] if dt is None else dt)
     _check_times(duration, transient, dt)
+    check_rk4_step(model, n, values, dt, method)
     if not (isinstance(save_every, int) and save_every >= 1):
         raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
     z0 = np.array(initial_state if initial_state is not None

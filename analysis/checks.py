@@ -1,0 +1,103 @@
+"""Checks of a run's settings against the model, before any time is spent integrating.
+
+``check_rk4_step``: classical RK4 is only stable while every eigenvalue λ of the linearised
+equations, times the step, stays inside its stability region (|λ|·Δt up to 2.83 on the
+imaginary axis, 2.785 on the negative real axis, at least 2.62 in between). A step above
+that limit does not lose accuracy gracefully: the motion grows without bound and the run
+ends in a blow-up long after the real mistake. The eigenvalues come from the model's own
+Jacobian (CasADi AD, no SymPy), so every term counts, custom ones included.
+
+The stiffness of a Hertz contact grows with its deflection (1.5·k·δ^½ per ball), so the
+Jacobian is taken where the contact is stiffest in normal running: the rotor displaced by
+the clearance plus the static deflection of one ball under the whole load
+(δ_s = (P/k)^{2/3}, P = |P_r| + P_u), in directions all around the bearing. Every loaded ball
+adds its stiffness there. A ball deflected twice as far is only 19 % stiffer in frequency
+(ω ∝ δ^{1/4}), so the estimate holds through the overshoot of contact impacts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.model import Model
+
+PROBE_SECTORS = 8
+"""Directions around the bearing in which the rotor is displaced..."""
+PROBE_OFFSETS = 4
+"""... each also at this many offsets within one ball spacing (ball on the line, between)."""
+
+
+def rk4_radius(angle: float) -> float:
+    """Largest r with |R(r·e^{i·angle})| <= 1, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 the RK4
+    amplification factor; ``angle`` in [π/2, π] (the stable half plane)."""
+    direction = complex(math.cos(angle), math.sin(angle))
+    low, high = 0.0, 4.0
+    for _ in range(50):
+        mid = (low + high) / 2
+        z = mid * direction
+        if abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) <= 1.0:
+            low = mid
+        else:
+            high = mid
+    return low
+
+
+def probe_states(n_balls: int, values: dict[str, float]) -> list[np.ndarray]:
+    """States [x, y, vx, vy] where the linearised model is at its stiffest: the rotor at rest
+    at the centre and, with a Hertz contact, displaced into the balls (see the module)."""
+    states = [np.zeros(4)]
+    k = values.get("contact_stiffness")
+    clearance = values.get("radial_clearance")
+    if k is None or clearance is None or k <= 0:
+        return states
+    load = abs(values.get("radial_load", 0.0)) + abs(values.get("unbalance_force", 0.0))
+    static = (load / k) ** (2 / 3)
+    radius = clearance + abs(clearance) + static  # deflection |γ0| + δ_s of the nearest ball
+    for sector in range(PROBE_SECTORS):
+        for offset in range(PROBE_OFFSETS):
+            phi = 2 * math.pi * (sector / PROBE_SECTORS + offset / (PROBE_OFFSETS * n_balls))
+            states.append(np.array([radius * math.cos(phi), radius * math.sin(phi), 0, 0]))
+    return states
+
+
+def stable_step(model: Model, n_balls: int, values: dict[str, float]) -> tuple[float, float]:
+    """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states."""
+    jac = model.functions(n_balls).jac
+    p = model.parameter_vector(values)
+    limit, largest = math.inf, 0.0
+    for z in probe_states(n_balls, values):
+        for lam in np.linalg.eigvals(np.asarray(jac(0.0, z, p), dtype=float)):
+            size = abs(lam)
+            if not math.isfinite(size):
+                continue
+            largest = max(largest, size)
+            if lam.real <= 0 and size > 0:  # growing modes are the model's, not RK4's
+                angle = max(math.pi / 2, math.atan2(abs(lam.imag), lam.real))
+                limit = min(limit, rk4_radius(angle) / size)
+    return limit, largest
+
+
+def nice_step(limit: float) -> float:
+    """A round step (1, 2 or 5 × 10^n s) at most half of ``limit``."""
+    target = limit / 2
+    scale = 10.0 ** math.floor(math.log10(target))
+    return max(m * scale for m in (1, 2, 5) if m * scale <= target)
+
+
+def check_rk4_step(model: Model, n_balls: int, values: dict[str, float], dt: float,
+                   method: str) -> None:
+    """Raise ``InputError`` when the RK4 step ``dt`` (s) is above the stability limit of
+    the model's stiffest linearisation with these parameter ``values``."""
+    if method != "rk4":
+        return
+    limit, largest = stable_step(model, n_balls, values)
+    if dt <= limit:
+        return
+    raise InputError(
+        f"dt: must be in (0, {limit:.3g}] s for RK4 with these parameters, got {dt!r}: the "
+        f"stiffest linearisation (contact and all terms) has |λ| = {largest:.4g} 1/s and RK4 "
+        f"is stable only for |λ|·dt up to about 2.8; try dt = {nice_step(limit):g} s, or "
+        "method cvodes")
