@@ -1,0 +1,719 @@
+"""The catalogue of bad inputs: every one ends with one line naming the field and what is
+allowed, exit code 2, no traceback (``--debug`` shows it).
+
+Two tables. ``SPEC_CASES``: a shipped spec with one edit, written to a temporary folder and
+loaded (``load_spec``, the first thing ``bearingdyn generate`` does; two of them also go
+through the command). ``CLI_CASES``: the real ``bearingdyn`` command in a temporary folder.
+The commands are slow to start (about 1 s each), so they all run at once, in parallel, when
+the first test needs them (``cli_outcomes``); every test then checks its own.
+
+``python -m tests.test_bad_inputs`` writes docs/bad-inputs.md from these tables and the
+messages they produce; ``test_docs_table_is_current`` keeps the two in step.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import sys
+import tomllib
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import tomli_w
+import xarray as xr
+
+from modelgen.spec import SpecError, load_spec
+from tests.conftest import ROOT, SPECS, run_cli
+
+DOCS = ROOT / "docs" / "bad-inputs.md"
+DROP = object()
+"""Edit value: remove the key."""
+IS_ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
+
+
+# ---------------------------------------------------------------- spec files
+
+@dataclass(frozen=True)
+class SpecCase:
+    """A shipped spec (``base``) with ``edits`` (dotted path -> value; ``terms.+`` appends)."""
+
+    id: str
+    group: str
+    what: str
+    edits: tuple[tuple[str, Any], ...]
+    expect: tuple[str, ...]
+    base: str = "vakharia2015"
+    text: str | None = None
+    """Raw file text instead of edits (for files that are not TOML)."""
+
+    def write(self, folder: Path) -> Path:
+        path = folder / f"{self.base}.toml"
+        if self.text is not None:
+            path.write_text(self.text)
+            return path
+        data = tomllib.loads((SPECS / f"{self.base}.toml").read_text())
+        for dotted, value in self.edits:
+            _edit(data, dotted, value)
+        path.write_text(tomli_w.dumps(data))
+        return path
+
+    def shown(self) -> str:
+        if self.text == "":
+            return f"no file `{self.base}.toml`"
+        if self.text is not None:
+            return f"file text `{self.text.strip()}`"
+        return "; ".join(f"`{p}` removed" if v is DROP else f"`{p} = {_inline(v)}`"
+                         for p, v in self.edits)
+
+
+def _edit(data: Any, dotted: str, value: Any) -> None:
+    value = copy.deepcopy(value) if value is not DROP else DROP
+    *parents, last = [int(k) if k.isdigit() else k for k in dotted.split(".")]
+    for key in parents:
+        data = data[key]
+    if last == "+":
+        data.append(value)
+    elif value is DROP:
+        del data[last]
+    else:
+        data[last] = value
+
+
+def _inline(value: Any) -> str:
+    """A value as inline TOML, for the docs."""
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_inline(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, list):
+        return "[" + ", ".join(_inline(v) for v in value) + "]"
+    if isinstance(value, str):
+        return json.dumps(value if len(value) <= 50 else value[:24] + "…" + value[-24:],
+                          ensure_ascii=False)
+    if isinstance(value, float) and not np.isfinite(value):
+        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    return str(value)
+
+
+def expression(**fields: str) -> tuple[str, dict]:
+    """Edit that appends a custom expression term."""
+    return ("terms.+", {"kind": "expression", **fields})
+
+
+K3 = ("parameters.k3", {"value": 1e15, "unit": "N/m^3", "source": "test", "low": 0.0,
+                        "high": 1e20})
+"""A user-declared parameter, as an edit."""
+P = "parameters"
+
+SPEC_CASES = [
+    # wrong types
+    SpecCase("number-as-text", "wrong type", "a number in quotes",
+             ((f"{P}.rotor_mass.value", "0.6"),),
+             ("parameters.rotor_mass.value: must be a number in (0, 100000] kg, got '0.6'",)),
+    SpecCase("fractional-balls", "wrong type", "a fractional number of balls",
+             (("structure.n_balls", 6.5),),
+             ("structure.n_balls: must be an integer in [3, 64], got 6.5",)),
+    SpecCase("parameter-not-table", "wrong type", "a parameter without its table",
+             ((f"{P}.damping", 200.0),), ("parameters.damping: must be a table, got 200.0",)),
+    SpecCase("terms-not-list", "wrong type", "terms not a list of tables",
+             (("terms", "hertz_contact"),),
+             ("terms: must be a list of tables ([[…]]), got 'hertz_contact'",)),
+    SpecCase("title-not-text", "wrong type", "text field given a number",
+             (("model.title", 5),), ("model.title: must be text in quotes, got 5",)),
+    SpecCase("not-toml", "wrong type", "a file that is not TOML", (),
+             ("vakharia2015.toml: not valid TOML", "line 1"), text="speed = = 5000\n"),
+    # missing fields
+    SpecCase("missing-section", "missing field", "a required section left out",
+             (("model", DROP),), ("model: missing required field",)),
+    SpecCase("missing-source", "missing field", "a parameter without its source",
+             ((f"{P}.damping.source", DROP),),
+             ("parameters.damping.source: missing required field",)),
+    SpecCase("missing-parameter", "missing field", "a parameter a term needs",
+             ((f"{P}.contact_stiffness", DROP),),
+             ("parameters.contact_stiffness: missing; terms[0] (hertz_contact) needs it "
+              "(allowed range (0, 1e+13] N/m^1.5)",)),
+    SpecCase("missing-structure", "missing field", "balls not given with a contact term",
+             (("structure", DROP),),
+             ("structure: missing; a model with a 'hertz_contact' term needs [structure] "
+              "n_balls in [3, 64]",)),
+    SpecCase("missing-kind", "missing field", "a term without its kind",
+             (("terms.1", {"variant": "paper_eq9"}),),
+             ("terms.1.kind: missing; allowed: hertz_contact, centrifugal",)),
+    SpecCase("empty-terms", "missing field", "no terms at all", (("terms", []),),
+             ("terms: must not be empty",)),
+    SpecCase("file-missing", "missing field", "a spec file that does not exist", (),
+             ("nothere.toml: file not found",), base="nothere", text=""),
+    # unknown fields
+    SpecCase("field-typo", "unknown field", "a misspelt field",
+             (("structure.n_bals", 6),),
+             ("structure.n_bals: unknown field (did you mean 'n_balls'?)",)),
+    SpecCase("section-typo", "unknown field", "a misspelt section",
+             (("simulaton", {"dt": 1e-5}),),
+             ("simulaton: unknown field (did you mean 'simulation'?)",)),
+    SpecCase("parameter-typo", "unknown field", "a misspelt parameter",
+             ((f"{P}.dampign", {"value": 1.0, "unit": "N*s/m", "source": "x"}),),
+             ("parameters.dampign: unknown parameter (did you mean 'damping'?)",
+              "a new parameter needs its allowed range: low = …, high = …")),
+    SpecCase("term-typo", "unknown field", "a misspelt term kind",
+             (("terms.0.kind", "hertz_contakt"),),
+             ("terms.0.kind: unknown term 'hertz_contakt' (did you mean 'hertz_contact'?); "
+              "allowed:",)),
+    SpecCase("variant-typo", "unknown field", "a misspelt choice",
+             (("terms.0.cage", "race_diameter"),),
+             ("terms.0.cage: must be 'race_diameters' or 'pitch_diameter', got "
+              "'race_diameter' (did you mean 'race_diameters'?)",)),
+    SpecCase("name-mismatch", "unknown field", "model name differs from the file name",
+             (("model.name", "other"),),
+             ("model.name: must equal the file name 'vakharia2015', got 'other'",)),
+    SpecCase("bad-model-name", "unknown field", "a model name that is not a module name",
+             (("model.name", "Vakharia 2015"),),
+             ("model.name: must be lower case letters, digits and '-', starting with a letter",
+              "got 'Vakharia 2015'")),
+    SpecCase("title-breaks-code", "unknown field", "a title that would end a code comment",
+             (("model.title", 'x"""; import os; """'),),
+             ("model.title: must be one line without '\"\"\"' (it is copied into generated "
+              "code comments)",)),
+    # units and ranges
+    SpecCase("wrong-unit", "units and ranges", "a unit other than the quantity's",
+             ((f"{P}.radial_load.unit", "kN"),),
+             ("parameters.radial_load.unit: must be 'N', got 'kN'",)),
+    SpecCase("negative-mass", "units and ranges", "negative mass",
+             ((f"{P}.rotor_mass.value", -0.6),),
+             ("parameters.rotor_mass.value: must be in (0, 100000] kg, got -0.6",)),
+    SpecCase("negative-stiffness", "units and ranges", "negative contact stiffness",
+             ((f"{P}.contact_stiffness.value", -7e9),),
+             ("parameters.contact_stiffness.value: must be in (0, 1e+13] N/m^1.5, got -7e+09",)),
+    SpecCase("negative-damping", "units and ranges", "negative damping",
+             ((f"{P}.damping.value", -1.0),),
+             ("parameters.damping.value: must be in [0, 1e+07] N*s/m, got -1",)),
+    SpecCase("negative-speed", "units and ranges", "negative speed",
+             ((f"{P}.speed_rpm.value", -5000.0),),
+             ("parameters.speed_rpm.value: must be in [0, 1e+06] rpm, got -5000",)),
+    SpecCase("races-swapped", "units and ranges", "inner race not inside the outer race",
+             ((f"{P}.inner_race_diameter.value", 30e-3),),
+             ("parameters.inner_race_diameter: must be smaller than outer_race_diameter "
+              "(0.028262 m), got 0.03 m",)),
+    SpecCase("ball-too-large", "units and ranges", "ball diameter larger than the race gap",
+             ((f"{P}.ball_diameter.value", 5e-3),),
+             ("parameters.ball_diameter: must be at most the race gap (outer_race_diameter − "
+              "inner_race_diameter)/2 = 0.004762 m, got 0.005 m",)),
+    SpecCase("pitch-outside-races", "units and ranges", "pitch circle outside the races",
+             ((f"{P}.pitch_diameter.value", 30e-3),),
+             ("parameters.pitch_diameter: must be in (0.018738, 0.028262) m, between the "
+              "races, got 0.03 m",)),
+    SpecCase("too-few-balls", "units and ranges", "fewer than 3 balls",
+             (("structure.n_balls", 2),), ("structure.n_balls: must be in [3, 64], got 2",)),
+    SpecCase("absurd-balls", "units and ranges", "an absurd number of balls",
+             (("structure.n_balls", 1000),),
+             ("structure.n_balls: must be in [3, 64], got 1000",)),
+    SpecCase("balls-do-not-fit", "units and ranges", "more balls than fit on the pitch circle",
+             (("structure.n_balls", 30),),
+             ("structure.n_balls: must be in [3, 17]: at most 17 balls of 0.004762 m fit on "
+              "the pitch circle (0.026725 m), got 30",)),
+    SpecCase("nan-value", "units and ranges", "NaN as a value (TOML `nan`)",
+             ((f"{P}.damping.value", float("nan")),),
+             ("parameters.damping.value: must be a finite number in [0, 1e+07] N*s/m, "
+              "got nan",)),
+    SpecCase("inf-step", "units and ranges", "infinity as a time (TOML `inf`)",
+             (("simulation.dt", float("inf")),),
+             ("simulation.dt: must be a finite number in (0, 10] s, got inf",)),
+    SpecCase("inf-initial-state", "units and ranges", "infinite initial state",
+             (("simulation.x0", float("-inf")),),
+             ("simulation.x0: must be a finite number (m), got -inf",)),
+    SpecCase("zero-step", "units and ranges", "a time step of zero",
+             (("simulation.dt", 0.0),), ("simulation.dt: must be in (0, 10] s, got 0.0",)),
+    SpecCase("transient-too-long", "units and ranges", "duration shorter than the transient",
+             (("simulation.transient", 5.0),),
+             ("simulation.transient: must be shorter than simulation.duration (3 s)",)),
+    SpecCase("duplicate-term", "units and ranges", "a built-in term twice",
+             (("terms.+", {"kind": "radial_load"}),),
+             ("terms: 'radial_load' appears 2 times; at most once",)),
+    SpecCase("centrifugal-without-contact", "units and ranges", "a ball term without a "
+             "contact", (("terms.0", {"kind": "centrifugal", "variant": "paper_eq9"}),),
+             ("terms[0] (centrifugal): acts on the balls and needs a 'hertz_contact' term",
+              "structure: a model without a 'hertz_contact' term has no balls; remove "
+              "[structure]")),
+    SpecCase("ball-term-without-balls", "units and ranges", "a ball load without a contact",
+             (expression(ball="1e9*c"),), base="duffing",
+             expect=("terms[3] (expression): acts on the balls and needs a 'hertz_contact' "
+                     "term",)),
+    # user-declared parameters
+    SpecCase("user-parameter-without-range", "user parameters", "a new parameter without a "
+             "range", ((f"{P}.k3", {"value": 1.0, "unit": "N/m^3", "source": "x"}),),
+             ("parameters.k3: unknown parameter", "a new parameter needs its allowed range: "
+              "low = …, high = …")),
+    SpecCase("user-parameter-out-of-range", "user parameters", "a new parameter outside its "
+             "range", (K3, (f"{P}.k3.value", -1.0)),
+             ("parameters.k3.value: must be in [0, 1e+20] N/m^3, got -1",)),
+    SpecCase("user-parameter-half-range", "user parameters", "a new parameter with one bound",
+             (K3, (f"{P}.k3.high", DROP)),
+             ("parameters.k3.high: missing; a new parameter needs its allowed range",)),
+    SpecCase("user-parameter-empty-range", "user parameters", "low not below high",
+             (K3, (f"{P}.k3.low", 1e30)),
+             ("parameters.k3.low: must be smaller than high (1e+20), got 1e+30",)),
+    SpecCase("user-parameter-taken-name", "user parameters", "a new parameter named like a "
+             "symbol", ((f"{P}.delta", {**K3[1]}),),
+             ("parameters.delta: 'delta' is taken (a symbol, function, Python or "
+              "generated-code name)",)),
+    SpecCase("builtin-with-range", "user parameters", "a range on a built-in parameter",
+             ((f"{P}.damping.low", 0.0), (f"{P}.damping.high", 10.0)),
+             ("parameters.damping: 'damping' is built in with the fixed range [0, 1e+07] "
+              "N*s/m; remove low and high",)),
+    # custom expressions
+    SpecCase("expr-attribute", "custom expressions", "attribute access",
+             (expression(fx="x.__class__"),),
+             ("terms.5.fx: attribute access is not allowed: 'x.__class__'",)),
+    SpecCase("expr-call", "custom expressions", "a call of anything but the listed functions",
+             (expression(fx="__import__('os').system('touch PWNED')"),),
+             ("terms.5.fx: attribute access is not allowed: "
+              "'__import__('os').system'",)),
+    SpecCase("expr-builtin-call", "custom expressions", "a call of a Python builtin",
+             (expression(fx="eval('1')"),),
+             ("terms.5.fx: calls to 'eval' are not allowed; functions: sin, cos, exp, sqrt, "
+              "abs, Heaviside, Max, Min: 'eval('1')'",)),
+    SpecCase("expr-lambda", "custom expressions", "a lambda",
+             (expression(fx="(lambda: 0)()"),),
+             ("terms.5.fx: lambdas are not allowed: 'lambda: 0'",)),
+    SpecCase("expr-comprehension", "custom expressions", "a comprehension",
+             (expression(fx="Max(x, [y for y in (x, y)])"),),
+             ("terms.5.fx: comprehensions are not allowed: '[y for y in (x, y)]'",)),
+    SpecCase("expr-subscript", "custom expressions", "a subscript",
+             (expression(fy="y[0]"),),
+             ("terms.5.fy: subscripts are not allowed: 'y[0]'",)),
+    SpecCase("expr-dunder", "custom expressions", "a name starting with '_'",
+             (expression(fx="__builtins__"),),
+             ("terms.5.fx: names starting with '_' are not allowed: '__builtins__'",)),
+    SpecCase("expr-too-long", "custom expressions", "an expression over 2000 characters",
+             (expression(fx="+".join(["x"] * 1001)),),
+             ("terms.5.fx: too long: 2001 characters, at most 2000",)),
+    SpecCase("expr-too-deep", "custom expressions", "nesting deeper than 40 levels",
+             (expression(fx="(" * 41 + "x" + ")" * 41),),
+             ("terms.5.fx: nested deeper than 40 levels",)),
+    SpecCase("expr-syntax", "custom expressions", "not an expression",
+             (expression(fx="x +"),),
+             ("terms.5.fx: not a valid expression (invalid syntax): 'x +'",)),
+    SpecCase("expr-power-caret", "custom expressions", "'^' for a power",
+             (expression(fx="-k3*x^3"),),
+             ("terms.5.fx: '^' is not a power here; use '**': '-k3*x^3'",)),
+    SpecCase("expr-division-by-zero", "custom expressions", "a division by zero",
+             (expression(fx="1/(x - x)"),),
+             ("terms.5.fx: division by zero or an infinite value: '1/(x - x)'",)),
+    SpecCase("expr-complex", "custom expressions", "a complex number",
+             (expression(fy="sqrt(-4)*y"),),
+             ("terms.5.fy: complex value (e.g. sqrt of a negative number): 'sqrt(-4)*y'",)),
+    SpecCase("expr-huge-number", "custom expressions", "a number beyond the double range",
+             (expression(fx="1e999*x"),),
+             ("terms.5.fx: number outside the floating-point range: '1e999'",)),
+    SpecCase("expr-unknown-name", "custom expressions", "an undeclared name",
+             (K3, expression(fx="-k_3*x**3")),
+             ("terms.5.fx: unknown name 'k_3' (did you mean 'k3'?); a new parameter needs a "
+              "declaration [parameters.k_3] with value, unit, source, low and high",)),
+    SpecCase("expr-ball-symbol", "custom expressions", "a per-ball symbol in a rotor force",
+             (expression(fx="1e9*delta"),),
+             ("terms.5.fx: 'delta' is a per-ball symbol; it may be used in 'ball' only",)),
+    SpecCase("expr-empty", "custom expressions", "an expression term without expressions",
+             (expression(description="nothing"),),
+             ("terms.5: an expression term needs at least one of fx, fy, ball",)),
+]
+
+
+def _spec_message(case: SpecCase, folder: Path) -> str:
+    folder.mkdir(parents=True, exist_ok=True)
+    path = case.write(folder) if case.text != "" else folder / f"{case.base}.toml"
+    cwd = Path.cwd()
+    os.chdir(folder)
+    try:
+        load_spec(path.name)
+    except SpecError as exc:
+        return f"error: {exc}"
+    finally:
+        os.chdir(cwd)
+    raise AssertionError(f"{case.id}: the spec was accepted")
+
+
+@pytest.mark.parametrize("case", SPEC_CASES, ids=[c.id for c in SPEC_CASES])
+def test_bad_spec(case: SpecCase, tmp_path):
+    message = _spec_message(case, tmp_path)
+    assert "\n" not in message
+    for fragment in case.expect:
+        assert fragment in message, message
+    assert not (tmp_path / "PWNED").exists(), "nothing in a spec ever runs"
+
+
+def test_every_problem_of_a_spec_is_in_its_one_line(tmp_path):
+    case = SpecCase("several", "", "", ((f"{P}.damping.value", float("nan")),
+                                        ("structure.n_bals", 6), (f"{P}.rotor_mass.value", "x")),
+                    ())
+    message = _spec_message(case, tmp_path)
+    assert "\n" not in message and message.count("; ") >= 2
+    for field_name in ("parameters.damping.value", "structure.n_bals", "parameters.rotor_mass"):
+        assert field_name in message
+    # checks across fields (units, names, geometry) run once every field is valid alone
+    case = SpecCase("cross", "", "", ((f"{P}.radial_load.unit", "kN"),
+                                      (f"{P}.ball_diameter.value", 6e-3)), ())
+    message = _spec_message(case, tmp_path / "cross")
+    assert "radial_load.unit: must be 'N'" in message
+    assert "ball_diameter: must be at most" in message
+
+
+# ---------------------------------------------------------------- the command line
+
+@dataclass(frozen=True)
+class CliCase:
+    id: str
+    group: str
+    what: str
+    args: tuple[str, ...]
+    expect: tuple[str, ...]
+    setup: Callable[[Path], None] | None = None
+    one_line: bool = True
+    """False for usage errors that click/typer print before the command runs."""
+    marks: tuple = field(default=())
+
+    def shown(self) -> str:
+        return "`bearingdyn " + " ".join(self.args) + "`"
+
+
+SIM = ("simulate", "vakharia2015", "-o", "r.nc")
+SHORT = ("--duration", "0.01", "--transient", "0", "--no-compile")
+
+
+def _corrupt_result(folder: Path) -> None:
+    (folder / "r.nc").write_bytes(b"CDF\x01 truncated netCDF file")
+
+
+def _foreign_result(folder: Path) -> None:
+    xr.Dataset({"z": ("t", np.zeros(3))}).to_netcdf(folder / "r.nc", engine="h5netcdf")
+
+
+def _unwritable_folder(folder: Path) -> None:
+    (folder / "locked").mkdir()
+    (folder / "locked").chmod(0o500)
+
+
+def _output_is_folder(folder: Path) -> None:
+    (folder / "out.nc").mkdir()
+
+
+def _bad_spec(folder: Path) -> None:
+    text = (SPECS / "vakharia2015.toml").read_text()
+    (folder / "vakharia2015.toml").write_text(
+        text.replace('kind = "unbalance"', 'kind = "unbalanse"'))
+
+
+def _hostile_spec(folder: Path) -> None:
+    SpecCase("", "", "", (K3, expression(fx="().__class__.__base__.__subclasses__()")),
+             ()).write(folder)
+
+
+CLI_CASES = [
+    CliCase("balls-too-few", "command line", "fewer than 3 balls", (*SIM, "--n-balls", "2"),
+            ("n_balls: must be an integer in [3, 64], got 2",)),
+    CliCase("balls-absurd", "command line", "an absurd number of balls",
+            (*SIM, "--n-balls", "1000"), ("n_balls: must be an integer in [3, 64], got 1000",)),
+    CliCase("balls-not-integer", "command line", "an option of the wrong type (checked by the "
+            "command-line parser, before the command runs)", (*SIM, "--n-balls", "six"),
+            ("Invalid value for '--n-balls'",), one_line=False),
+    CliCase("step-zero", "command line", "a time step of zero", (*SIM, "--dt", "0"),
+            ("dt: must be a finite number > 0 s, got 0.0",)),
+    CliCase("step-nan", "command line", "NaN as a time step", (*SIM, "--dt", "nan"),
+            ("dt: must be a finite number > 0 s, got nan",)),
+    CliCase("step-unstable", "command line", "a time step above the RK4 stability limit of "
+            "the linearised contact stiffness",
+            (*SIM, "--n-balls", "8", "--dt", "2e-4", "--set", "radial_load=1e5"),
+            ("dt: must be in (0, 0.000101] s for RK4 with these parameters, got 0.0002",
+             "try dt = 5e-05 s, or method cvodes")),
+    CliCase("duration-below-transient", "command line", "duration shorter than the transient",
+            (*SIM, "--duration", "0.5", "--transient", "1"),
+            ("transient: must be in [0, duration) = [0, 0.5) s, got 1.0",)),
+    CliCase("set-negative-mass", "command line", "`--set` outside the range",
+            (*SIM, "--set", "rotor_mass=-1"),
+            ("rotor_mass: must be in (0, 100000] kg, got -1.0",)),
+    CliCase("set-unknown", "command line", "`--set` of an unknown parameter",
+            (*SIM, "--set", "dampign=1"),
+            ("dampign: not a parameter of model 'vakharia2015' (did you mean 'damping'?)",)),
+    CliCase("set-inf", "command line", "`--set` to infinity", (*SIM, "--set", "damping=inf"),
+            ("damping: must be in [0, 1e+07] N*s/m, got inf",)),
+    CliCase("set-not-number", "command line", "`--set` to text", (*SIM, "--set", "damping=lots"),
+            ("--set damping: value must be a number, got 'lots'",)),
+    CliCase("set-no-value", "command line", "`--set` without a value",
+            (*SIM, "--set", "damping"), ("--set: expected name=value, got 'damping'",)),
+    CliCase("speed-negative", "command line", "negative speed", (*SIM, "--speed-rpm", "-5"),
+            ("speed_rpm: must be in [0, 1e+06] rpm, got -5.0",)),
+    CliCase("method-unknown", "command line", "an unknown integrator",
+            (*SIM, *SHORT, "--method", "euler"),
+            ("method: must be 'rk4' or 'cvodes', got 'euler'",)),
+    CliCase("model-unknown", "command line", "an unknown model", ("simulate", "vakharia", "-o",
+            "r.nc"), ("model: no generated model named 'vakharia' (did you mean 'vakharia2015'?)"
+                      "; available:",)),
+    CliCase("spec-unknown-term", "command line", "a bad spec given to `generate`",
+            ("generate", "vakharia2015.toml", "--out", "gen"),
+            ("vakharia2015.toml: terms.4.kind: unknown term 'unbalanse' (did you mean "
+             "'unbalance'?)",), setup=_bad_spec),
+    CliCase("spec-hostile-expression", "command line", "a spec expression that tries to "
+            "escape", ("generate", "vakharia2015.toml", "--out", "gen"),
+            ("terms.5.fx: attribute access is not allowed: '().__class__.__base__."
+             "__subclasses__'",), setup=_hostile_spec),
+    CliCase("output-folder-missing", "files", "an output folder that does not exist",
+            (*SIM[:3], "nowhere/r.nc", *SHORT), ("output: folder 'nowhere' does not exist",)),
+    CliCase("output-folder-locked", "files", "an output folder without write permission",
+            (*SIM[:3], "locked/r.nc", *SHORT), ("output: folder 'locked' is not writable",),
+            setup=_unwritable_folder,
+            marks=(pytest.mark.skipif(IS_ROOT, reason="root may write anywhere"),)),
+    CliCase("output-is-folder", "files", "an output path that is a folder",
+            (*SIM[:3], "out.nc", *SHORT), ("out.nc", "folder"), setup=_output_is_folder,
+            marks=(pytest.mark.xfail(strict=True, reason="analysis/io.py atomic_write lets "
+                                     "IsADirectoryError through (reported)"),)),
+    CliCase("result-missing", "files", "a result file that does not exist",
+            ("spectrum", "missing.nc"), ("result file: 'missing.nc' does not exist",)),
+    CliCase("result-corrupt", "files", "a corrupt result file", ("spectrum", "r.nc"),
+            ("result file: 'r.nc' is not a readable netCDF file",), setup=_corrupt_result),
+    CliCase("result-foreign", "files", "a netCDF file that is not a bearingdyn run",
+            ("poincare", "r.nc"),
+            ("result file: 'r.nc' is not a bearingdyn run (missing x, y, vx, vy)",),
+            setup=_foreign_result),
+    CliCase("section-unknown", "command line", "an unknown Poincaré section",
+            ("poincare", "r.nc", "--section", "moon"),
+            ("--section: must be one of shaft, cage, vc, got 'moon'",)),
+    CliCase("blow-up", "numerical failures", "a motion that blows up (softening spring)",
+            ("simulate", "duffing", "-o", "r.nc", "--set", "cubic_stiffness=-1", "--duration",
+             "20", "--transient", "0", "--no-compile"),
+            ("the motion blew up at t = 1.35 s", "try a smaller dt, more damping, or check the "
+             "parameters")),
+]
+
+
+@dataclass
+class Outcome:
+    returncode: int
+    stdout: str
+    stderr: str
+    folder: Path
+
+
+def _run_case(case: CliCase, folder: Path) -> Outcome:
+    folder.mkdir(parents=True)
+    if case.setup:
+        case.setup(folder)
+    res = run_cli(*case.args, cwd=folder)
+    return Outcome(res.returncode, res.stdout, res.stderr, folder)
+
+
+def run_cli_cases(root: Path, cases: list[CliCase] = CLI_CASES) -> dict[str, Outcome]:
+    """Run every command case in its own folder under ``root``, several at a time."""
+    workers = min(8, 2 * (os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = {c.id: pool.submit(_run_case, c, root / c.id) for c in cases}
+        return {name: future.result() for name, future in futures.items()}
+
+
+@pytest.fixture(scope="module")
+def cli_outcomes(tmp_path_factory) -> dict[str, Outcome]:
+    return run_cli_cases(tmp_path_factory.mktemp("cli"))
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=c.marks) for c in CLI_CASES])
+def test_bad_command(case: CliCase, cli_outcomes):
+    out = cli_outcomes[case.id]
+    assert out.returncode == 2, out.stderr
+    assert "Traceback" not in out.stderr
+    message = out.stderr.strip()
+    if case.one_line:
+        assert message.startswith("error: ") and "\n" not in message, message
+    for fragment in case.expect:
+        assert fragment in message, message
+    assert not (out.folder / "r.nc").exists() or case.setup in (_corrupt_result,
+                                                                _foreign_result)
+    assert not list(out.folder.glob(".*.tmp")), "no temporary file left behind"
+
+
+def test_spec_errors_through_the_command_are_one_line(cli_outcomes):
+    """The spec cases above load in-process; these two show the command's side: exit 2."""
+    for name in ("spec-unknown-term", "spec-hostile-expression"):
+        out = cli_outcomes[name]
+        assert out.returncode == 2 and out.stderr.count("\n") == 1
+        assert not (out.folder / "gen").exists(), "nothing generated from a bad spec"
+
+
+def test_catalogue_is_large_and_distinct():
+    ids = [c.id for c in [*SPEC_CASES, *CLI_CASES]]
+    assert len(ids) == len(set(ids)) and len(ids) >= 30
+
+
+# ---------------------------------------------------------------- numerical failures
+
+def test_blow_up_stops_with_its_time_and_a_fix():
+    from analysis.errors import SimulationError
+    from analysis.simulate import simulate
+
+    with pytest.raises(SimulationError, match=r"blew up at t = 1\.35 s.*try a smaller dt"):
+        simulate("duffing", duration=20.0, transient=0.0, cubic_stiffness=-1.0, compiled=False)
+
+
+def test_unstable_step_is_refused_before_running():
+    """The step check catches what used to end in a blow-up (the RK4 instability)."""
+    from analysis.errors import InputError
+    from analysis.simulate import simulate
+
+    with pytest.raises(InputError, match=r"dt: must be in \(0, 0\.000101\] s.*5e-05"):
+        simulate("vakharia2015", 8, duration=0.05, transient=0.0, dt=2e-4, radial_load=1e5)
+    ok = simulate("vakharia2015", 8, duration=0.02, transient=0.0, dt=5e-5, radial_load=1e5,
+                  compiled=False)
+    assert np.all(np.isfinite(ok.x.values))
+
+
+def test_cvodes_failure_surfaces_the_solver_message():
+    from analysis.errors import SimulationError
+    from analysis.simulate import simulate
+
+    with pytest.raises(SimulationError, match=r"CVODES failed: .*CV_ILL_INPUT"):
+        simulate("vakharia2015", duration=0.01, transient=0.0, method="cvodes", rtol=1e-30,
+                 atol=0.0)
+
+
+def test_newton_non_convergence_is_a_result():
+    from analysis.periodic import shoot
+
+    orbit = shoot("balanced-rotor", 8, "vc", radial_load=50.0, max_iter=1, tol=1e-30,
+                  settle=0.05)
+    assert not orbit.converged
+    assert orbit.message == f"no convergence in 1 iterations (scaled residual {orbit.residual:.2e})"
+
+
+def test_continuation_start_failure_is_reported():
+    from analysis.continuation import continue_orbits
+    from analysis.errors import InputError
+
+    with pytest.raises(InputError, match=r"start: no periodic orbit found at forcing_amplitude "
+                                         r"= 7\.5 \(singular Newton matrix"):
+        continue_orbits("duffing", param="forcing_amplitude", start=7.5, stop=8.0,
+                        period="shaft", dt=0.01, guess=np.array([2.5, 0, 0, 0]), t0=0.0)
+
+
+def test_crash_mid_write_leaves_nothing(tmp_path):
+    from analysis.io import atomic_write
+
+    def half_then_crash(tmp: Path) -> None:
+        tmp.write_bytes(b"CDF\x01 half a result")
+        raise OSError("disk full")
+
+    with pytest.raises(OSError, match="disk full"):
+        atomic_write(tmp_path / "run.nc", half_then_crash)
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "run.nc").write_text("previous result")
+    with pytest.raises(OSError):
+        atomic_write(tmp_path / "run.nc", half_then_crash)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]
+    assert (tmp_path / "run.nc").read_text() == "previous result", "the old file survives"
+
+
+# ---------------------------------------------------------------- the docs table
+
+GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "user parameters",
+          "custom expressions", "command line", "files", "numerical failures"]
+
+
+def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:
+    """docs/bad-inputs.md from the catalogue and the messages it produced."""
+    rows: dict[str, list[str]] = {g: [] for g in GROUPS}
+    for case in SPEC_CASES:
+        rows[case.group].append(_row(case.what, case.shown(), spec_messages[case.id]))
+    for case in CLI_CASES:
+        out = cli_outcomes[case.id]
+        text = out.stderr.strip()
+        if case.id == "output-is-folder" or (IS_ROOT and case.id == "output-folder-locked"):
+            text = "(see the note below the table)"
+        elif not case.one_line:
+            text = " ".join(line.strip(" │╭╮╰╯─") for line in text.splitlines()[-3:]).strip()
+        rows[case.group].append(_row(case.what, case.shown(), text))
+    parts = [DOCS_HEAD]
+    for group in GROUPS:
+        parts.append(f"\n## {group.capitalize()}\n\n| input | example | message |\n|---|---|---|\n"
+                     + "\n".join(rows[group]) + "\n")
+    parts.append(DOCS_TAIL)
+    return "".join(parts)
+
+
+def _row(what: str, shown: str, message: str) -> str:
+    shown, message = (text.replace("|", "\\|") for text in (shown, message))
+    return f"| {what} | {shown} | `{message}` |"
+
+
+DOCS_HEAD = """# Bad inputs and what bearingdyn says
+
+Generated by `python -m tests.test_bad_inputs` from the catalogue in
+[tests/test_bad_inputs.py](../tests/test_bad_inputs.py), which the test suite runs: every row is
+a test, and a test fails when this page and the messages drift apart.
+
+Every bad input ends the command with **one line** on stderr, `error: <field>: <what is
+allowed>, got <value>`, and **exit code 2**; `bearingdyn --debug …` shows the traceback.
+Spec files are checked field by field, and all problems of a file are listed in that one
+line, separated by `;`. Spec examples below edit `modelgen/specs/vakharia2015.toml`
+(`duffing.toml` where noted by the message); the spec messages are those of
+`bearingdyn generate vakharia2015.toml`.
+"""
+
+DOCS_TAIL = """
+Notes:
+
+- *Wrong option types* (`--n-balls six`) are caught by the command-line parser before the
+  command runs: exit code 2 and a framed message naming the option, after the usage line.
+- *An output folder without write permission* is refused before the file is written (for
+  root, who may write anywhere, the check passes). *An output path that is a folder* still
+  ends in a traceback (`IsADirectoryError` from the final rename); the catalogue keeps it as
+  an expected failure until `analysis/io.py` reports it.
+- Numerical failures: a blow-up (non-finite state, or a displacement beyond 1000 clearances)
+  stops the run with its time and a suggestion; CVODES failures carry the solver's own
+  return code; a shooting solve that does not converge is a result (`converged = false`
+  and the reason), and a continuation whose first orbit does not converge stops with the
+  reason (`start: …`).
+
+## Custom expression terms
+
+`[[terms]] kind = "expression"` takes `fx`, `fy` (force on the rotor, N) and `ball` (radial
+load of every ball in contact, N) as text. Allowed: numbers, `pi`, the state `x`, `y`, `vx`,
+`vy`, the time `t`, the shaft speed `omega` (rad/s), in `ball` also `c`, `s` (cos and sin of the
+ball angle) and `delta` (its contact deflection, m), the model's parameters, `+ - * / **`,
+parentheses, and the functions `sin cos exp sqrt abs Heaviside Max Min` (Heaviside(0) = 0).
+A new parameter is declared with its unit and range:
+`k3 = { value = 1e15, unit = "N/m^3", source = "…", low = 0.0, high = 1e20 }`.
+The text is read as a syntax tree and checked against that list; it is never executed.
+Limits: 2000 characters, 40 levels of nesting, numeric exponents within ±100, every number a
+finite double.
+
+## Fuzzing
+
+`python -m tests.fuzz_spec --minutes 3` feeds randomly damaged specs (any TOML value in any
+field, keys removed and added, broken TOML text, custom terms with random and hostile
+expressions) to the spec loader, and random text and syntax trees to the expression parser,
+until the time is up. Anything but a valid result or the clean error is a crash: it is
+printed, shrunk to a small example, and the exit code is 1. Not part of the test suite.
+"""
+
+
+def spec_messages(root: Path) -> dict[str, str]:
+    """The message of every spec case, each loaded in its own folder under ``root``."""
+    messages = {}
+    for case in SPEC_CASES:
+        (root / case.id).mkdir(parents=True)
+        messages[case.id] = _spec_message(case, root / case.id)
+    return messages
+
+
+def test_docs_table_is_current(cli_outcomes, tmp_path):
+    assert DOCS.read_text() == render_docs(spec_messages(tmp_path), cli_outcomes), (
+        "docs/bad-inputs.md is stale: run `python -m tests.test_bad_inputs`")
+
+
+if __name__ == "__main__":
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        DOCS.write_text(render_docs(spec_messages(Path(tmp) / "spec"),
+                                    run_cli_cases(Path(tmp) / "cli")))
+    print(f"wrote {DOCS.relative_to(ROOT)}", file=sys.stderr)
