@@ -17,6 +17,7 @@ adds its stiffness there. A ball deflected twice as far is only 19 % stiffer in 
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -64,7 +65,14 @@ def probe_states(n_balls: int, values: dict[str, float]) -> list[np.ndarray]:
 
 
 def stable_step(model: Model, n_balls: int, values: dict[str, float]) -> tuple[float, float]:
-    """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states."""
+    """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states; memoised
+    per model, number of balls and parameter values (sweeps ask again and again)."""
+    return _stable_step(model, n_balls, tuple(sorted(values.items())))
+
+
+@functools.lru_cache(maxsize=4096)
+def _stable_step(model: Model, n_balls: int, items: tuple) -> tuple[float, float]:
+    values = dict(items)
     jac = model.functions(n_balls).jac
     p = model.parameter_vector(values)
     limit, largest = math.inf, 0.0

@@ -20,18 +20,26 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise InputError(f"output: '{path}' is a folder; give a file name")
     if not folder.is_dir():
         raise InputError(f"output: folder '{folder}' does not exist")
     if not os.access(folder, os.W_OK):
         raise InputError(f"output: folder '{folder}' is not writable")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise InputError(f"output: cannot write in '{folder}' ({exc.strerror})") from None
     os.close(fd)
     try:
         write(Path(tmp))
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # as an ordinary open() would have made it
-        os.replace(tmp, path)
+        try:
+            os.replace(tmp, path)
+        except OSError as exc:
+            raise InputError(f"output: cannot write '{path}' ({exc.strerror})") from None
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

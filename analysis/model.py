@@ -78,6 +78,9 @@ class Model:
     def check_n_balls(self, n_balls: int | None) -> int:
         n = self.default_n_balls if n_balls is None else n_balls
         low, high = self.module.N_BALLS_RANGE
+        if high == 0 and n != 0:
+            raise InputError(f"n_balls: model '{self.name}' has no balls; leave n_balls out, "
+                             f"got {n!r}")
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not low <= n <= high:
             raise InputError(f"n_balls: must be an integer in [{low}, {high}], got {n!r}")
         return int(n)

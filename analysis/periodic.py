@@ -166,11 +166,21 @@ def shoot(
         z_end, mono, _ = evaluate(flow, zj, t0 + j * period_s / segments, p)
         return z_end, mono
 
-    if segments == 1:
-        z, mono, iters, res, ok, msg = _newton_single(segment_map, z, scale, tol, max_iter)
-    else:
-        z, mono, iters, res, ok, msg = _newton_multiple(segment_map, z, segments, scale, tol,
-                                                        max_iter)
+    try:
+        if segments == 1:
+            z, mono, iters, res, ok, msg = _newton_single(segment_map, z, scale, tol, max_iter)
+        else:
+            z, mono, iters, res, ok, msg = _newton_multiple(segment_map, z, segments, scale,
+                                                            tol, max_iter)
+    except np.linalg.LinAlgError as exc:  # non-finite states from a diverging guess
+        z, mono, iters, res, ok = z, np.full((4, 4), np.nan), 0, np.inf, False
+        msg = f"the flow from the guess is not finite ({exc}); try another guess or settle"
+    if not np.all(np.isfinite(mono)):
+        return PeriodicOrbit(model=model.name, n_balls=n, period=str(per), period_s=period_s,
+                             t0=t0, z0=z, monodromy=mono, multipliers=np.full(4, np.nan),
+                             converged=False, iterations=iters, residual=float(res),
+                             message=msg if not ok else "non-finite monodromy matrix",
+                             values=values, n_steps=steps)
     return PeriodicOrbit(model=model.name, n_balls=n, period=str(per), period_s=period_s,
                          t0=t0, z0=z, monodromy=mono, multipliers=np.linalg.eigvals(mono),
                          converged=ok, iterations=iters, residual=res, message=msg,

@@ -106,6 +106,10 @@ def simulate(
     if method == "rk4":
         states = _run_rk4(model, n, p, z0, dt, save_every, n_saved, limit, compiled)
     elif method == "cvodes":
+        if not (math.isfinite(rtol) and 0 < rtol < 1):
+            raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
+        if not (math.isfinite(atol) and 0 <= atol < 1):
+            raise InputError(f"atol: must be in [0, 1), got {atol!r}")
         states = _run_cvodes(model, n, p, z0, times, rtol, atol, limit)
     else:
         raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
@@ -145,9 +149,10 @@ def _blow_up(states: np.ndarray, times: np.ndarray, limit: float) -> None:
     bad = ~np.all(np.isfinite(states), axis=0) | (np.hypot(states[0], states[1]) > limit)
     if np.any(bad):
         when = times[int(np.argmax(bad))]
+        bound = f"beyond {limit:g} m" if np.isfinite(limit) else "growing without bound"
         raise SimulationError(
-            f"the motion blew up at t = {when:.6g} s (displacement not finite or beyond "
-            f"{limit:g} m); try a smaller dt, more damping, or check the parameters")
+            f"the motion blew up at t = {when:.6g} s (displacement not finite or {bound}); "
+            "try a smaller dt, more damping, or check the parameters")
 
 
 def _run_rk4(model: Model, n_balls: int, p: np.ndarray, z0: np.ndarray, dt: float,

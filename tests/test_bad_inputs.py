@@ -466,9 +466,7 @@ CLI_CASES = [
             setup=_unwritable_folder,
             marks=(pytest.mark.skipif(IS_ROOT, reason="root may write anywhere"),)),
     CliCase("output-is-folder", "files", "an output path that is a folder",
-            (*SIM[:3], "out.nc", *SHORT), ("out.nc", "folder"), setup=_output_is_folder,
-            marks=(pytest.mark.xfail(strict=True, reason="analysis/io.py atomic_write lets "
-                                     "IsADirectoryError through (reported)"),)),
+            (*SIM[:3], "out.nc", *SHORT), ("out.nc", "folder"), setup=_output_is_folder),
     CliCase("result-missing", "files", "a result file that does not exist",
             ("spectrum", "missing.nc"), ("result file: 'missing.nc' does not exist",)),
     CliCase("result-corrupt", "files", "a corrupt result file", ("spectrum", "r.nc"),
