@@ -116,7 +116,7 @@ def diagram_figure(ds: xr.Dataset) -> Figure:
         for d, direction in enumerate(ds.direction.values):
             values = ds[var].isel(direction=d)
             grid = np.repeat(ds[param].values, values.sizes["k"])
-            ax.plot(grid, values.values.ravel() * MICRO, ",", color=f"C{d}", alpha=0.7)
+            ax.plot(grid, values.values.ravel() * MICRO, ".", ms=2, color=f"C{d}", alpha=0.6)
             ax.plot([], [], "o", ms=3, color=f"C{d}", label=f"sweep {direction}")
         ax.set_ylabel(f"{var} on the {ds.attrs['section']} section (µm)")
         ax.grid(True, alpha=0.3)
