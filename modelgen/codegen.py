@@ -30,6 +30,7 @@ import modelgen
 from modelgen.assemble import Equations, assemble, latex_equations
 from modelgen.spec import N_BALLS_RANGE, Spec, load_spec, spec_hash
 from modelgen.symbols import Context
+from modelgen.unrolled import helper_sources
 
 RUNTIME_TEMPLATE = "runtime.py.tmpl"
 PACKAGE_DOC = (
@@ -139,6 +140,7 @@ def module_source(spec: Spec, eq: Equations, digest: str, spec_file: str) -> str
     ctx = eq.ctx
     state_args = "x, y, vx, vy, t, p"
     functions = [
+        *helper_sources([eq.ball_load, *eq.rotor_force]),
         _function_source(
             "ball_load", f"c, s, {state_args}",
             "Radial load of one ball at (cos θ, sin θ) = (c, s) on the rotor, N.",

@@ -62,12 +62,27 @@ QUANTITIES: dict[str, Quantity] = {
                  "amplitude of the harmonic force F cos(ωt) in x (harmonic_force term)"),
         Quantity("ball_density", "kg/m^3", 0.0, 1.0e5, r"\rho_b", "ball material density",
                  low_inclusive=False),
+        Quantity("groove_conformity_inner", "1", 0.505, 1.0, r"f_i",
+                 "inner race groove radius over ball diameter (stiffness = geometry)"),
+        Quantity("groove_conformity_outer", "1", 0.505, 1.0, r"f_o",
+                 "outer race groove radius over ball diameter (stiffness = geometry)"),
+        Quantity("youngs_modulus", "Pa", 0.0, 1.0e13, r"E",
+                 "Young's modulus of balls and races (stiffness = geometry)",
+                 low_inclusive=False),
+        Quantity("poisson_ratio", "1", 0.0, 0.5, r"\nu",
+                 "Poisson ratio of balls and races (stiffness = geometry)"),
+        Quantity("diametral_clearance", "m", -2.0e-3, 2.0e-3, r"P_d",
+                 "diametral clearance, total free radial play (clearance = diametral; "
+                 "negative: preload)"),
+        Quantity("hunt_crossley_damping", "s/m", 0.0, 10.0, r"\alpha",
+                 "Hunt-Crossley damping factor of the ball contacts (damping = hunt_crossley): "
+                 "restitution e ≈ 1 − α v at impact speed v"),
     )
 }
 
 TAKEN_NAMES = frozenset({
     # generated code: modules and helpers its functions use, their parameter vector
-    "ca", "math", "sys", "p", "hertz15",
+    "ca", "math", "sys", "p", "hertz15", "race_stiffness", "inner_race_load",
     # attributes of result files besides the parameters (analysis.simulate.run_attrs)
     "model", "spec_sha256", "n_balls", "bearingdyn_version", "generator", "casadi_version",
     "method", "dt", "save_every", "duration", "transient", "x0", "y0", "vx0", "vy0", "rtol",

@@ -34,7 +34,7 @@ from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
 from modelgen.quantities import QUANTITIES, TAKEN_NAMES, Quantity
 from modelgen.symbols import Context, make_context
-from modelgen.terms import TERM_CLASSES, TERMS, ExpressionTerm, HertzContact
+from modelgen.terms import TERM_CLASSES, TERMS, Centrifugal, ExpressionTerm, HertzContact
 from modelgen.terms.expression import BALL_SYMBOLS, ROTOR_SYMBOLS
 
 N_BALLS_RANGE = (3, 64)
@@ -129,7 +129,7 @@ class Spec(_Strict):
     @model_validator(mode="after")
     def _check_physics(self) -> Spec:
         problems = [*_parameter_problems(self.parameters), *_structure_problems(self),
-                    *_term_problems(self), *_geometry_problems(self)]
+                    *_term_problems(self), *_contact_problems(self), *_geometry_problems(self)]
         if self.simulation.transient >= self.simulation.duration:
             problems.append("simulation.transient: must be shorter than simulation.duration "
                             f"({self.simulation.duration:g} s)")
@@ -250,6 +250,19 @@ def _term_problems(spec: Spec) -> list[str]:
             problems.append(f"parameters.{name}: missing; {user} needs it "
                             f"(allowed range {QUANTITIES[name].range_text()})")
     return problems
+
+
+def _contact_problems(spec: Spec) -> list[str]:
+    """One contact term; a two-contact model already holds the balls' centrifugal force."""
+    contacts = sorted({t.kind for t in spec.terms if isinstance(t, HertzContact)})
+    if len(contacts) > 1:  # the same kind twice is reported by _term_problems
+        return [f"terms: {' and '.join(repr(k) for k in contacts)} both model the ball "
+                "contacts; keep one"]
+    if contacts != ["two_contact"]:
+        return []
+    return [f"terms[{i}] (centrifugal): 'two_contact' already holds the centrifugal force of "
+            "the balls (outer load = inner load + F_c); remove this term"
+            for i, t in enumerate(spec.terms) if isinstance(t, Centrifugal)]
 
 
 def _expression_problems(i: int, term: ExpressionTerm, parameters: dict[str, Parameter],

@@ -7,12 +7,13 @@ from modelgen.terms.damping import ViscousDamping
 from modelgen.terms.expression import ExpressionTerm
 from modelgen.terms.loads import HarmonicForce, RadialLoad, Unbalance
 from modelgen.terms.springs import CubicSpring
+from modelgen.terms.two_contact import TwoContact
 
 TERM_CLASSES: tuple[type[Term], ...] = (
     HertzContact, Centrifugal, ViscousDamping, RadialLoad, Unbalance, CubicSpring,
-    HarmonicForce, ExpressionTerm,
+    HarmonicForce, ExpressionTerm, TwoContact,
 )
 TERMS: dict[str, type[Term]] = {cls.model_fields["kind"].default: cls for cls in TERM_CLASSES}
 
 __all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "CubicSpring", "ExpressionTerm", "HarmonicForce",
-           "HertzContact", "RadialLoad", "Term", "Unbalance", "ViscousDamping"]
+           "HertzContact", "RadialLoad", "Term", "TwoContact", "Unbalance", "ViscousDamping"]

@@ -2,6 +2,17 @@
 
 Paper Eqs. 1-6: ball i sits at θ_i = 2π(i-1)/N_b + ω_cage t and is compressed by
 δ_i = x cos θ_i + y sin θ_i - γ_0 (m); its load on the rotor is k·max(0, δ_i)^{3/2} (N).
+
+Options of ``hertz_contact`` (each with the paper's reading as default):
+
+- ``stiffness``: ``given`` uses the parameter ``contact_stiffness`` k; ``geometry`` computes
+  k from the ball, the groove conformities and the material, Hertz point contact at both
+  races in series (``modelgen/hertz.py``), as an expression of those runtime parameters;
+- ``clearance``: ``radial`` takes γ_0 = ``radial_clearance`` (the clearance of one ball in
+  Eq. 5); ``diametral`` takes the total free play P_d = ``diametral_clearance`` of bearing
+  catalogues and γ_0 = P_d/2 (docs/paper-slips.md S6);
+- ``damping``: ``none`` or ``hunt_crossley`` (per-ball contact damping, paper Eq. 10;
+  ``modelgen/terms/contact_damping.py``).
 """
 
 from __future__ import annotations
@@ -10,18 +21,45 @@ from typing import ClassVar, Literal
 
 import sympy as sp
 
+from modelgen.hertz import RaceStiffness, combined_stiffness
 from modelgen.symbols import Context
 from modelgen.terms.base import Term
+from modelgen.terms.contact_damping import (
+    DAMPING_PARAMETERS,
+    DampingLaw,
+    damping_factor,
+    describe_damping,
+)
+
+Clearance = Literal["radial", "diametral"]
+CLEARANCE_PARAMETER: dict[str, str] = {"radial": "radial_clearance",
+                                       "diametral": "diametral_clearance"}
+"""The parameter each clearance convention reads."""
+GEOMETRY_PARAMETERS = ("ball_diameter", "pitch_diameter", "groove_conformity_inner",
+                       "groove_conformity_outer", "youngs_modulus", "poisson_ratio")
+"""What the contact stiffness is computed from with ``stiffness = "geometry"``."""
+STIFFNESS_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "given": ("contact_stiffness",), "geometry": GEOMETRY_PARAMETERS,
+}
 
 
-def deflection(ctx: Context) -> sp.Expr:
+def clearance(ctx: Context, convention: Clearance = "radial") -> sp.Expr:
+    """γ_0 of Eq. 5 (m): the radial clearance, or half the diametral clearance."""
+    value = ctx.p(CLEARANCE_PARAMETER[convention])
+    return value if convention == "radial" else value / 2
+
+
+def deflection(ctx: Context, convention: Clearance = "radial") -> sp.Expr:
     """Contact deflection δ_i of one ball (m), paper Eq. 5."""
-    return ctx.x * ctx.c + ctx.y * ctx.s - ctx.p("radial_clearance")
+    return ctx.x * ctx.c + ctx.y * ctx.s - clearance(ctx, convention)
 
 
-def hertz_load(ctx: Context) -> sp.Expr:
-    """Hertz point-contact load k·max(0, δ)^{3/2} (N), paper Eqs. 3 and 6."""
-    return ctx.p("contact_stiffness") * sp.Max(0, deflection(ctx)) ** sp.Rational(3, 2)
+def race_stiffnesses(ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+    """(K_i, K_o): ball–inner-race and ball–outer-race Hertz constants (N/m^1.5)."""
+    args = [ctx.p(n) for n in ("ball_diameter", "pitch_diameter")]
+    material = [ctx.p("youngs_modulus"), ctx.p("poisson_ratio")]
+    return (RaceStiffness(*args, ctx.p("groove_conformity_inner"), *material, 1),
+            RaceStiffness(*args, ctx.p("groove_conformity_outer"), *material, -1))
 
 
 class HertzContact(Term):
@@ -35,17 +73,22 @@ class HertzContact(Term):
 
     kind: Literal["hertz_contact"] = "hertz_contact"
     cage: Literal["race_diameters", "pitch_diameter"] = "race_diameters"
+    stiffness: Literal["given", "geometry"] = "given"
+    clearance: Clearance = "radial"
+    damping: DampingLaw = "none"
 
-    needs: ClassVar[tuple[str, ...]] = ("contact_stiffness", "radial_clearance", "speed_rpm")
+    needs: ClassVar[tuple[str, ...]] = ("speed_rpm",)
     summary: ClassVar[str] = (
         "Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} "
         "per ball (paper Eqs. 3–6)"
     )
 
     def required_parameters(self) -> tuple[str, ...]:
-        if self.cage == "race_diameters":
-            return (*self.needs, "inner_race_diameter", "outer_race_diameter")
-        return (*self.needs, "ball_diameter", "pitch_diameter")
+        cage = (("inner_race_diameter", "outer_race_diameter")
+                if self.cage == "race_diameters" else ("ball_diameter", "pitch_diameter"))
+        names = (*STIFFNESS_PARAMETERS[self.stiffness], CLEARANCE_PARAMETER[self.clearance],
+                 *self.needs, *cage, *DAMPING_PARAMETERS[self.damping])
+        return tuple(dict.fromkeys(names))
 
     def cage_speed(self, ctx: Context) -> sp.Expr:
         """Cage angular speed ω_cage (rad/s)."""
@@ -55,12 +98,29 @@ class HertzContact(Term):
         d_b, d_m = ctx.p("ball_diameter"), ctx.p("pitch_diameter")
         return ctx.omega / 2 * (1 - d_b / d_m)
 
+    def stiffness_constant(self, ctx: Context) -> sp.Expr:
+        """k of Q = k δ^{3/2} (N/m^1.5): given, or both races in series from the geometry."""
+        if self.stiffness == "given":
+            return ctx.p("contact_stiffness")
+        return combined_stiffness(*race_stiffnesses(ctx))
+
     def ball_load(self, ctx: Context) -> sp.Expr:
-        return hertz_load(ctx)
+        delta = deflection(ctx, self.clearance)
+        elastic = self.stiffness_constant(ctx) * sp.Max(0, delta) ** sp.Rational(3, 2)
+        return elastic * damping_factor(ctx, self.damping)
 
     def describe(self) -> str:
         cage = {
             "race_diameters": "ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1)",
             "pitch_diameter": "ω_cage = ω/2·(1 − D_b/D_m) (rolling without slip)",
         }[self.cage]
-        return f"{self.summary}; cage speed {cage}"
+        clearance = ("; γ_0 = P_d/2 from the diametral clearance P_d"
+                     if self.clearance == "diametral" else "")
+        return (f"{self.summary}; cage speed {cage}{self._describe_stiffness()}{clearance}"
+                f"{describe_damping(self.damping)}")
+
+    def _describe_stiffness(self) -> str:
+        if self.stiffness == "given":
+            return ""
+        return ("; k = [K_i^(−2/3) + K_o^(−2/3)]^(−3/2) from Hertz point contact at the inner "
+                "and outer race (groove conformities f_i, f_o, E, ν; modelgen/hertz.py)")
