@@ -218,7 +218,8 @@ class RaceStiffness(Unrolled):
     def algorithm(d_b: Any, d_m: Any, f: Any, e: Any, nu: Any, sign: Any, ops: Ops) -> Any:
         return unrolled_stiffness(d_b, d_m, f, e, nu, sign, ops)
 
-    def _latex(self, printer: Any) -> str:
-        name = "K_i" if self.args[5] == 1 else "K_o"
-        args = ", ".join(printer._print(a) for a in self.args[:5])
-        return rf"{name}\left({args}\right)"
+    def latex_name(self) -> str:
+        return "K_i" if self.args[5] == 1 else "K_o"
+
+    def latex_args(self, printer: Any) -> str:
+        return ", ".join(printer._print(a) for a in self.args[:5])

@@ -60,6 +60,13 @@ NUMPY = Ops(
 """Evaluate an algorithm on floats or NumPy arrays."""
 
 
+def numpy_call(algorithm: Callable[..., Any], *args: Any) -> Any:
+    """``algorithm`` on NumPy values; the discarded side of ``if_positive`` may divide 0 by 0
+    where it is not used, which is not worth a warning."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return algorithm(*args, NUMPY)
+
+
 class _Trace:
     """Records the operations of one run of an algorithm as lines of CasADi code."""
 
@@ -161,14 +168,17 @@ class Unrolled(sp.Function):
         if "algorithm" in cls.__dict__:
             algorithm = cls.__dict__["algorithm"].__func__
             # lambdify evaluates the function by calling _imp_ on NumPy values
-            cls._imp_ = staticmethod(lambda *args: algorithm(*args, NUMPY))
+            cls._imp_ = staticmethod(lambda *args: numpy_call(algorithm, *args))
 
     def latex_name(self) -> str:
         return self.code_name
 
-    def _latex(self, printer: Any) -> str:
-        args = ", ".join(printer._print(a) for a in self.args)
-        return rf"{self.latex_name()}\left({args}\right)"
+    def latex_args(self, printer: Any) -> str:
+        return ", ".join(printer._print(a) for a in self.args)
+
+    def _latex(self, printer: Any, exp: str | None = None) -> str:
+        text = rf"{self.latex_name()}\left({self.latex_args(printer)}\right)"
+        return rf"\left({text}\right)^{{{exp}}}" if exp else text
 
     def _sympystr(self, printer: Any) -> str:
         """A call of the helper: what the CasADi printer (a ``StrPrinter``) writes."""

@@ -32,7 +32,7 @@ import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.centrifugal import harris_force
 from modelgen.terms.contact import HertzContact, deflection, race_stiffnesses
-from modelgen.unrolled import NUMPY, Ops, Unrolled
+from modelgen.unrolled import NUMPY, Ops, Unrolled, numpy_call
 
 STEPS = 4
 """Newton steps per ball: the force error is below 1e-15 of K_i δ^{3/2} over F_c/K_o from
@@ -57,7 +57,7 @@ def inner_race_load(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops = NUMPY,
 
 def race_loads(delta: Any, k_i: Any, k_o: Any, f_c: Any) -> dict[str, Any]:
     """Inner and outer loads (N) and deflections (m) of one ball, NumPy (for checks)."""
-    q_i = inner_race_load(delta, k_i, k_o, f_c)
+    q_i = numpy_call(inner_race_load, delta, k_i, k_o, f_c)
     delta_i = (q_i / k_i) ** (2 / 3)
     delta_o = ((q_i + f_c) / k_o) ** (2 / 3)
     return {"inner_load": q_i, "outer_load": q_i + f_c, "inner_deflection": delta_i,
@@ -79,9 +79,12 @@ class InnerRaceLoad(Unrolled):
     def algorithm(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops) -> Any:
         return inner_race_load(delta, k_i, k_o, f_c, ops)
 
-    def _latex(self, printer: Any) -> str:
+    def latex_name(self) -> str:
+        return r"Q_{in}"
+
+    def latex_args(self, printer: Any) -> str:
         delta, *rest = (printer._print(a) for a in self.args)
-        return rf"Q_{{in}}\left({delta};\ {', '.join(rest)}\right)"
+        return rf"{delta};\ {', '.join(rest)}"
 
 
 class TwoContact(HertzContact):
