@@ -2,8 +2,10 @@
 
 For each spec it writes
   ``__init__.py``  the model's expressions as CasADi code (per-ball load, rotor force, mass,
-                   shaft and cage speed) plus its parameter table; ``build(n_balls)`` makes
-                   the CasADi Functions through ``generated/_runtime.py``;
+                   shaft and cage speed, and the helpers of quantities solved by a fixed
+                   iteration, ``modelgen/unrolled.py``) plus its parameter table;
+                   ``build(n_balls)`` makes the CasADi Functions through
+                   ``generated/_runtime.py``;
   ``<model>.c``    CasADi's C source of rhs, jac and rk4_step at the spec's default N_b;
   ``MODEL.md``     the model card: equations in LaTeX, parameters with units and sources.
 Every header records the spec's SHA-256 and the bearingdyn/SymPy/CasADi versions; the same

@@ -47,10 +47,11 @@ def inner_race_load(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops = NUMPY,
     opening = ops.power(f_c / k_o, two_thirds)
     u = ops.minimum(delta / (1 + ratio), delta - opening)
     for _ in range(steps):
-        q = k_i * ops.hertz15(u)
-        # outer deflection and dh/du; both sides are used only where u > 0 (q > 0)
-        outer = ops.if_positive(u, ((q + f_c) / k_o) ** two_thirds, opening)
-        slope = 1 + ops.if_positive(u, ratio * (q / (q + f_c)) ** ops.rational(1, 3), 0)
+        # where u > 0: c = δ_o^{1/2} = ((K_i u^{3/2} + F_c)/K_o)^{1/3}, h'(u) = 1 + K_i √u/(K_o c);
+        # where u <= 0 the inner contact is open: δ_o = δ_c, h'(u) = 1
+        cube = ((k_i * ops.hertz15(u) + f_c) / k_o) ** ops.rational(1, 3)
+        outer = ops.if_positive(u, cube * cube, opening)
+        slope = ops.if_positive(u, 1 + k_i / k_o * ops.sqrt(u) / cube, 1)
         u = u - (u + outer - delta) / slope
     return k_i * ops.hertz15(u)
 
