@@ -132,7 +132,8 @@ def test_load_vanishes_as_contact_opens(case, ball, _):
         assert 0.0 <= q <= previous
         previous = q
     k_max, kb = 1e12, 1e12  # the largest contact stiffness drawn; the custom kb*delta**2
-    assert previous <= k_max * 1e-13**1.5 + kb * 1e-13**2, "load -> 0 as δ -> 0+"
+    bound = k_max * 1e-13**1.5 + kb * 1e-13**2
+    assert previous <= bound * (1 + 1e-12), "load -> 0 as δ -> 0+"  # rounding allowance
 
 
 def _generated_forces(name: str, n_balls: int):
