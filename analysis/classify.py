@@ -130,10 +130,11 @@ def classify(
 def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
     from analysis.lyapunov import lyapunov
     from analysis.model import load_model
+    from analysis.simulate import state_at
 
     model = load_model(ds.attrs["model"])
     values = {name: float(ds.attrs[name]) for name in model.parameter_names}
-    state = tuple(float(ds[v][-1]) for v in ("x", "y", "vx", "vy"))
+    state = tuple(state_at(ds, -1))
     length = float(ds.t[-1] - ds.t[0])
     return lyapunov(model, int(ds.attrs["n_balls"]) or None, duration=duration or length,
                     transient=0.0, dt=float(ds.attrs["dt"]), initial_state=state, **values)

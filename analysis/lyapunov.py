@@ -25,7 +25,7 @@ import xarray as xr
 from analysis.compiled import compiled_function
 from analysis.errors import InputError
 from analysis.model import Model, load_model
-from analysis.simulate import run_attrs, simulate
+from analysis.simulate import run_attrs, simulate, state_at
 
 BLOCKS = 10
 """Batches for the confidence interval of the exponents (batch means)."""
@@ -102,7 +102,7 @@ def lyapunov(
     if transient > 0:
         settled = simulate(model, n, duration=transient + dt, transient=transient, dt=dt,
                            initial_state=initial_state, **values)
-        z0 = np.array([float(settled[v][0]) for v in ("x", "y", "vx", "vy")])
+        z0 = state_at(settled, 0)
         t0 = float(settled.t[0])
     else:
         z0 = np.array(initial_state if initial_state is not None else

@@ -26,7 +26,7 @@ import numpy as np
 from analysis.errors import InputError
 from analysis.flow import Period, evaluate, flow_map, period_seconds, steps_per_period
 from analysis.model import Model, load_model
-from analysis.simulate import simulate
+from analysis.simulate import simulate, state_at
 
 STABILITY_MARGIN = 1e-6
 """|μ| below 1 − margin counts as stable; within the margin the verdict is 'marginal'."""
@@ -123,7 +123,7 @@ def default_guess(model: Model, n_balls: int, per: Period, values: dict[str, flo
     steps = steps_per_period(model, n_balls, per, values, dt) * n_periods
     ds = simulate(model, n_balls, duration=t_end, transient=0.0, dt=t_end / steps,
                   save_every=steps, **values)
-    return np.array([float(ds[v][-1]) for v in ("x", "y", "vx", "vy")]), 0.0
+    return state_at(ds, -1), 0.0
 
 
 def shoot(

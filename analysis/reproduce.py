@@ -18,7 +18,7 @@ from analysis.executors import Executor
 from analysis.io import save_dataset
 from analysis.lyapunov import lyapunov
 from analysis.model import load_model
-from analysis.simulate import simulate
+from analysis.simulate import simulate, state_at
 from analysis.spectrum import Peak, find_peaks
 from analysis.sweep import Axis, Setting, stability_chart
 
@@ -148,8 +148,7 @@ def reproduce(
     for nb in n_balls:
         ds = simulate(mdl, nb, duration=duration, transient=transient)
         exps = lyapunov(mdl, nb, duration=duration - transient, transient=0.0,
-                        n_exponents=1, initial_state=tuple(float(ds[v][0]) for v in
-                                                           ("x", "y", "vx", "vy")))
+                        n_exponents=1, initial_state=tuple(state_at(ds, 0)))
         verdict = classify(ds, exponents=exps)
         nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
         save_dataset(ds, nc)

@@ -8,6 +8,7 @@ method and step, the characteristic frequencies and the package versions.
 
 from __future__ import annotations
 
+import functools
 import math
 from importlib import metadata
 from typing import Literal
@@ -29,6 +30,7 @@ RK4_STABILITY_LIMIT = 2.785
 """|λ|·Δt at which classical RK4 stops being stable on the imaginary axis (2√2)."""
 
 
+@functools.cache
 def package_version() -> str:
     try:
         return metadata.version("bearingdyn")
@@ -131,6 +133,15 @@ def run_attrs(model: Model, n_balls: int, values: dict[str, float]) -> dict:
     attrs.update(values)
     attrs.update(model.frequencies(n_balls, values).as_dict())
     return attrs
+
+
+STATE = ("x", "y", "vx", "vy")
+"""The state variables of a run, in the order of the state vector."""
+
+
+def state_at(ds: xr.Dataset, index: int) -> np.ndarray:
+    """The state [x, y, vx, vy] (m, m/s) at sample ``index`` of a run (-1: the last)."""
+    return np.array([float(ds[v][index]) for v in STATE])
 
 
 def to_dataset(t: np.ndarray, states: np.ndarray, attrs: dict) -> xr.Dataset:

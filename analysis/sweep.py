@@ -31,7 +31,7 @@ from analysis.executors import Executor, SerialExecutor
 from analysis.io import save_dataset
 from analysis.model import load_model
 from analysis.poincare import poincare_section
-from analysis.simulate import run_attrs, simulate
+from analysis.simulate import run_attrs, simulate, state_at
 from analysis.store import PointStore
 
 NATURE_CODES = {"periodic-1": 1, "periodic-2": 2, "periodic-n": 3, "quasi-periodic": 4,
@@ -112,7 +112,7 @@ def diagram_point(setting: Setting, n_balls, values, initial_state=None) -> dict
     pts = poincare_section(ds, setting.section)
     k = setting.samples
     out = {v: pts[v].values[:k] for v in ("x", "y", "vx", "vy")}
-    out["final"] = np.array([float(ds[v][-1]) for v in ("x", "y", "vx", "vy")])
+    out["final"] = state_at(ds, -1)
     out["amplitude_x"] = float(np.ptp(ds.x.values)) / 2
     out["amplitude_y"] = float(np.ptp(ds.y.values)) / 2
     return out
@@ -126,7 +126,7 @@ def chart_point(setting: Setting, n_balls, values) -> dict:
     ds = _record(setting, n_balls, values)
     exponents = None
     if setting.lyapunov:
-        start = tuple(float(ds[v][0]) for v in ("x", "y", "vx", "vy"))
+        start = tuple(state_at(ds, 0))
         exponents = lyapunov(setting.model, n_balls, duration=float(ds.t[-1] - ds.t[0]),
                              transient=0.0, dt=setting.dt, n_exponents=1,
                              initial_state=start, **values)

@@ -10,9 +10,9 @@ import pytest
 
 from analysis.classify import _normalised_points, repeat_period
 from analysis.continuation import continue_from_orbit, continue_orbits, switch_period_doubling
-from analysis.io import save_dataset
+from analysis.io import open_result, save_dataset
 from analysis.poincare import poincare_section
-from analysis.simulate import simulate
+from analysis.simulate import simulate, state_at
 
 RPM = 30 / math.pi  # rad/s -> rpm
 RESONANCE = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
@@ -28,7 +28,7 @@ def sweep(omegas, params, periods=60, keep=1):
         ds = simulate("duffing", None, duration=periods * period,
                       transient=(periods - keep) * period, dt=period / 100,
                       initial_state=state, speed_rpm=w * RPM, **params)
-        state = tuple(float(ds[v][-1]) for v in ("x", "y", "vx", "vy"))
+        state = tuple(state_at(ds, -1))
         out.append((w, float(np.ptp(ds.x.values)) / 2, ds))
     return out
 
@@ -66,16 +66,9 @@ def test_branch_stability_and_file_round_trip(resonance_branch, tmp_path):
     assert br.stable.values[middle] == 0 and br.multiplier_abs.values[middle].max() > 1
     assert br.stable.values[0] == 1 and br.stable.values[-1] == 1
     save_dataset(br, tmp_path / "branch.nc")
-    back = load_dataset_branch(tmp_path / "branch.nc")
+    back = open_result(tmp_path / "branch.nc")
     assert list(back.special.values) == list(br.special.values)
     np.testing.assert_array_equal(back.speed_rpm.values, br.speed_rpm.values)
-
-
-def load_dataset_branch(path):
-    import xarray as xr
-
-    with xr.open_dataset(path, engine="h5netcdf") as ds:
-        return ds.load()
 
 
 def _section_points(ds):
@@ -113,7 +106,7 @@ def test_period_doubling_confirmed_by_branch_switching_and_brute_force():
     half = simulate("duffing", None, duration=two.period_s / 2, transient=0.0,
                     dt=two.period_s / two.n_steps, save_every=two.n_steps // 2,
                     initial_state=tuple(two.z0), **two.values)
-    orbit_points.append(np.array([float(half[v][-1]) for v in ("x", "y", "vx", "vy")]))
+    orbit_points.append(state_at(half, -1))
     scale = np.array([1, 1, omega, omega])
     mine = {tuple(np.round(z / scale / s_after, 3)) for z in orbit_points}
     assert brute == mine, (brute, mine, ds.attrs["speed_rpm"])

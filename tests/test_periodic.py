@@ -9,7 +9,7 @@ from analysis.errors import InputError
 from analysis.flow import Period, evaluate, flow_map
 from analysis.model import load_model
 from analysis.periodic import commensurate, shoot
-from analysis.simulate import simulate
+from analysis.simulate import simulate, state_at
 
 DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
 
@@ -58,7 +58,7 @@ def test_shooting_reproduces_the_simulated_orbit(rotor_orbit):
     ds = simulate("balanced-rotor", 8, duration=n_periods * orbit.period_s, transient=0.0,
                   dt=orbit.period_s / orbit.n_steps, save_every=orbit.n_steps,
                   radial_load=50.0)
-    end = np.array([float(ds[v][-1]) for v in ("x", "y", "vx", "vy")])
+    end = state_at(ds, -1)
     scale = np.array([1, 1, 0, 0]) * np.abs(orbit.z0[:2]).max() + np.array(
         [0, 0, 1, 1]) * np.abs(orbit.z0[2:]).max()
     assert np.max(np.abs(end - orbit.z0) / scale) < 1e-6

@@ -12,9 +12,9 @@ import time
 import cloudpickle
 import numpy as np
 import pytest
-import xarray as xr
 
 from analysis.executors import DaskExecutor, ProcessExecutor
+from analysis.io import open_result
 from analysis.periodic import shoot
 from analysis.sweep import Axis, Setting, stability_chart
 from tests.conftest import ROOT
@@ -27,11 +27,6 @@ SWEEP = ["sweep", "vakharia2015", "--n-balls", "8", "--param", "speed_rpm", "--f
 def _cli(args, cwd):
     return subprocess.Popen([sys.executable, "-m", "analysis.cli", *args], cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
-def _open(path):
-    with xr.open_dataset(path, engine="h5netcdf") as ds:
-        return ds.load()
 
 
 def test_interrupted_sweep_resumes_to_the_same_result(tmp_path):
@@ -50,7 +45,7 @@ def test_interrupted_sweep_resumes_to_the_same_result(tmp_path):
 
     again = _cli([*SWEEP, "-o", "part.nc"], tmp_path)
     assert again.wait(timeout=600) == 0, again.stderr.read()
-    a, b = _open(tmp_path / "whole.nc"), _open(tmp_path / "part.nc")
+    a, b = open_result(tmp_path / "whole.nc"), open_result(tmp_path / "part.nc")
     for var in ("x", "y", "vx", "vy", "amplitude_x", "amplitude_y"):
         np.testing.assert_array_equal(a[var].values, b[var].values)
     assert not parts.exists()
