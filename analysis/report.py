@@ -29,7 +29,7 @@ class CaseResult:
     frequencies: dict[str, float] = field(default_factory=dict)
 
     def major(self, var: str) -> str:
-        return peak_name(self.peaks[var][0]) if self.peaks[var] else "-"
+        return major_name(self.peaks[var])
 
     def others(self, var: str) -> str:
         names = []
@@ -37,6 +37,22 @@ class CaseResult:
             if peak_name(p) not in names:
                 names.append(peak_name(p))
         return ", ".join(names) or "-"
+
+
+def major_name(peaks: Sequence[Peak]) -> str:
+    """Name of the largest peak (``-`` when there is none)."""
+    return peak_name(peaks[0]) if peaks else "-"
+
+
+def simulate_case(model, n_balls: int, netcdf: Path, figure: Path, **kwargs):
+    """Simulate one N_b, write its run and its paper figure (spectra and Poincaré maps, x
+    and y), and return the run and its labelled peaks per direction."""
+    from analysis.plots import paper_figure, save_figure
+
+    ds = simulate(model, n_balls, **kwargs)
+    save_dataset(ds, netcdf)
+    save_figure(paper_figure(ds), figure)
+    return ds, {var: find_peaks(ds, var) for var in ("x", "y")}
 
 
 def peak_name(peak: Peak) -> str:
@@ -54,19 +70,15 @@ def run_paper_case(
 ) -> list[CaseResult]:
     """Simulate each N_b, save ``nb<N>.nc`` and ``nb<N>.png`` in ``out_dir``, and write
     ``peaks.md`` and ``peaks.json`` (the peak table). Returns one result per N_b."""
-    from analysis.plots import paper_figure, save_figure
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
     results = []
     for i, nb in enumerate(n_balls):
         start = time.perf_counter()
-        ds = simulate(mdl, nb, duration=duration, transient=transient, **parameters)
-        peaks = {var: find_peaks(ds, var) for var in ("x", "y")}
         nc, png = out / f"nb{nb}.nc", out / f"nb{nb}.png"
-        save_dataset(ds, nc)
-        save_figure(paper_figure(ds), png)
+        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient,
+                                  **parameters)
         results.append(CaseResult(nb, nc, png, peaks, time.perf_counter() - start,
                                   {k: ds.attrs[k] for k in ("shaft_hz", "cage_hz", "vc_hz")}))
         if progress:

@@ -15,11 +15,11 @@ import xarray as xr
 
 from analysis.classify import classify
 from analysis.executors import Executor
-from analysis.io import save_dataset
 from analysis.lyapunov import lyapunov
 from analysis.model import load_model
-from analysis.simulate import simulate, state_at
-from analysis.spectrum import Peak, find_peaks
+from analysis.report import major_name, peak_name, simulate_case
+from analysis.simulate import state_at
+from analysis.spectrum import Peak
 from analysis.sweep import Axis, Setting, stability_chart
 
 
@@ -75,13 +75,13 @@ class Row:
     paper: PaperRow | None = None
 
     def major(self, var: str) -> str:
-        return _name(self.peaks[var][0]) if self.peaks[var] else "-"
+        return major_name(self.peaks[var])
 
     def others(self, var: str) -> list[str]:
         names: list[str] = []
         for p in self.peaks[var][1:]:
-            if p.label and _name(p) not in names and _name(p) != self.major(var):
-                names.append(_name(p))
+            if p.label and peak_name(p) not in names and peak_name(p) != self.major(var):
+                names.append(peak_name(p))
         return names
 
     def marks(self) -> dict[str, bool | None]:
@@ -94,10 +94,6 @@ class Row:
                 "others_x": set(p.others_x) <= set(self.others("x")) | {self.major("x")},
                 "others_y": set(p.others_y) <= set(self.others("y")) | {self.major("y")},
                 "nature": nature_matches(p.nature, self.nature)}
-
-
-def _name(peak: Peak) -> str:
-    return peak.label or f"{peak.frequency_hz:.0f} Hz"
 
 
 @dataclass
@@ -138,22 +134,18 @@ def reproduce(
     """Simulate the paper's case for each N_b (``duration`` s, the first ``transient`` s
     dropped), classify it with its largest Lyapunov exponent, and chart the verdicts over
     the ``sensitivity`` ranges (default ``SENSITIVITY``). Results go to ``out_dir``."""
-    from analysis.plots import paper_figure, save_figure
-
     start = time.perf_counter()
     out = Path(out_dir)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
     rows = []
     for nb in n_balls:
-        ds = simulate(mdl, nb, duration=duration, transient=transient)
+        nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
+        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient)
         exps = lyapunov(mdl, nb, duration=duration - transient, transient=0.0,
                         n_exponents=1, initial_state=tuple(state_at(ds, 0)))
         verdict = classify(ds, exponents=exps)
-        nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
-        save_dataset(ds, nc)
-        save_figure(paper_figure(ds), png)
-        rows.append(Row(nb, {v: find_peaks(ds, v) for v in ("x", "y")}, verdict.nature,
+        rows.append(Row(nb, peaks, verdict.nature,
                         verdict.detail, float(exps.exponents[0]), float(exps.ci95[0]), png,
                         nc, PAPER_TABLE2.get(nb)))
         if log:
