@@ -58,14 +58,18 @@ class Axis:
         except (ValueError, IndexError):
             raise InputError(f"axis: expected name:start:stop:count (or n_balls:low:high), "
                              f"got {text!r}") from None
-        if num < 1:
-            raise InputError(f"axis {name}: count must be >= 1, got {num}")
-        return cls(name, tuple(np.linspace(start, stop, num).tolist()))
+        return cls.linear(name, start, stop, num)
 
     @classmethod
     def linear(cls, name: str, start: float, stop: float, num: int) -> Axis:
-        return cls.parse(f"{name}:{start}:{stop}:{num}") if name != "n_balls" else cls(
-            name, tuple(float(v) for v in np.unique(np.round(np.linspace(start, stop, num)))))
+        """``num`` equally spaced values from ``start`` to ``stop`` (whole, distinct numbers
+        for ``n_balls``)."""
+        if num < 1:
+            raise InputError(f"axis {name}: count must be >= 1, got {num}")
+        values = np.linspace(start, stop, num)
+        if name == "n_balls":
+            values = np.unique(np.round(values))
+        return cls(name, tuple(values.tolist()))
 
 
 @dataclass(frozen=True)
