@@ -7,6 +7,12 @@ Typical use::
     find_peaks(ds, "x")
 
 Names are imported on first use (PEP 562), so ``import analysis`` and the CLI start fast.
+
+The package is layered: ``model`` (the generated models), ``integrate`` (RK4/CVODES, compiled
+blocks, flow maps), ``signal`` (spectra, Poincaré sections), ``stability`` (Lyapunov
+exponents, periodic orbits, continuation, classification), ``sweeps`` (parameter grids and
+their executors) and ``reports`` (figures, the paper's job and report, progress display);
+``errors`` and ``io`` are shared by all, and ``cli`` is the ``bearingdyn`` command on top.
 """
 
 from __future__ import annotations
@@ -20,16 +26,13 @@ _API = {
     "load_dataset": "analysis.io", "save_dataset": "analysis.io",
     "Model": "analysis.model", "available_models": "analysis.model",
     "load_model": "analysis.model",
-    "poincare_section": "analysis.poincare",
-    "run_paper_case": "analysis.report",
-    "amplitude_spectrum": "analysis.spectrum", "find_peaks": "analysis.spectrum",
-    "peak_table": "analysis.spectrum",
+    "poincare_section": "analysis.signal.poincare",
+    "run_paper_case": "analysis.reports.report",
+    "amplitude_spectrum": "analysis.signal.spectrum", "find_peaks": "analysis.signal.spectrum",
+    "peak_table": "analysis.signal.spectrum",
+    "simulate": "analysis.integrate.simulate",
 }
-__all__ = [*sorted(_API), "simulate"]
-
-# Imported eagerly: the function shares its name with its module, and a lazy lookup would
-# hand out the module once anything had imported ``analysis.simulate``.
-from analysis.simulate import simulate  # noqa: E402
+__all__ = sorted(_API)
 
 
 def __getattr__(name: str) -> Any:

@@ -3,7 +3,7 @@
 The run: ``vakharia2015``, N_b = 8, 1 s simulated from the spec's initial state with the
 paper's RK4 step Δt = 1e-5 s (1e5 steps, every state kept), through
 
-    (a) ``simulate()``, RK4 compiled to C (``analysis.compiled``),
+    (a) ``simulate()``, RK4 compiled to C (``analysis.integrate.compiled``),
     (b) ``simulate(compiled=False)``, the same RK4 blocks in the CasADi virtual machine,
     (c) a plain NumPy RK4 loop (one Python iteration per step, NumPy over the balls),
     (d) SciPy ``solve_ivp`` (RK45, adaptive) with the NumPy right-hand side of (c),
@@ -221,9 +221,9 @@ def run_benchmark(repeat: int = 5, duration: float = 1.0, memory_duration: float
                   memory_save_every: int = 100, progress: Callable[[str], None] = print
                   ) -> Result:
     """Time the paths (median of ``repeat``), compare them, measure peak memory."""
-    from analysis.compiled import library, run_rk4
+    from analysis.integrate.compiled import library, run_rk4
+    from analysis.integrate.simulate import simulate
     from analysis.model import load_model
-    from analysis.simulate import simulate
 
     model = load_model(MODEL)
     n_steps = round(duration / DT)
@@ -247,7 +247,7 @@ def run_benchmark(repeat: int = 5, duration: float = 1.0, memory_duration: float
     compiled_label = ("bearingdyn RK4, compiled C" if backend == "compiled"
                       else "bearingdyn RK4 (no C compiler: CasADi VM)")
     rows = {
-        "a": Row("a", compiled_label, note="analysis.compiled.run_rk4: states array"),
+        "a": Row("a", compiled_label, note="analysis.integrate.compiled.run_rk4: states array"),
         "a+": Row("a+", "(a) through simulate()",
                   note="plus input checks, blow-up checks, xarray Dataset, provenance"),
         "b": Row("b", "bearingdyn RK4, CasADi VM", note="run_rk4, compiled=False"),

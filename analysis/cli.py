@@ -116,8 +116,8 @@ def simulate(
         "--no-compile", help="Run RK4 in the CasADi VM instead of compiled C.")] = False,
 ):
     """Integrate a model and write the motion (x, y, vx, vy over t) to netCDF."""
+    from analysis.integrate.simulate import simulate as run
     from analysis.io import save_dataset
-    from analysis.simulate import simulate as run
 
     params = parse_sets(sets)
     if speed_rpm is not None:
@@ -143,7 +143,7 @@ def spectrum(
 ):
     """Labelled spectral peaks (X, VC, VC−X, …) of a run, x and y directions."""
     from analysis.io import load_dataset
-    from analysis.spectrum import peak_table
+    from analysis.signal.spectrum import peak_table
 
     ds = load_dataset(run_file)
     peaks = peak_table(ds, max_peaks=max_peaks)
@@ -158,7 +158,7 @@ def spectrum(
             typer.echo(f"{p.direction:>3} {p.frequency_hz:15.2f} {p.amplitude:14.3e}  "
                        f"{p.label or '?'}")
     if output:
-        from analysis.plots import save_figure, spectrum_figure
+        from analysis.reports.plots import save_figure, spectrum_figure
 
         save_figure(spectrum_figure(ds), output)
         typer.echo(f"wrote {output}", err=as_json)
@@ -174,7 +174,7 @@ def poincare(
 ):
     """Stroboscopic Poincaré section of a run (once per shaft, cage or VC period)."""
     from analysis.io import load_dataset
-    from analysis.poincare import SECTIONS, poincare_section
+    from analysis.signal.poincare import SECTIONS, poincare_section
 
     if section not in SECTIONS:
         raise InputError(f"--section: must be one of {', '.join(SECTIONS)}, got {section!r}")
@@ -188,7 +188,7 @@ def poincare(
                    f"x in [{float(pts.x.min()):.4e}, {float(pts.x.max()):.4e}] m, "
                    f"y in [{float(pts.y.min()):.4e}, {float(pts.y.max()):.4e}] m")
     if output:
-        from analysis.plots import poincare_figure, save_figure
+        from analysis.reports.plots import poincare_figure, save_figure
 
         save_figure(poincare_figure(ds, section), output)
         typer.echo(f"wrote {output}", err=as_json)
@@ -203,7 +203,7 @@ def _parameters(speed_rpm: float | None, sets: list[str] | None) -> dict[str, fl
 
 def _save_figure(fig, output: Path | None, err: bool = False) -> None:
     if output:
-        from analysis.plots import save_figure
+        from analysis.reports.plots import save_figure
 
         save_figure(fig, output)
         typer.echo(f"wrote {output}", err=err)
@@ -230,7 +230,7 @@ def lyapunov(
                                                 help="Figure of the running estimates.")] = None,
 ):
     """Lyapunov spectrum (4 exponents, 1/s) from the tangent dynamics of the RK4 map."""
-    from analysis.lyapunov import lyapunov as run_lyapunov
+    from analysis.stability.lyapunov import lyapunov as run_lyapunov
 
     res = run_lyapunov(model, n_balls, duration=duration, transient=transient, dt=dt,
                        renorm_every=renorm_every, **_parameters(speed_rpm, sets))
@@ -245,7 +245,7 @@ def lyapunov(
         typer.echo(f"sum = {data['sum_of_exponents']:.6g} 1/s; mean divergence "
                    f"{data['mean_divergence']:.6g} 1/s")
     if output:
-        from analysis.plots import lyapunov_figure
+        from analysis.reports.plots import lyapunov_figure
 
         _save_figure(lyapunov_figure(res), output, err=as_json)
 
@@ -265,7 +265,7 @@ def floquet(
     as_json: JsonOption = False,
 ):
     """Periodic orbit by Newton shooting, its Floquet multipliers and stability."""
-    from analysis.periodic import shoot
+    from analysis.stability.periodic import shoot
 
     orbit = shoot(model, n_balls, period, segments=segments, dt=dt, settle=settle,
                   **_parameters(speed_rpm, sets))
@@ -290,8 +290,8 @@ def classify(
 ):
     """Periodic-n, quasi-periodic or chaotic (computes the largest Lyapunov exponent when
     the Poincaré points alone cannot tell)."""
-    from analysis.classify import classify as run_classify
     from analysis.io import load_dataset
+    from analysis.stability.classify import classify as run_classify
 
     result = run_classify(load_dataset(run_file), section)
     if as_json:
@@ -322,8 +322,8 @@ def continue_(
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
 ):
     """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection."""
-    from analysis import continuation as cont
     from analysis.io import save_dataset
+    from analysis.stability import continuation as cont
 
     progress = None if quiet else typer.echo
     branch = cont.continue_orbits(model, n_balls, param=param, start=start, stop=stop,
@@ -350,7 +350,7 @@ def continue_(
         typer.echo(f"wrote {path}: {br.sizes['point']} orbits ({br.attrs['branch']}), "
                    f"{br.attrs['status']}; special points: {', '.join(specials) or 'none'}")
     if plot:
-        from analysis.plots import branch_figure
+        from analysis.reports.plots import branch_figure
 
         _save_figure(branch_figure(branches), plot)
 
@@ -364,7 +364,7 @@ QuietOption = Annotated[bool, typer.Option("--quiet", help="No progress output."
 
 
 def _executor(kind: str, workers: int | None, scheduler: str | None):
-    from analysis.executors import make_executor
+    from analysis.sweeps.executors import make_executor
 
     return make_executor(kind, workers, scheduler)
 
@@ -393,7 +393,7 @@ def sweep(
     quiet: QuietOption = False,
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
-    from analysis.sweep import Axis, ProgressReporter, Setting, bifurcation_diagram
+    from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, bifurcation_diagram
 
     setting = Setting(model, n_balls, parse_sets(sets), transient, samples, section, dt)
     ex = _executor(executor, workers, scheduler)
@@ -429,7 +429,7 @@ def chart(
     table: Annotated[bool, typer.Option("--table", help="Print the chart as a table.")] = False,
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
-    from analysis.sweep import Axis, ProgressReporter, Setting, chart_table, stability_chart
+    from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, chart_table, stability_chart
 
     setting = Setting(model, n_balls, parse_sets(sets), transient, revolutions, "shaft", dt,
                       lyapunov)
@@ -453,7 +453,7 @@ def plot(
 ):
     """Draw the natural figure of a result file (run, branch, diagram or chart)."""
     from analysis.io import open_result
-    from analysis.plots import any_figure
+    from analysis.reports.plots import any_figure
 
     _save_figure(any_figure(open_result(result)), output)
 
@@ -474,10 +474,10 @@ def reproduce(
 ):
     """Reproduce the paper: Table 2 and Figs. 2-6 side by side with the paper, sensitivity
     to the omitted parameters, provenance (report.md, report.html, table2.json)."""
-    from analysis.report import write_reproduction
-    from analysis.reproduce import SENSITIVITY
-    from analysis.reproduce import reproduce as run_reproduce
-    from analysis.sweep import ProgressReporter
+    from analysis.reports.report import write_reproduction
+    from analysis.reports.reproduce import SENSITIVITY
+    from analysis.reports.reproduce import reproduce as run_reproduce
+    from analysis.sweeps.sweep import ProgressReporter
 
     kwargs = {}
     if quick:
@@ -508,7 +508,7 @@ def run(
     sets: SetOption = None,
 ):
     """The default job: the paper's case for N_b = 6…10 (netCDF + figure per N_b, peak table)."""
-    from analysis.report import PAPER_N_BALLS, peak_table_markdown, run_paper_case
+    from analysis.reports.report import PAPER_N_BALLS, peak_table_markdown, run_paper_case
 
     results = run_paper_case(out_dir, model, n_balls or PAPER_N_BALLS, duration, transient,
                              progress=typer.echo, **parse_sets(sets))

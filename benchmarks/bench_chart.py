@@ -15,8 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from analysis.executors import make_executor
-from analysis.sweep import Axis, ProgressReporter, Setting, stability_chart
+from analysis.sweeps.executors import make_executor
+from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, stability_chart
 
 
 def main() -> None:

@@ -547,7 +547,7 @@ def test_catalogue_is_large_and_distinct():
 
 def test_blow_up_stops_with_its_time_and_a_fix():
     from analysis.errors import SimulationError
-    from analysis.simulate import simulate
+    from analysis.integrate.simulate import simulate
 
     with pytest.raises(SimulationError, match=r"blew up at t = 1\.35 s.*try a smaller dt"):
         simulate("duffing", duration=20.0, transient=0.0, cubic_stiffness=-1.0, compiled=False)
@@ -556,7 +556,7 @@ def test_blow_up_stops_with_its_time_and_a_fix():
 def test_unstable_step_is_refused_before_running():
     """The step check catches what used to end in a blow-up (the RK4 instability)."""
     from analysis.errors import InputError
-    from analysis.simulate import simulate
+    from analysis.integrate.simulate import simulate
 
     with pytest.raises(InputError, match=r"dt: must be in \(0, 0\.000101\] s.*5e-05"):
         simulate("vakharia2015", 8, duration=0.05, transient=0.0, dt=2e-4, radial_load=1e5)
@@ -567,7 +567,7 @@ def test_unstable_step_is_refused_before_running():
 
 def test_cvodes_failure_surfaces_the_solver_message():
     from analysis.errors import SimulationError
-    from analysis.simulate import simulate
+    from analysis.integrate.simulate import simulate
 
     with pytest.raises(SimulationError, match=r"CVODES failed: .*CV_ILL_INPUT"):
         simulate("vakharia2015", duration=0.01, transient=0.0, method="cvodes", rtol=1e-30,
@@ -575,7 +575,7 @@ def test_cvodes_failure_surfaces_the_solver_message():
 
 
 def test_newton_non_convergence_is_a_result():
-    from analysis.periodic import shoot
+    from analysis.stability.periodic import shoot
 
     orbit = shoot("balanced-rotor", 8, "vc", radial_load=50.0, max_iter=1, tol=1e-30,
                   settle=0.05)
@@ -584,8 +584,8 @@ def test_newton_non_convergence_is_a_result():
 
 
 def test_continuation_start_failure_is_reported():
-    from analysis.continuation import continue_orbits
     from analysis.errors import InputError
+    from analysis.stability.continuation import continue_orbits
 
     with pytest.raises(InputError, match=r"start: no periodic orbit found at forcing_amplitude "
                                          r"= 7\.5 \(singular Newton matrix"):

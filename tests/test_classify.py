@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-from analysis.classify import classify
-from analysis.simulate import simulate
+from analysis.integrate.simulate import simulate
+from analysis.stability.classify import classify
 
 RPM = 30 / math.pi
 

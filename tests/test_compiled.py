@@ -8,9 +8,9 @@ import warnings
 import numpy as np
 import pytest
 
-from analysis import compiled
+from analysis.integrate import compiled
+from analysis.integrate.simulate import simulate
 from analysis.model import load_model
-from analysis.simulate import simulate
 
 MODEL, N_BALLS = "vakharia2015", 8
 CALM = dict(damping=2000.0)

@@ -8,11 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from analysis.classify import _normalised_points, repeat_period
-from analysis.continuation import continue_from_orbit, continue_orbits, switch_period_doubling
+from analysis.integrate.simulate import simulate, state_at
 from analysis.io import open_result, save_dataset
-from analysis.poincare import poincare_section
-from analysis.simulate import simulate, state_at
+from analysis.signal.poincare import poincare_section
+from analysis.stability.classify import _normalised_points, repeat_period
+from analysis.stability.continuation import (
+    continue_from_orbit,
+    continue_orbits,
+    switch_period_doubling,
+)
 
 RPM = 30 / math.pi  # rad/s -> rpm
 RESONANCE = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.lyapunov import lyapunov
-from analysis.periodic import shoot
+from analysis.stability.lyapunov import lyapunov
+from analysis.stability.periodic import shoot
 
 
 @pytest.mark.parametrize(("model", "n_balls", "params"), [

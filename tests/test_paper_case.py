@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from analysis.integrate.simulate import simulate
 from analysis.model import load_model
-from analysis.simulate import simulate
-from analysis.spectrum import find_peaks
+from analysis.signal.spectrum import find_peaks
 
 # Table 1 of the paper, by hand: r = D_i/2, R = D_o/2, Eq. 1 ω_cage = ω r/(R + r)
 D_I, D_O = 18.738e-3, 28.262e-3

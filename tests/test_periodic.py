@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from analysis.errors import InputError
-from analysis.flow import Period, evaluate, flow_map
+from analysis.integrate.flow import Period, evaluate, flow_map
+from analysis.integrate.simulate import simulate, state_at
 from analysis.model import load_model
-from analysis.periodic import commensurate, shoot
-from analysis.simulate import simulate, state_at
+from analysis.stability.periodic import commensurate, shoot
 
 DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
 

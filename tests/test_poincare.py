@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis.poincare import SECTIONS, poincare_section, section_period
+from analysis.signal.poincare import SECTIONS, poincare_section, section_period
 
 X = 83.3333  # shaft frequency, Hz: its period is not a multiple of dt
 CAGE = 33.2234

@@ -8,9 +8,9 @@ import pytest
 
 from analysis.io import load_dataset
 from analysis.model import load_model
-from analysis.report import write_reproduction
-from analysis.reproduce import PAPER_TABLE2, Row, nature_matches, reproduce
-from analysis.spectrum import Peak, find_peaks
+from analysis.reports.report import write_reproduction
+from analysis.reports.reproduce import PAPER_TABLE2, Row, nature_matches, reproduce
+from analysis.signal.spectrum import Peak, find_peaks
 
 
 @pytest.fixture(scope="module")

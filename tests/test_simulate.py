@@ -7,8 +7,8 @@ import pytest
 from scipy.optimize import fsolve
 
 from analysis.errors import InputError
+from analysis.integrate.simulate import simulate
 from analysis.model import load_model
-from analysis.simulate import simulate
 
 
 def _rel_max(a, b) -> float:

@@ -11,7 +11,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from analysis.errors import InputError
-from analysis.spectrum import (
+from analysis.signal.spectrum import (
     Peak,
     amplitude_spectrum,
     find_peaks,

@@ -13,10 +13,10 @@ import cloudpickle
 import numpy as np
 import pytest
 
-from analysis.executors import DaskExecutor, ProcessExecutor
 from analysis.io import open_result
-from analysis.periodic import shoot
-from analysis.sweep import Axis, Setting, stability_chart
+from analysis.stability.periodic import shoot
+from analysis.sweeps.executors import DaskExecutor, ProcessExecutor
+from analysis.sweeps.sweep import Axis, Setting, stability_chart
 from tests.conftest import ROOT
 
 SWEEP = ["sweep", "vakharia2015", "--n-balls", "8", "--param", "speed_rpm", "--from", "4000",

@@ -11,8 +11,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from analysis.poincare import poincare_section, section_period
-from analysis.spectrum import Peak, amplitude_spectrum, find_peaks
+from analysis.signal.poincare import poincare_section, section_period
+from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks
 
 MICRO = 1e6
 AXIS_NAMES = {"x": ("x", "vx", "X direction"), "y": ("y", "vy", "Y direction")}

@@ -1,7 +1,7 @@
 """Reproduce the seed paper: its Table 2 and Figs. 2-6 next to what the equations give, and how
 the verdicts depend on the parameters the paper does not state.
 
-``reproduce()`` computes; ``analysis.report.write_reproduction`` renders the report folder.
+``reproduce()`` computes; ``analysis.reports.report.write_reproduction`` renders the report folder.
 """
 
 from __future__ import annotations
@@ -13,14 +13,14 @@ from pathlib import Path
 
 import xarray as xr
 
-from analysis.classify import classify
-from analysis.executors import Executor
-from analysis.lyapunov import lyapunov
+from analysis.integrate.simulate import state_at
 from analysis.model import load_model
-from analysis.report import major_name, peak_name, simulate_case
-from analysis.simulate import state_at
-from analysis.spectrum import Peak
-from analysis.sweep import Axis, Setting, stability_chart
+from analysis.reports.report import major_name, peak_name, simulate_case
+from analysis.signal.spectrum import Peak
+from analysis.stability.classify import classify
+from analysis.stability.lyapunov import lyapunov
+from analysis.sweeps.executors import Executor
+from analysis.sweeps.sweep import Axis, Setting, stability_chart
 
 
 @dataclass(frozen=True)

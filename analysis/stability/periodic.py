@@ -1,8 +1,8 @@
 """Periodic orbits by shooting, and their Floquet multipliers.
 
 A periodic orbit of period T solves Φ_T(z0, t0) = z0, where Φ_T is the fixed-step RK4 map over
-one forcing period (``analysis.flow``). Newton's method needs ∂Φ_T/∂z0, the monodromy matrix,
-which CasADi computes by AD through the integrator. Its eigenvalues are the Floquet
+one forcing period (``analysis.integrate.flow``). Newton's method needs ∂Φ_T/∂z0, the monodromy
+matrix, which CasADi computes by AD through the integrator. Its eigenvalues are the Floquet
 multipliers: the orbit is stable when all lie inside the unit circle.
 
 *Single shooting* iterates on z0 alone; *multiple shooting* splits the period into m segments
@@ -24,9 +24,9 @@ from fractions import Fraction
 import numpy as np
 
 from analysis.errors import InputError
-from analysis.flow import Period, evaluate, flow_map, period_seconds, steps_per_period
+from analysis.integrate.flow import Period, evaluate, flow_map, period_seconds, steps_per_period
+from analysis.integrate.simulate import simulate, state_at
 from analysis.model import Model, load_model
-from analysis.simulate import simulate, state_at
 
 STABILITY_MARGIN = 1e-6
 """|μ| below 1 − margin counts as stable; within the margin the verdict is 'marginal'."""

@@ -2,7 +2,7 @@
 
 Unknowns w = (z0 / s_z, λ / s_λ): the orbit's state at the section (scaled per component by
 ``periodic.state_scale``) and the continuation parameter (scaled by the requested range).
-Equations: G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 (shooting, ``analysis.flow``) plus the
+Equations: G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 (shooting, ``analysis.integrate.flow``) plus the
 arclength condition τ·(w − w_pred) = 0 of Keller's method; the bordered Newton matrix is built
 from the monodromy matrix and ∂Φ/∂λ, both by AD (the period's own dependence on λ, e.g. on the
 speed, included). The step adapts to the Newton iterations.
@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.flow import (
+from analysis.integrate.flow import (
     Period,
     evaluate,
     flow_map,
@@ -39,9 +39,9 @@ from analysis.flow import (
     period_seconds,
     steps_per_period,
 )
+from analysis.integrate.simulate import run_attrs
 from analysis.model import Model, load_model
-from analysis.periodic import PeriodicOrbit, shoot, state_scale
-from analysis.simulate import run_attrs
+from analysis.stability.periodic import PeriodicOrbit, shoot, state_scale
 
 
 @dataclass

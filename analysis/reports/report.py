@@ -8,10 +8,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from analysis.integrate.simulate import simulate
 from analysis.io import atomic_write, save_dataset
 from analysis.model import load_model
-from analysis.simulate import simulate
-from analysis.spectrum import Peak, find_peaks
+from analysis.signal.spectrum import Peak, find_peaks
 
 PAPER_N_BALLS = (6, 7, 8, 9, 10)
 """Table 2 of the paper."""
@@ -47,7 +47,7 @@ def major_name(peaks: Sequence[Peak]) -> str:
 def simulate_case(model, n_balls: int, netcdf: Path, figure: Path, **kwargs):
     """Simulate one N_b, write its run and its paper figure (spectra and Poincaré maps, x
     and y), and return the run and its labelled peaks per direction."""
-    from analysis.plots import paper_figure, save_figure
+    from analysis.reports.plots import paper_figure, save_figure
 
     ds = simulate(model, n_balls, **kwargs)
     save_dataset(ds, netcdf)
@@ -119,7 +119,7 @@ TABLE_HEAD = ("| N_b | major peak, x | major peak, y | other peaks, x | other pe
 def reproduction_markdown(rep, figure_names: dict[str, str]) -> str:
     """The report as Markdown (figures referenced by file name)."""
     from analysis.model import load_model
-    from analysis.reproduce import PAPER_NATURE, SENSITIVITY
+    from analysis.reports.reproduce import PAPER_NATURE, SENSITIVITY
 
     model = load_model(rep.model)
     rows = []
@@ -180,7 +180,7 @@ peak the paper lists is among ours.
 
 Nature: periodic-n, quasi-periodic (a two-frequency torus locked to X and VC, or a frequency
 of its own) or chaotic, from the shaft-synchronous Poincaré points and the largest Lyapunov
-exponent (`analysis.classify`). Run: {rep.settings['duration']:g} s simulated, the first
+exponent (`analysis.stability.classify`). Run: {rep.settings['duration']:g} s simulated, the first
 {rep.settings['transient']:g} s dropped, fixed-step RK4 with Δt = 1e-5 s.
 
 ## Figures 2–6 redrawn
@@ -231,7 +231,7 @@ def write_reproduction(rep, out_dir: str | Path) -> dict[str, Path]:
 
     import markdown
 
-    from analysis.plots import chart_figure, save_figure
+    from analysis.reports.plots import chart_figure, save_figure
 
     out = Path(out_dir)
     names = {f"nb{r.n_balls}": r.figure.name for r in rep.rows}

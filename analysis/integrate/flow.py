@@ -3,7 +3,7 @@
 ``Period`` names the period of a periodic orbit as an expression of the parameters:
 ``vc`` (1/VC, the balanced rotor), ``shaft`` (1/X), ``vc:k`` / ``shaft:k`` (k of them), or
 ``ratio:p/q`` (p VC periods = q shaft revolutions; the caller makes the ratio exact, see
-``analysis.periodic.commensurate``). ``flow_map`` integrates N fixed RK4 steps of
+``analysis.stability.periodic.commensurate``). ``flow_map`` integrates N fixed RK4 steps of
 h = T(p)/N from (z0, t0) and returns the end state, the monodromy matrix ∂z_T/∂z0 and
 ∂z_T/∂p, all by algorithmic differentiation through the integrator (the derivative of the
 discrete RK4 map, not finite differences).

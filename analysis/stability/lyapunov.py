@@ -22,10 +22,10 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.compiled import compiled_function
 from analysis.errors import InputError
+from analysis.integrate.compiled import compiled_function
+from analysis.integrate.simulate import run_attrs, simulate, state_at
 from analysis.model import Model, load_model
-from analysis.simulate import run_attrs, simulate, state_at
 
 BLOCKS = 10
 """Batches for the confidence interval of the exponents (batch means)."""
@@ -85,7 +85,7 @@ def lyapunov(
     ``ci95`` (batch means over ten blocks), ``running`` (the running estimates over time,
     dims ``t`` × ``index``, to judge convergence) and the mean phase-space divergence
     ``mean_divergence`` (1/s) as an attribute, next to the run's provenance. ``compiled``:
-    the tangent block runs as C (``analysis.compiled``), else in the CasADi VM.
+    the tangent block runs as C (``analysis.integrate.compiled``), else in the CasADi VM.
     """
     model = load_model(model) if isinstance(model, str) else model
     n = model.check_n_balls(n_balls)

@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from analysis.poincare import poincare_section
+from analysis.signal.poincare import poincare_section
 
 GRAPH_RATIO = 0.2
 """Sorted-neighbour / random-pair distance below which points lie on a smooth graph of φ."""
@@ -95,9 +95,9 @@ def classify(
 ) -> Classification:
     """Classify the motion in ``ds`` (a run from ``simulate``, transient dropped).
 
-    ``exponents`` (from ``analysis.lyapunov.lyapunov``) is computed from the run's own model,
-    parameters and final state when needed and not given (``lyapunov_duration`` seconds,
-    default: the run's length).
+    ``exponents`` (from ``analysis.stability.lyapunov.lyapunov``) is computed from the run's
+    own model, parameters and final state when needed and not given (``lyapunov_duration``
+    seconds, default: the run's length).
     """
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
@@ -128,9 +128,9 @@ def classify(
 
 
 def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
-    from analysis.lyapunov import lyapunov
+    from analysis.integrate.simulate import state_at
     from analysis.model import load_model
-    from analysis.simulate import state_at
+    from analysis.stability.lyapunov import lyapunov
 
     model = load_model(ds.attrs["model"])
     values = {name: float(ds.attrs[name]) for name in model.parameter_names}

@@ -17,9 +17,9 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.checks import check_rk4_step
-from analysis.compiled import library, run_rk4
 from analysis.errors import InputError, SimulationError
+from analysis.integrate.checks import check_rk4_step
+from analysis.integrate.compiled import library, run_rk4
 from analysis.model import Model, load_model
 
 Method = Literal["rk4", "cvodes"]
@@ -80,7 +80,7 @@ def simulate(
     save_every: keep every n-th RK4 step only (output spacing ``save_every * dt``).
     initial_state: (x0, y0, vx0, vy0) in m and m/s (default: the spec's, paper 1e-6 m).
     compiled: run RK4 as compiled C (built once per model and N_b, then cached; see
-        ``analysis.compiled``); ``False``: the CasADi virtual machine (same results).
+        ``analysis.integrate.compiled``); ``False``: the CasADi virtual machine (same results).
     **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``.
     """
     model = _resolve(model)
@@ -168,7 +168,7 @@ def _blow_up(states: np.ndarray, times: np.ndarray, limit: float) -> None:
 
 def _run_rk4(model: Model, n_balls: int, p: np.ndarray, z0: np.ndarray, dt: float,
              save_every: int, n_saved: int, limit: float, compiled: bool = True) -> np.ndarray:
-    """RK4 in blocks of up to 1e4 steps (``analysis.compiled``: compiled C, or the VM).
+    """RK4 in blocks of up to 1e4 steps (``analysis.integrate.compiled``: compiled C, or the VM).
 
     A blow-up is looked for at the end of every block (non-finite values propagate), then
     reported with the time of the first bad state of that block."""

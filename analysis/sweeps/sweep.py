@@ -4,11 +4,11 @@
   n_balls) on a grid; at each value the motion is simulated, the transient dropped and
   ``samples`` Poincaré points kept. With ``follow=True`` each point starts from the end state
   of the previous one, up and/or down the grid (hysteresis shows as different branches).
-* ``stability_chart``: a 2-D grid; each point classified (``analysis.classify``) as
+* ``stability_chart``: a 2-D grid; each point classified (``analysis.stability.classify``) as
   periodic-n, quasi-periodic or chaotic, with its largest Lyapunov exponent and amplitude.
 
-Both run through one executor (``analysis.executors``: serial, local processes or Dask) and
-store each finished point at once (``analysis.store``): re-running an interrupted command
+Both run through one executor (``analysis.sweeps.executors``: serial, local processes or Dask) and
+store each finished point at once (``analysis.sweeps.store``): re-running an interrupted command
 computes only the missing points. Followed diagram chains write their points from the
 worker (a Dask cluster on several machines needs a shared file system for them); chart
 points are written by the calling process as they arrive.
@@ -27,12 +27,12 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.executors import Executor, SerialExecutor
+from analysis.integrate.simulate import run_attrs, simulate, state_at
 from analysis.io import save_dataset
 from analysis.model import load_model
-from analysis.poincare import poincare_section
-from analysis.simulate import run_attrs, simulate, state_at
-from analysis.store import PointStore
+from analysis.signal.poincare import poincare_section
+from analysis.sweeps.executors import Executor, SerialExecutor
+from analysis.sweeps.store import PointStore
 
 NATURE_CODES = {"periodic-1": 1, "periodic-2": 2, "periodic-n": 3, "quasi-periodic": 4,
                 "chaotic": 5}
@@ -124,8 +124,8 @@ def diagram_point(setting: Setting, n_balls, values, initial_state=None) -> dict
 
 def chart_point(setting: Setting, n_balls, values) -> dict:
     """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point."""
-    from analysis.classify import classify
-    from analysis.lyapunov import lyapunov
+    from analysis.stability.classify import classify
+    from analysis.stability.lyapunov import lyapunov
 
     ds = _record(setting, n_balls, values)
     exponents = None

@@ -1,0 +1,5 @@
+"""Parameter sweeps: ``sweep`` (bifurcation diagrams and stability charts over grids),
+``executors`` (one interface for serial, process-pool and Dask execution) and ``store`` (each
+finished point on disk at once, so that an interrupted sweep resumes). Progress is reported
+through a ``(done, total)`` callback.
+"""
