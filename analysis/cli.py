@@ -474,8 +474,8 @@ def reproduce(
 ):
     """Reproduce the paper: Table 2 and Figs. 2-6 side by side with the paper, sensitivity
     to the omitted parameters, provenance (report.md, report.html, table2.json)."""
+    from analysis.reports.paper import SENSITIVITY
     from analysis.reports.report import write_reproduction
-    from analysis.reports.reproduce import SENSITIVITY
     from analysis.reports.reproduce import reproduce as run_reproduce
     from analysis.sweeps.sweep import ProgressReporter
 
@@ -508,7 +508,8 @@ def run(
     sets: SetOption = None,
 ):
     """The default job: the paper's case for N_b = 6…10 (netCDF + figure per N_b, peak table)."""
-    from analysis.reports.report import PAPER_N_BALLS, peak_table_markdown, run_paper_case
+    from analysis.reports.paper import PAPER_N_BALLS
+    from analysis.reports.report import peak_table_markdown, run_paper_case
 
     results = run_paper_case(out_dir, model, n_balls or PAPER_N_BALLS, duration, transient,
                              progress=typer.echo, **parse_sets(sets))

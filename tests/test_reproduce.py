@@ -8,8 +8,9 @@ import pytest
 
 from analysis.io import load_dataset
 from analysis.model import load_model
+from analysis.reports.paper import PAPER_TABLE2, nature_matches
 from analysis.reports.report import write_reproduction
-from analysis.reports.reproduce import PAPER_TABLE2, Row, nature_matches, reproduce
+from analysis.reports.reproduce import Row, reproduce
 from analysis.signal.spectrum import Peak, find_peaks
 
 

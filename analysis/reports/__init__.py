@@ -1,5 +1,6 @@
-"""Output for people: ``plots`` (figures), ``report`` (the paper's case as a job and the
-reproduction report in Markdown/HTML) and ``reproduce`` (the reproduction's computation).
-Everything else in ``analysis`` computes; this is where results become files, figures and
-text.
+"""Output for people: ``plots`` (figures), ``paper`` (the seed paper's data and the per-N_b
+step shared by the jobs), ``reproduce`` (the reproduction's computation) and ``report`` (the
+``run`` job's peak table and the reproduction report in Markdown/HTML/JSON). Imports go one
+way: ``paper`` ← ``reproduce`` ← ``report``. Everything else in ``analysis`` computes; this is
+where results become files, figures and text.
 """

@@ -1,4 +1,7 @@
-"""The paper's case as a job: simulate N_b = 6…10, write results, figures and a peak table."""
+"""Rendering for people: the paper's case as a job (simulate N_b = 6…10, write results,
+figures and a peak table) and the reproduction report (``reproduce()``'s result as Markdown,
+HTML and JSON). The computation is in ``analysis.reports.paper`` and
+``analysis.reports.reproduce``; this module imports them, never the other way round."""
 
 from __future__ import annotations
 
@@ -8,13 +11,18 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analysis.integrate.simulate import simulate
-from analysis.io import atomic_write, save_dataset
+from analysis.io import atomic_write
 from analysis.model import load_model
-from analysis.signal.spectrum import Peak, find_peaks
-
-PAPER_N_BALLS = (6, 7, 8, 9, 10)
-"""Table 2 of the paper."""
+from analysis.reports.paper import (
+    PAPER_N_BALLS,
+    PAPER_NATURE,
+    SENSITIVITY,
+    major_name,
+    peak_name,
+    simulate_case,
+)
+from analysis.reports.reproduce import Reproduction
+from analysis.signal.spectrum import Peak
 
 
 @dataclass
@@ -37,26 +45,6 @@ class CaseResult:
             if peak_name(p) not in names:
                 names.append(peak_name(p))
         return ", ".join(names) or "-"
-
-
-def major_name(peaks: Sequence[Peak]) -> str:
-    """Name of the largest peak (``-`` when there is none)."""
-    return peak_name(peaks[0]) if peaks else "-"
-
-
-def simulate_case(model, n_balls: int, netcdf: Path, figure: Path, **kwargs):
-    """Simulate one N_b, write its run and its paper figure (spectra and Poincaré maps, x
-    and y), and return the run and its labelled peaks per direction."""
-    from analysis.reports.plots import paper_figure, save_figure
-
-    ds = simulate(model, n_balls, **kwargs)
-    save_dataset(ds, netcdf)
-    save_figure(paper_figure(ds), figure)
-    return ds, {var: find_peaks(ds, var) for var in ("x", "y")}
-
-
-def peak_name(peak: Peak) -> str:
-    return peak.label if peak.label else f"{peak.frequency_hz:.0f} Hz"
 
 
 def run_paper_case(
@@ -116,11 +104,8 @@ TABLE_HEAD = ("| N_b | major peak, x | major peak, y | other peaks, x | other pe
               "largest Lyapunov exponent (1/s, 95 %) |\n|---|---|---|---|---|---|---|")
 
 
-def reproduction_markdown(rep, figure_names: dict[str, str]) -> str:
+def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> str:
     """The report as Markdown (figures referenced by file name)."""
-    from analysis.model import load_model
-    from analysis.reports.reproduce import PAPER_NATURE, SENSITIVITY
-
     model = load_model(rep.model)
     rows = []
     matched = total = 0
@@ -225,7 +210,7 @@ def _versions() -> str:
     return ", ".join(found) + f", Python {platform.python_version()}"
 
 
-def write_reproduction(rep, out_dir: str | Path) -> dict[str, Path]:
+def write_reproduction(rep: Reproduction, out_dir: str | Path) -> dict[str, Path]:
     """Write report.md, report.html (figures embedded) and table2.json into ``out_dir``."""
     import base64
 

@@ -1,7 +1,9 @@
 """Reproduce the seed paper: its Table 2 and Figs. 2-6 next to what the equations give, and how
 the verdicts depend on the parameters the paper does not state.
 
-``reproduce()`` computes; ``analysis.reports.report.write_reproduction`` renders the report folder.
+``reproduce()`` computes; ``analysis.reports.report.write_reproduction`` renders the report
+folder. The paper's own data (Table 2, the omitted quantities' ranges) is in
+``analysis.reports.paper``.
 """
 
 from __future__ import annotations
@@ -15,49 +17,21 @@ import xarray as xr
 
 from analysis.integrate.simulate import state_at
 from analysis.model import load_model
-from analysis.reports.report import major_name, peak_name, simulate_case
+from analysis.reports.paper import (
+    PAPER_NATURE,
+    PAPER_TABLE2,
+    SENSITIVITY,
+    PaperRow,
+    major_name,
+    nature_matches,
+    peak_name,
+    simulate_case,
+)
 from analysis.signal.spectrum import Peak
 from analysis.stability.classify import classify
 from analysis.stability.lyapunov import lyapunov
 from analysis.sweeps.executors import Executor
 from analysis.sweeps.sweep import Axis, Setting, stability_chart
-
-
-@dataclass(frozen=True)
-class PaperRow:
-    """One row of the paper's Table 2 (labels in our ASCII form, e.g. ``VC-X``)."""
-
-    major_x: str
-    major_y: str
-    others_x: tuple[str, ...]
-    others_y: tuple[str, ...]
-    nature: str
-    """chaotic, quasi-periodic, or multi-orbit periodic (the paper's words)."""
-
-
-PAPER_TABLE2: dict[int, PaperRow] = {
-    6: PaperRow("2X", "X", ("X", "VC-X", "2X", "VC", "VC+X"), ("VC-X", "VC"), "chaotic"),
-    7: PaperRow("X", "X", ("2X", "VC"), ("VC-X",), "quasi-periodic"),
-    8: PaperRow("X", "X", ("2X", "VC-X", "VC", "VC+X"), (), "quasi-periodic"),
-    9: PaperRow("X", "X", ("2X", "VC"), (), "quasi-periodic"),
-    10: PaperRow("X", "X", ("2X", "VC-X", "VC"), (), "multi-orbit periodic"),
-}
-"""Table 2 of the paper, transcribed. N_b = 5 is only in the conclusions: 'chaotic'."""
-PAPER_NATURE = {5: "chaotic", **{n: row.nature for n, row in PAPER_TABLE2.items()}}
-
-SENSITIVITY: dict[str, tuple[float, ...]] = {
-    "damping": (50.0, 100.0, 200.0, 300.0, 400.0),
-    "rotor_mass": (0.3, 0.6, 0.9, 1.2),
-    "contact_stiffness": tuple(7.055e9 * f for f in (0.8, 0.9, 1.0, 1.1, 1.2)),
-}
-"""Plausible ranges of the quantities the paper omits (N·s/m, kg, N/m^1.5)."""
-
-
-def nature_matches(paper: str, ours: str) -> bool:
-    """Whether our class agrees with the paper's word for it."""
-    if paper == "multi-orbit periodic":
-        return ours.startswith("periodic-") and ours != "periodic-1"
-    return ours == paper
 
 
 @dataclass

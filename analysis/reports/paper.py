@@ -1,0 +1,78 @@
+"""The seed paper's case, shared by the ``run`` job (``analysis.reports.report``) and the
+reproduction (``analysis.reports.reproduce``): the paper's Table 2 as transcribed, the ranges
+of the quantities it omits, the per-N_b step (simulate, write the run and its figure, find the
+peaks) and the naming of peaks.
+
+Dependencies go one way: ``paper`` ← ``reproduce`` (computes) ← ``report`` (renders).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from analysis.integrate.simulate import simulate
+from analysis.io import save_dataset
+from analysis.signal.spectrum import Peak, find_peaks
+
+PAPER_N_BALLS = (6, 7, 8, 9, 10)
+"""Table 2 of the paper."""
+
+
+@dataclass(frozen=True)
+class PaperRow:
+    """One row of the paper's Table 2 (labels in our ASCII form, e.g. ``VC-X``)."""
+
+    major_x: str
+    major_y: str
+    others_x: tuple[str, ...]
+    others_y: tuple[str, ...]
+    nature: str
+    """chaotic, quasi-periodic, or multi-orbit periodic (the paper's words)."""
+
+
+PAPER_TABLE2: dict[int, PaperRow] = {
+    6: PaperRow("2X", "X", ("X", "VC-X", "2X", "VC", "VC+X"), ("VC-X", "VC"), "chaotic"),
+    7: PaperRow("X", "X", ("2X", "VC"), ("VC-X",), "quasi-periodic"),
+    8: PaperRow("X", "X", ("2X", "VC-X", "VC", "VC+X"), (), "quasi-periodic"),
+    9: PaperRow("X", "X", ("2X", "VC"), (), "quasi-periodic"),
+    10: PaperRow("X", "X", ("2X", "VC-X", "VC"), (), "multi-orbit periodic"),
+}
+"""Table 2 of the paper, transcribed. N_b = 5 is only in the conclusions: 'chaotic'."""
+PAPER_NATURE = {5: "chaotic", **{n: row.nature for n, row in PAPER_TABLE2.items()}}
+
+SENSITIVITY: dict[str, tuple[float, ...]] = {
+    "damping": (50.0, 100.0, 200.0, 300.0, 400.0),
+    "rotor_mass": (0.3, 0.6, 0.9, 1.2),
+    "contact_stiffness": tuple(7.055e9 * f for f in (0.8, 0.9, 1.0, 1.1, 1.2)),
+}
+"""Plausible ranges of the quantities the paper omits (N·s/m, kg, N/m^1.5)."""
+
+
+def nature_matches(paper: str, ours: str) -> bool:
+    """Whether our class agrees with the paper's word for it."""
+    if paper == "multi-orbit periodic":
+        return ours.startswith("periodic-") and ours != "periodic-1"
+    return ours == paper
+
+
+def peak_name(peak: Peak) -> str:
+    return peak.label if peak.label else f"{peak.frequency_hz:.0f} Hz"
+
+
+def major_name(peaks: Sequence[Peak]) -> str:
+    """Name of the largest peak (``-`` when there is none)."""
+    return peak_name(peaks[0]) if peaks else "-"
+
+
+def simulate_case(model, n_balls: int, netcdf: Path, figure: Path, **kwargs):
+    """Simulate one N_b, write its run and its paper figure (spectra and Poincaré maps, x
+    and y), and return the run and its labelled peaks per direction."""
+    # matplotlib is imported only when a figure is drawn (it costs the CLI a second)
+    from analysis.reports.plots import paper_figure, save_figure
+
+    ds = simulate(model, n_balls, **kwargs)
+    save_dataset(ds, netcdf)
+    save_figure(paper_figure(ds), figure)
+    return ds, {var: find_peaks(ds, var) for var in ("x", "y")}
