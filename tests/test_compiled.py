@@ -143,19 +143,23 @@ def test_block_plan_covers_the_steps_in_few_calls(n_steps):
     assert len(plan) - plan.count(compiled.BLOCK_SIZES[0]) <= 36
 
 
-# The benchmark (analysis/bench.py): its hand-written paths compute the same model.
+# The benchmark (benchmarks/bench_simulate.py, not part of the package): its hand-written
+# paths compute the same model.
 
-def test_benchmark_reference_matches_the_generated_model():
-    from analysis import bench
+@pytest.fixture(scope="module")
+def bench():
+    from analysis.cli import _benchmark_module
 
+    return _benchmark_module()
+
+
+def test_benchmark_reference_matches_the_generated_model(bench):
     model = load_model(bench.MODEL)
     for values in (model.defaults, model.parameters(bench.CALM)):
         bench.check_reference(model, values, bench.N_BALLS)
 
 
-def test_benchmark_rk4_paths_agree_with_the_compiled_one():
-    from analysis import bench
-
+def test_benchmark_rk4_paths_agree_with_the_compiled_one(bench):
     model = load_model(bench.MODEL)
     values = model.parameters(bench.CALM)
     ref = bench.Reference.from_parameters(values, bench.N_BALLS)
@@ -177,3 +181,16 @@ def test_bench_command_prints_the_table(cli):
         assert text in res.stdout
     bad = cli("bench", "--repeat", "0")
     assert bad.returncode == 2 and "--repeat" in bad.stderr
+
+
+def test_bench_command_outside_a_checkout_says_where_the_benchmarks_are(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    import analysis.cli
+
+    monkeypatch.setattr(analysis.cli, "BENCHMARKS", tmp_path / "benchmarks")
+    res = CliRunner().invoke(analysis.cli.app, ["bench", "--repeat", "1"])
+    assert res.exit_code == 2
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and "source tree" in lines[0]
+    assert "python benchmarks/bench_simulate.py" in lines[0]
