@@ -393,7 +393,8 @@ def sweep(
     quiet: QuietOption = False,
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
-    from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, bifurcation_diagram
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram
 
     setting = Setting(model, n_balls, parse_sets(sets), transient, samples, section, dt)
     ex = _executor(executor, workers, scheduler)
@@ -429,7 +430,8 @@ def chart(
     table: Annotated[bool, typer.Option("--table", help="Print the chart as a table.")] = False,
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
-    from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, chart_table, stability_chart
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.sweep import Axis, Setting, chart_table, stability_chart
 
     setting = Setting(model, n_balls, parse_sets(sets), transient, revolutions, "shaft", dt,
                       lyapunov)
@@ -475,9 +477,9 @@ def reproduce(
     """Reproduce the paper: Table 2 and Figs. 2-6 side by side with the paper, sensitivity
     to the omitted parameters, provenance (report.md, report.html, table2.json)."""
     from analysis.reports.paper import SENSITIVITY
+    from analysis.reports.progress import ProgressReporter
     from analysis.reports.report import write_reproduction
     from analysis.reports.reproduce import reproduce as run_reproduce
-    from analysis.sweeps.sweep import ProgressReporter
 
     kwargs = {}
     if quick:

@@ -15,8 +15,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from analysis.reports.progress import ProgressReporter
 from analysis.sweeps.executors import make_executor
-from analysis.sweeps.sweep import Axis, ProgressReporter, Setting, stability_chart
+from analysis.sweeps.sweep import Axis, Setting, stability_chart
 
 
 def main() -> None:

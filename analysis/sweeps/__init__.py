@@ -1,5 +1,5 @@
 """Parameter sweeps: ``sweep`` (bifurcation diagrams and stability charts over grids),
 ``executors`` (one interface for serial, process-pool and Dask execution) and ``store`` (each
 finished point on disk at once, so that an interrupted sweep resumes). Progress is reported
-through a ``(done, total)`` callback.
+through a ``(done, total)`` callback; drawing it is ``analysis.reports.progress``'s job.
 """

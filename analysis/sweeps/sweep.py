@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -337,58 +336,3 @@ def chart_table(ds: xr.Dataset) -> str:
             lines.append(f"| {yv:g} | {xv:g} | {p.nature.item()} | {lam_text} | "
                          f"{float(p.amplitude_x) * 1e6:.3g} | {float(p.amplitude_y) * 1e6:.3g} |")
     return "\n".join(lines) + "\n"
-
-
-class ProgressReporter:
-    """Progress of a sweep: a rich progress bar on a terminal, otherwise one log line per
-    ``every`` points (and at the end), each with points done, rate and ETA."""
-
-    def __init__(self, label: str, quiet: bool = False, every: int | None = None):
-        import sys
-
-        self.label, self.quiet, self.every = label, quiet, every
-        self.start, self.last, self.bar = time.perf_counter(), -1, None
-        self.tty = sys.stderr.isatty()
-
-    def __call__(self, done: int, total: int) -> None:
-        if self.quiet or done == self.last:
-            return
-        if self.tty:
-            self._bar(done, total)
-        else:
-            every = self.every or max(1, total // 20)
-            if done == total or done // every != max(self.last, 0) // every or self.last < 0:
-                import sys
-
-                elapsed = time.perf_counter() - self.start
-                rate = done / elapsed if elapsed > 0 else 0.0
-                eta = f"{(total - done) / rate:.0f} s" if rate > 0 else "–"
-                print(f"{self.label}: {done}/{total} points, {rate:.2f} points/s, "
-                      f"ETA {eta}", file=sys.stderr, flush=True)
-        self.last = done
-
-    def _bar(self, done: int, total: int) -> None:
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            ProgressColumn,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-        from rich.text import Text
-
-        class RateColumn(ProgressColumn):
-            def render(self, task) -> Text:
-                return Text(f"{task.speed:.2f} pts/s" if task.speed else "– pts/s")
-
-        if self.bar is None:
-            self.bar = Progress(TextColumn(self.label), BarColumn(), MofNCompleteColumn(),
-                                RateColumn(), TimeElapsedColumn(), TextColumn("ETA"),
-                                TimeRemainingColumn())
-            self.bar.start()
-            self.task = self.bar.add_task(self.label, total=total, completed=done)
-        self.bar.update(self.task, completed=done)
-        if done >= total:
-            self.bar.stop()
