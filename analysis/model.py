@@ -1,8 +1,20 @@
-"""The one door from the analysis layer to generated models.
+"""The one door from the analysis layer to generated models, and the System contract.
 
-``load_model("vakharia2015")`` imports ``generated.vakharia2015``, checks that it still
-matches its spec file (stale code is an error), and wraps it with parameter handling and the
-characteristic frequencies. Nothing here imports SymPy or ``modelgen`` code.
+``load_model`` finds a model by
+
+- the name of a shipped model (``"vakharia2015"``: the committed ``generated/`` package,
+  checked against its spec: stale code is an error);
+- the name of a spec in a folder of ``BEARINGDYN_MODELS``, or the path of a ``.toml`` spec
+  anywhere: its code is generated on first use into the user cache (keyed by the spec's
+  SHA-256 and path) and loaded from there, never from or into the package;
+- a folder written by ``bearingdyn generate SPEC --out DIR`` (the folder, or the model's
+  folder inside it).
+
+A generated module meets the ``GeneratedModel`` Protocol; ``Model`` wraps it with parameter
+handling, the numbers of balls per bearing and the characteristic frequencies; a ``System``
+is a model with its structure (balls per bearing), parameter values and initial state: what
+every analysis takes. Nothing here imports SymPy (only a user spec without cached code
+imports ``modelgen`` to generate it).
 """
 
 from __future__ import annotations
@@ -10,38 +22,117 @@ from __future__ import annotations
 import difflib
 import hashlib
 import importlib
+import importlib.util
 import math
 import pkgutil
+import sys
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cache
-from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 import generated
 from analysis.errors import InputError, StaleModelError
+from modelgen.locations import (
+    MODELS_ENV,
+    cached_model_root,
+    is_shipped,
+    shipped_spec_dir,
+    spec_digest,
+    user_specs,
+)
+
+Structure = tuple[int, ...]
+"""Number of rolling elements of each bearing, in the order of the model's bearings."""
+BallCounts = int | Mapping[str, int] | Sequence[int] | None
+"""What a caller may give as ``n_balls``: one number (a model with one bearing), a mapping
+bearing name -> number, a sequence in bearing order, or None (the spec's defaults)."""
+
+
+@runtime_checkable
+class GeneratedModel(Protocol):
+    """What a generated model module provides (``generated/<model>/__init__.py``)."""
+
+    NAME: str
+    TITLE: str
+    SPEC_FILE: str
+    SPEC_SHA256: str
+    GENERATOR: dict[str, str]
+    STATE: tuple[str, ...]
+    STATE_UNITS: tuple[str, ...]
+    BODIES: tuple[tuple[str, str, tuple[str, ...]], ...]
+    BEARINGS: tuple[tuple[str, str, str, int, tuple[int, int]], ...]
+    DEFAULT_N_BALLS: tuple[int, ...]
+    SIMULATION: dict[str, float]
+    INITIAL_STATE: tuple[float, ...]
+    PARAMETERS: tuple[tuple[str, float, str, str], ...]
+    RANGES: dict[str, tuple[float, float, bool]]
+
+    def external_force(self, z: Any, t: Any, p: Any) -> tuple[Any, ...]: ...
+
+    def mass(self, p: Any) -> tuple[Any, ...]: ...
+
+    def shaft_speed(self, p: Any) -> Any: ...
+
+    def build(self, n_balls: Structure | None = None) -> Any: ...
+
+
+@dataclass(frozen=True)
+class BearingInfo:
+    """A bearing of a generated model: the bodies it links and its numbers of balls."""
+
+    name: str
+    inner: str
+    outer: str
+    default_n_balls: int
+    fewest: int
+    most: int
 
 
 @dataclass(frozen=True)
 class Frequencies:
-    """Characteristic frequencies (Hz): shaft X, cage, varying compliance VC = N_b·cage."""
+    """Characteristic frequencies (Hz): shaft X, and per bearing its cage (FTF) and
+    varying compliance VC = N_b·cage."""
 
     shaft_hz: float
-    cage_hz: float
-    vc_hz: float
+    cage: dict[str, float] = field(default_factory=dict)
+    vc: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def cage_hz(self) -> float:
+        """Cage frequency of the first bearing (0 without bearings), Hz."""
+        return next(iter(self.cage.values()), 0.0)
+
+    @property
+    def vc_hz(self) -> float:
+        """VC frequency of the first bearing (0 without bearings), Hz."""
+        return next(iter(self.vc.values()), 0.0)
 
     def as_dict(self) -> dict[str, float]:
-        return {"shaft_hz": self.shaft_hz, "cage_hz": self.cage_hz, "vc_hz": self.vc_hz}
+        """Result-file attributes: ``cage_hz``, ``vc_hz`` with one bearing (or none), else
+        ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing."""
+        out = {"shaft_hz": self.shaft_hz}
+        if len(self.vc) <= 1:
+            out.update(cage_hz=self.cage_hz, vc_hz=self.vc_hz)
+        else:
+            for name in self.vc:
+                out[f"cage_hz_{name}"] = self.cage[name]
+                out[f"vc_hz_{name}"] = self.vc[name]
+        return out
 
 
-@dataclass(eq=False)  # compared and hashed by identity: load_model caches one per name
+@dataclass(eq=False)  # compared and hashed by identity: load_model caches one per model
 class Model:
     """A generated model with its parameter table (defaults in SI units, speed in rpm)."""
 
     module: Any
-    _functions: dict[int, Any] = field(default_factory=dict, repr=False)
+    spec_path: str = ""
+    """The spec file the model was loaded for, as the user gave it (or the generated
+    header's when loaded by name or folder)."""
+    _functions: dict[Structure, Any] = field(default_factory=dict, repr=False)
 
     @property
     def name(self) -> str:
@@ -50,6 +141,32 @@ class Model:
     @property
     def spec_sha256(self) -> str:
         return self.module.SPEC_SHA256
+
+    @property
+    def spec_file(self) -> str:
+        """The spec's path as cited: ``modelgen/specs/NAME.toml`` for a shipped model."""
+        return self.spec_path or self.module.SPEC_FILE
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(self.module.STATE)
+
+    @property
+    def state_units(self) -> dict[str, str]:
+        return dict(zip(self.module.STATE, self.module.STATE_UNITS, strict=True))
+
+    @property
+    def n_state(self) -> int:
+        return len(self.module.STATE)
+
+    @property
+    def bearings(self) -> list[BearingInfo]:
+        return [BearingInfo(name, inner, outer, n, lo, hi)
+                for name, inner, outer, n, (lo, hi) in self.module.BEARINGS]
+
+    @property
+    def bearing_names(self) -> list[str]:
+        return [b[0] for b in self.module.BEARINGS]
 
     @property
     def parameter_names(self) -> list[str]:
@@ -68,29 +185,86 @@ class Model:
         return {row[0]: row[3] for row in self.module.PARAMETERS}
 
     @property
+    def default_structure(self) -> Structure:
+        return tuple(int(n) for n in self.module.DEFAULT_N_BALLS)
+
+    @property
     def default_n_balls(self) -> int:
-        return int(self.module.DEFAULT_N_BALLS)
+        """Default balls of the first bearing (0 for a model without bearings)."""
+        return self.default_structure[0] if self.default_structure else 0
 
     @property
     def simulation_defaults(self) -> dict[str, float]:
+        """Default ``dt``, ``duration`` and ``transient`` (s)."""
         return dict(self.module.SIMULATION)
 
-    def check_n_balls(self, n_balls: int | None) -> int:
-        n = self.default_n_balls if n_balls is None else n_balls
-        low, high = self.module.N_BALLS_RANGE
-        if high == 0 and n != 0:
-            raise InputError(f"n_balls: model '{self.name}' has no balls; leave n_balls out, "
-                             f"got {n!r}")
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not low <= n <= high:
-            raise InputError(f"n_balls: must be an integer in [{low}, {high}], got {n!r}")
-        return int(n)
+    @property
+    def initial_state(self) -> np.ndarray:
+        """The spec's initial state, in the order of ``state_names``."""
+        return np.array(self.module.INITIAL_STATE, dtype=float)
 
-    def functions(self, n_balls: int | None = None):
-        """CasADi Functions (rhs, jac, rk4_step, simulator) for ``n_balls`` balls (cached)."""
-        n = self.check_n_balls(n_balls)
-        if n not in self._functions:
-            self._functions[n] = self.module.build(n)
-        return self._functions[n]
+    def structure(self, n_balls: BallCounts = None) -> Structure:
+        """Balls per bearing from what a caller gave (see ``BallCounts``), each checked
+        against the bearing's range."""
+        bearings = self.bearings
+        if n_balls is None:
+            return self.default_structure
+        if not bearings:
+            if isinstance(n_balls, (Mapping, Sequence)) and not n_balls:
+                return ()
+            raise InputError(f"n_balls: model '{self.name}' has no balls; leave n_balls out, "
+                             f"got {n_balls!r}")
+        if isinstance(n_balls, Mapping):
+            unknown = [k for k in n_balls if k not in self.bearing_names]
+            if unknown:
+                raise InputError(f"n_balls: model '{self.name}' has no bearing "
+                                 f"'{unknown[0]}'; bearings: {', '.join(self.bearing_names)}")
+            counts = [n_balls.get(b.name, b.default_n_balls) for b in bearings]
+        elif isinstance(n_balls, Sequence) and not isinstance(n_balls, str):
+            if len(n_balls) != len(bearings):
+                raise InputError(f"n_balls: model '{self.name}' has {len(bearings)} "
+                                 f"bearing(s) ({', '.join(self.bearing_names)}), got "
+                                 f"{len(n_balls)} numbers")
+            counts = list(n_balls)
+        elif len(bearings) > 1:
+            raise InputError(f"n_balls: model '{self.name}' has bearings "
+                             f"{', '.join(self.bearing_names)}; give each its number, e.g. "
+                             f"--n-balls {bearings[0].name}=8 (API: n_balls={{'"
+                             f"{bearings[0].name}': 8}}), got {n_balls!r}")
+        else:
+            counts = [n_balls]
+        for b, n in zip(bearings, counts, strict=True):
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or \
+                    not b.fewest <= n <= b.most:
+                label = "n_balls" if len(bearings) == 1 else f"n_balls[{b.name}]"
+                raise InputError(f"{label}: must be an integer in [{b.fewest}, {b.most}] "
+                                 f"(at most {b.most} balls fit the geometry), got {n!r}")
+        return tuple(int(n) for n in counts)
+
+    def check_n_balls(self, n_balls: BallCounts) -> Structure:
+        """Alias of ``structure`` (kept for callers of the one-bearing API)."""
+        return self.structure(n_balls)
+
+    def structure_attrs(self, structure: Structure) -> dict[str, int]:
+        """Result-file attributes: ``n_balls`` with one bearing (or 0 without), else
+        ``n_balls_<bearing>``."""
+        if len(structure) <= 1:
+            return {"n_balls": structure[0] if structure else 0}
+        return {f"n_balls_{b}": n for b, n in zip(self.bearing_names, structure, strict=True)}
+
+    def structure_label(self, structure: Structure) -> str:
+        """``N_b = 8`` or ``N_b[left] = 8, N_b[right] = 10`` for titles and messages."""
+        if len(structure) <= 1:
+            return f"N_b = {structure[0]}" if structure else "no balls"
+        return ", ".join(f"N_b[{b}] = {n}"
+                         for b, n in zip(self.bearing_names, structure, strict=True))
+
+    def functions(self, n_balls: BallCounts = None):
+        """CasADi Functions (rhs, jac, rk4_step, simulator) for these balls (cached)."""
+        s = self.structure(n_balls)
+        if s not in self._functions:
+            self._functions[s] = self.module.build(s)
+        return self._functions[s]
 
     def parameters(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
         """Defaults updated by ``overrides``, each checked against its allowed range."""
@@ -117,55 +291,266 @@ class Model:
     def parameter_vector(self, values: dict[str, float]) -> np.ndarray:
         return np.array([values[n] for n in self.parameter_names], dtype=float)
 
-    def frequencies(self, n_balls: int | None = None,
+    def cage_speed(self, bearing: str, p: Any) -> Any:
+        """Cage angular speed of ``bearing`` (rad/s; a CasADi expression for symbolic p)."""
+        return getattr(self.module, f"cage_speed_{bearing}")(p)
+
+    def frequencies(self, n_balls: BallCounts = None,
                     values: dict[str, float] | None = None) -> Frequencies:
-        """Shaft, cage and varying-compliance frequencies in Hz."""
-        n = self.check_n_balls(n_balls)
+        """Shaft frequency and each bearing's cage and VC frequencies, Hz."""
+        s = self.structure(n_balls)
         p = self.parameter_vector(values or self.defaults)
         shaft = float(self.module.shaft_speed(p)) / (2 * math.pi)
-        cage = float(self.module.cage_speed(p)) / (2 * math.pi)
-        return Frequencies(shaft_hz=shaft, cage_hz=cage, vc_hz=n * cage)
+        cage = {b: float(self.cage_speed(b, p)) / (2 * math.pi) for b in self.bearing_names}
+        vc = {b: n * cage[b] for b, n in zip(self.bearing_names, s, strict=True)}
+        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc)
 
+    def centre_indices(self) -> list[tuple[int, int | None]]:
+        """State indices (x, y) of every body's centre (y None for a body moving along x)."""
+        names, bodies = self.state_names, self.module.BODIES
+        pairs = []
+        for body, _, _ in bodies:
+            suffix = "" if len(bodies) == 1 else f"_{body}"
+            y = f"y{suffix}"
+            pairs.append((names.index(f"x{suffix}"), names.index(y) if y in names else None))
+        return pairs
+
+    def check_state(self, state: Any, what: str = "initial_state") -> np.ndarray:
+        """``state`` as a float array of the model's state size, or one clear error."""
+        try:
+            z = np.array(state, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            z = np.array([np.nan])
+        if z.shape != (self.n_state,) or not np.all(np.isfinite(z)):
+            raise InputError(f"{what}: must be {self.n_state} finite numbers "
+                             f"({', '.join(self.state_names)}), got {state!r}")
+        return z
+
+
+@dataclass(frozen=True, eq=False)
+class System:
+    """A model with its structure (balls per bearing), parameter values (SI, speed in rpm)
+    and initial state: the one object every analysis takes.
+
+    >>> system = System.make("vakharia2015", n_balls=8, speed_rpm=6000)
+    >>> system.state_names
+    ('x', 'y', 'vx', 'vy')
+    """
+
+    model: Model
+    structure: Structure
+    parameters: Mapping[str, float]
+    state: np.ndarray
+
+    @classmethod
+    def make(cls, model: Model | str | Path, n_balls: BallCounts = None,
+             state: Any = None, **parameters: float) -> System:
+        """Check and bundle: ``n_balls`` (see ``BallCounts``), ``state`` (default: the
+        spec's initial state) and parameter overrides by name."""
+        m = load_model(model) if isinstance(model, (str, Path)) else model
+        z = m.initial_state if state is None else m.check_state(state)
+        return cls(m, m.structure(n_balls), dict(m.parameters(parameters)), z)
+
+    def replace(self, n_balls: BallCounts = None, state: Any = None,
+                **parameters: float) -> System:
+        """A copy with other balls, state or parameters."""
+        merged = {**self.parameters, **parameters}
+        structure = self.structure if n_balls is None else self.model.structure(n_balls)
+        z = self.state if state is None else self.model.check_state(state)
+        return System(self.model, structure, self.model.parameters(merged), z)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.model.state_names
+
+    @property
+    def n_state(self) -> int:
+        return self.model.n_state
+
+    @property
+    def p(self) -> np.ndarray:
+        """The parameter vector of the generated functions."""
+        return self.model.parameter_vector(dict(self.parameters))
+
+    @property
+    def functions(self):
+        return self.model.functions(self.structure)
+
+    def frequencies(self) -> Frequencies:
+        return self.model.frequencies(self.structure, dict(self.parameters))
+
+
+def as_system(target: System | Model | str | Path, n_balls: BallCounts = None,
+              state: Any = None, **parameters: float) -> System:
+    """The System an analysis works on: ``target`` itself when it is one (changed by any
+    balls, state or parameters given), else a System of the model ``target`` (a Model, or
+    a name, spec path or folder for ``load_model``)."""
+    if isinstance(target, System):
+        if n_balls is None and state is None and not parameters:
+            return target
+        return target.replace(n_balls, state, **parameters)
+    return System.make(target, n_balls, state, **parameters)
+
+
+# ---- finding and importing generated models -------------------------------------------
 
 def available_models() -> list[str]:
-    """Names of the models in ``generated/``."""
+    """Names of the shipped models and of the specs in ``BEARINGDYN_MODELS`` folders."""
     names = []
     for info in pkgutil.iter_modules(generated.__path__):
         if info.ispkg:
             names.append(importlib.import_module(f"generated.{info.name}").NAME)
+    names += [n for n in user_specs() if n not in names]
     return sorted(names)
 
 
-def _spec_file(module: Any) -> Path | None:
-    path = Path(str(resources.files("modelgen") / "specs" / module.SPEC_FILE))
-    return path if path.exists() else None
+def model_origin(name: str) -> str:
+    """'shipped' or the path of the user spec a model name stands for."""
+    users = user_specs()
+    return "shipped" if name not in users or _is_shipped_name(name) else str(users[name])
+
+
+def _is_shipped_name(name: str) -> bool:
+    return (shipped_spec_dir() / f"{name}.toml").exists()
 
 
 @cache
-def load_model(name: str) -> Model:
-    """The generated model ``name`` (e.g. ``"vakharia2015"``), checked against its spec."""
-    module_name = name.replace("-", "_")
-    try:
-        module = importlib.import_module(f"generated.{module_name}")
-    except ModuleNotFoundError:
-        known = available_models()
-        close = difflib.get_close_matches(name, known, n=1)
-        hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise InputError(f"model: no generated model named '{name}'{hint}; "
-                         f"available: {', '.join(known)}") from None
+def load_model(name: str | Path) -> Model:
+    """The model ``name``: a shipped model (``"vakharia2015"``), a spec in a
+    ``BEARINGDYN_MODELS`` folder, the path of a ``.toml`` spec, or a generated folder."""
+    text = str(name)
+    path = Path(text).expanduser()
+    if text.endswith(".toml") or path.is_dir() or path.exists():
+        return _load_path(path)
+    if _is_shipped_name(text) or _generated_exists(text):
+        return _load_shipped(text)
+    users = user_specs()
+    if text in users:
+        return _load_spec_file(users[text])
+    known = available_models()
+    close = difflib.get_close_matches(text, known, n=1)
+    hint = f" (did you mean '{close[0]}'?)" if close else ""
+    raise InputError(f"model: no model named '{text}'{hint}; available: {', '.join(known)} "
+                     f"(a spec of your own: give its .toml path, or put its folder in "
+                     f"{MODELS_ENV})")
+
+
+def _generated_exists(name: str) -> bool:
+    module = name.replace("-", "_")
+    return importlib.util.find_spec(f"generated.{module}") is not None \
+        if module.isidentifier() else False
+
+
+def _load_shipped(name: str) -> Model:
+    module = importlib.import_module(f"generated.{name.replace('-', '_')}")
     check_fresh(module, name)
     return Model(module=module)
 
 
+def _load_path(path: Path) -> Model:
+    if path.is_dir():
+        return _load_folder(path)
+    if not path.exists():
+        raise InputError(f"model: spec file {path} not found")
+    if is_shipped(path):
+        return _load_shipped(path.stem)
+    return _load_spec_file(path)
+
+
+def _load_spec_file(path: Path) -> Model:
+    """A user spec: its cached generated code, generated first when missing."""
+    root = cached_model_root(path)
+    module_dir = _only_model(root) if root.is_dir() else None
+    if module_dir is None:
+        _generate_into_cache(path, root)
+        module_dir = _only_model(root)
+    return Model(module=_import_folder(root, module_dir.name), spec_path=str(path.resolve()))
+
+
+def _generate_into_cache(path: Path, root: Path) -> None:
+    """Generate a user spec's code into its cache folder (validated first; written to a
+    temporary folder and renamed, so concurrent processes never see half a model)."""
+    import os
+    import shutil
+    import tempfile
+
+    from modelgen.codegen import package_files, render
+
+    files = {**package_files(), **render(path).files}  # validates the spec first
+    root.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=root.parent, prefix=f".{root.name}."))
+    try:
+        for rel, text in files.items():
+            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+            (tmp / rel).write_text(text)
+        try:
+            os.rename(tmp, root)
+        except OSError:  # another process was first: use theirs
+            shutil.rmtree(tmp, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _only_model(root: Path) -> Path | None:
+    models = [p for p in sorted(root.iterdir()) if (p / "__init__.py").exists()]
+    return models[0] if len(models) == 1 else None
+
+
+def _load_folder(folder: Path) -> Model:
+    """A folder of ``generate --out``: the root (holding ``_runtime.py``) or one model in it."""
+    folder = folder.resolve()
+    if (folder / "_runtime.py").exists():
+        models = [p for p in sorted(folder.iterdir()) if (p / "__init__.py").exists()]
+        if len(models) != 1:
+            names = ", ".join(p.name for p in models) or "none"
+            raise InputError(f"model: {folder} holds {len(models)} generated models "
+                             f"({names}); give the model's folder")
+        root, module = folder, models[0].name
+    elif (folder.parent / "_runtime.py").exists() and (folder / "__init__.py").exists():
+        root, module = folder.parent, folder.name
+    else:
+        raise InputError(f"model: {folder} is not a generated model folder (written by "
+                         "`bearingdyn generate SPEC --out DIR`)")
+    loaded = _import_folder(root, module)
+    check_fresh(loaded, loaded.NAME)
+    return Model(module=loaded)
+
+
+def _import_folder(root: Path, module: str) -> Any:
+    """Import ``root/module`` as a sub-module of a package named after ``root``."""
+    package = "_bearingdyn_models_" + hashlib.sha256(str(root.resolve()).encode()).hexdigest()[:12]
+    if package not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            package, root / "__init__.py", submodule_search_locations=[str(root)])
+        if spec is None or spec.loader is None:
+            raise InputError(f"model: cannot import the generated models in {root}")
+        pkg = importlib.util.module_from_spec(spec)
+        sys.modules[package] = pkg
+        spec.loader.exec_module(pkg)
+    loaded = importlib.import_module(f"{package}.{module}")
+    if not isinstance(loaded, GeneratedModel):
+        raise InputError(f"model: {root / module} was generated by an older bearingdyn; "
+                         "regenerate it with `bearingdyn generate`")
+    return loaded
+
+
 def check_fresh(module: Any, name: str) -> None:
-    """Raise ``StaleModelError`` when the shipped spec's sha256 differs from the one the
-    generated module was made from."""
-    spec = _spec_file(module)
-    if spec is None:
+    """Raise ``StaleModelError`` when the spec a generated module names has changed since
+    (a shipped spec, or a user spec whose file still exists)."""
+    cited = Path(module.SPEC_FILE)
+    spec = shipped_spec_dir() / cited.name if not cited.is_absolute() else cited
+    if not spec.exists():
         return
-    digest = hashlib.sha256(spec.read_bytes()).hexdigest()
+    digest = spec_digest(spec)
     if digest != module.SPEC_SHA256:
+        where = f"generated/{name.replace('-', '_')}" if not cited.is_absolute() else \
+            "the generated code"
         raise StaleModelError(
-            f"model '{name}': generated/{name.replace('-', '_')} was generated from a "
-            f"different version of {spec.name} (sha256 {module.SPEC_SHA256[:12]}…, the spec "
-            f"is now {digest[:12]}…); regenerate it with `bearingdyn generate {name}`")
+            f"model '{name}': {where} was generated from a different version of "
+            f"{spec.name} (sha256 {module.SPEC_SHA256[:12]}…, the spec is now "
+            f"{digest[:12]}…); regenerate it with `bearingdyn generate {name}`"
+            if not cited.is_absolute() else
+            f"model '{name}': {where} was generated from a different version of {spec} "
+            f"(sha256 {module.SPEC_SHA256[:12]}…, the spec is now {digest[:12]}…); "
+            f"regenerate it with `bearingdyn generate {spec} --out <folder>`")

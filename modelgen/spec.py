@@ -9,15 +9,13 @@ from __future__ import annotations
 import builtins
 import difflib
 import functools
-import hashlib
 import keyword
 import math
 import operator
 import re
 import tomllib
-from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import sympy as sp
 from pydantic import (
@@ -32,10 +30,12 @@ from pydantic import (
 
 from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
+from modelgen.locations import MODELS_ENV, shipped_spec_dir, spec_digest, user_specs
 from modelgen.quantities import QUANTITIES, TAKEN_NAMES, Quantity
-from modelgen.symbols import Context, make_context
+from modelgen.symbols import STATE_NAMES, Context, make_context
 from modelgen.terms import TERM_CLASSES, TERMS, Centrifugal, ExpressionTerm, HertzContact
-from modelgen.terms.expression import BALL_SYMBOLS, ROTOR_SYMBOLS
+from modelgen.terms.base import OWNER_NAME, Term
+from modelgen.terms.expression import BALL_SYMBOLS, ROTOR_SYMBOLS, TIME_SYMBOLS
 
 N_BALLS_RANGE = (3, 64)
 """Allowed number of balls (inclusive)."""
@@ -50,7 +50,6 @@ Python's keywords and builtins, and the names of the generated code and result f
 RACE_GAP_TOLERANCE = 1e-9
 """Relative slack of 'ball diameter <= race gap' (paper Table 1 has D_o − D_i = 2 D_b)."""
 
-SPEC_DIR = "specs"
 __all__ = ["N_BALLS_RANGE", "Spec", "SpecError", "load_spec", "parse_spec", "spec_hash"]
 
 
@@ -84,18 +83,98 @@ class ModelInfo(_Strict):
 
 
 class Structure(_Strict):
+    """``[structure]`` of a one-body spec: the balls of its one bearing (``bearing``)."""
+
     n_balls: int = Field(ge=N_BALLS_RANGE[0], le=N_BALLS_RANGE[1])
     """Default number of balls; any number in range can be built at run time."""
+
+
+MOTIONS: dict[str, tuple[str, ...]] = {
+    "planar": ("x", "y"), "linear": ("x",), "planar_tilt": ("x", "y", "tx", "ty"),
+}
+"""The coordinates of a body by its motion: displacement x, y (m) of its centre and, for
+``planar_tilt``, its tilt tx = dx/dz, ty = dy/dz (rad) about the centre."""
+COORDINATE_UNITS = {"x": ("m", "m/s"), "y": ("m", "m/s"), "tx": ("rad", "rad/s"),
+                    "ty": ("rad", "rad/s")}
+"""Units of each coordinate and of its velocity."""
+GROUND = "ground"
+"""The outer 'body' of a bearing whose outer race does not move."""
+
+
+class Support(_Strict):
+    """Isotropic linear spring and viscous damper from a body's centre to ground."""
+
+    stiffness: str | None = None
+    """Parameter name of the support stiffness, N/m."""
+    damping: str | None = None
+    """Parameter name of the support damping, N·s/m."""
+
+
+class Body(_Strict):
+    """``[[bodies]]``: a rigid body, its coordinates and its mass."""
+
+    name: str = Field(pattern=OWNER_NAME)
+    motion: Literal["planar", "linear", "planar_tilt"] = "planar"
+    """``planar``: x, y; ``linear``: x only; ``planar_tilt``: x, y and tilts tx, ty."""
+    mass: str | None = None
+    """Parameter name of the mass, kg (default ``<name>_mass``)."""
+    inertia: str | None = None
+    """Parameter name of the transverse moment of inertia about the centre, kg·m²
+    (``planar_tilt`` only; default ``<name>_inertia``)."""
+    support: Support | None = None
+
+    @property
+    def mass_parameter(self) -> str:
+        return self.mass or f"{self.name}_mass"
+
+    @property
+    def inertia_parameter(self) -> str:
+        return self.inertia or f"{self.name}_inertia"
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        return MOTIONS[self.motion]
+
+    def inertias(self) -> tuple[str, ...]:
+        """The parameter of the mass or inertia of each coordinate."""
+        return tuple(self.inertia_parameter if c in ("tx", "ty") else self.mass_parameter
+                     for c in self.coordinates)
+
+
+class Bearing(_Strict):
+    """``[[bearings]]``: rolling elements between an inner body and an outer body (or
+    ground). Its contact and ball terms name it (``bearing = "…"``); its parameters are the
+    model's, or ``<quantity>_<bearing name>`` where the spec declares one for it (e.g.
+    ``radial_clearance_left``); ``station_<name>`` (m) is its axial position on a tilting
+    inner body."""
+
+    name: str = Field(pattern=OWNER_NAME)
+    inner: str = Field(pattern=OWNER_NAME)
+    outer: str = Field(GROUND, pattern=OWNER_NAME)
+    n_balls: int = Field(ge=N_BALLS_RANGE[0], le=N_BALLS_RANGE[1])
+    """Default number of rolling elements (structural: any number in range is built at run
+    time without SymPy)."""
 
 
 class SimulationDefaults(_Strict):
     dt: float = Field(1e-5, gt=0, le=10.0)
     duration: float = Field(1.0, gt=0, le=1e5)
     transient: float = Field(0.0, ge=0, le=1e5)
-    x0: float = 1e-6
-    y0: float = 1e-6
-    vx0: float = 0.0
-    vy0: float = 0.0
+    x0: float | None = None
+    y0: float | None = None
+    vx0: float | None = None
+    vy0: float | None = None
+    initial: dict[str, float] = Field(default_factory=dict)
+    """Initial value of any state by name (m, m/s, rad, rad/s); the others start at 0, and
+    in a model with state x, y, vx, vy, x and y start at 1e-6 m unless given."""
+
+    @model_serializer(mode="wrap")
+    def _omit_unset(self, handler):
+        """Leave out what is not given, so a dump is valid TOML (no None)."""
+        return {k: v for k, v in handler(self).items() if v is not None and v != {}}
+
+    def times(self) -> dict[str, float]:
+        return {"dt": self.dt, "duration": self.duration, "transient": self.transient}
 
 
 class Parameter(_Strict):
@@ -119,17 +198,32 @@ TermEntry = Annotated[functools.reduce(operator.or_, TERM_CLASSES), Field(discri
 
 
 class Spec(_Strict):
+    """A model: bodies, bearings between them, terms acting on both, and parameters.
+
+    A spec without ``[[bodies]]`` has one planar body ``rotor`` (mass ``rotor_mass``); with
+    ``[structure]`` it has one bearing ``bearing`` from the rotor to ground. That is the
+    shape of the paper's model, its state is ``x, y, vx, vy``, and the shipped specs of that
+    shape are written that way.
+    """
+
     model: ModelInfo
     structure: Structure | None = None
-    """Ball set; required with a ``hertz_contact`` term, absent in models without balls."""
+    """The ball set of a one-body spec's one bearing (use ``[[bearings]]`` otherwise)."""
+    bodies: list[Body] | None = None
+    bearings: list[Bearing] | None = None
     simulation: SimulationDefaults = SimulationDefaults()
     parameters: dict[str, Parameter]
     terms: list[TermEntry] = Field(min_length=1)  # type: ignore[valid-type]
 
     @model_validator(mode="after")
     def _check_physics(self) -> Spec:
-        problems = [*_parameter_problems(self.parameters), *_structure_problems(self),
-                    *_term_problems(self), *_contact_problems(self), *_geometry_problems(self)]
+        problems = _layout_problems(self)
+        if not problems:
+            problems = [*_parameter_problems(self), *_attachment_problems(self)]
+        if not problems:
+            problems = [*_structure_problems(self), *_term_problems(self),
+                        *_contact_problems(self), *_geometry_problems(self),
+                        *_initial_problems(self)]
         if self.simulation.transient >= self.simulation.duration:
             problems.append("simulation.transient: must be shorter than simulation.duration "
                             f"({self.simulation.duration:g} s)")
@@ -140,29 +234,140 @@ class Spec(_Strict):
     def parameter_values(self) -> dict[str, float]:
         return {n: p.value for n, p in self.parameters.items()}
 
+    def body_list(self) -> list[Body]:
+        """The bodies (one planar ``rotor`` when the spec names none)."""
+        return list(self.bodies) if self.bodies is not None else [Body(name="rotor")]
+
+    def bearing_list(self) -> list[Bearing]:
+        """The bearings (``bearing`` from ``[structure]`` in a one-body spec)."""
+        if self.bearings is not None:
+            return list(self.bearings)
+        if self.structure is not None:
+            return [Bearing(name="bearing", inner="rotor", n_balls=self.structure.n_balls)]
+        return []
+
+    def state_names(self) -> tuple[str, ...]:
+        """Positions of every body, then their velocities (``<coordinate>_<body>`` when the
+        model has several bodies)."""
+        bodies = self.body_list()
+        suffix = (lambda b: "") if len(bodies) == 1 else (lambda b: f"_{b.name}")
+        positions = [f"{c}{suffix(b)}" for b in bodies for c in b.coordinates]
+        return (*positions, *(f"v{n}" for n in positions))
+
+    def state_units(self) -> tuple[str, ...]:
+        units = [COORDINATE_UNITS[c] for b in self.body_list() for c in b.coordinates]
+        return (*(u[0] for u in units), *(u[1] for u in units))
+
+    def initial_state(self) -> tuple[float, ...]:
+        """The default initial state, in the order of ``state_names``."""
+        names = self.state_names()
+        sim = self.simulation
+        values = dict.fromkeys(names, 0.0)
+        if names == STATE_NAMES:
+            values.update(x=1e-6, y=1e-6)
+        for name in ("x", "y", "vx", "vy"):
+            if getattr(sim, f"{name}0") is not None:
+                values[name] = float(getattr(sim, f"{name}0"))
+        values.update(sim.initial)
+        return tuple(values[n] for n in names)
+
+    def attachment(self, term: Term) -> dict[str, str]:
+        """Where ``term`` acts: {"body": name} and/or {"bearing": name}."""
+        found = {}
+        for owner in term.owners():
+            named = getattr(term, owner)
+            pool = self.body_list() if owner == "body" else self.bearing_list()
+            if named is None and len(pool) == 1:
+                named = pool[0].name
+            if named is not None:
+                found[owner] = named
+        return found
+
+    def contacts(self) -> dict[str, HertzContact]:
+        """The contact term of each bearing, by bearing name."""
+        return {self.attachment(t)["bearing"]: t for t in self.terms
+                if isinstance(t, HertzContact)}
+
     def contact(self) -> HertzContact | None:
-        """The contact term, or None in a model without balls."""
-        return next((t for t in self.terms if isinstance(t, HertzContact)), None)
+        """The contact term of the first bearing, or None in a model without balls."""
+        return next(iter(self.contacts().values()), None)
 
     @property
     def n_balls(self) -> int:
-        """Default number of balls (0 for a model without balls)."""
-        return self.structure.n_balls if self.structure else 0
+        """Default number of balls of the first bearing (0 for a model without balls)."""
+        bearings = self.bearing_list()
+        return bearings[0].n_balls if bearings else 0
+
+    def owner_names(self) -> list[str]:
+        return [b.name for b in (*self.body_list(), *self.bearing_list())]
 
     def quantity(self, name: str) -> Quantity:
-        """Unit, allowed range and symbol of parameter ``name`` (built-in or declared)."""
+        """Unit, allowed range and symbol of parameter ``name`` (built-in, a built-in one
+        of a body or bearing (``<quantity>_<owner>``), or declared)."""
         if name in QUANTITIES:
             return QUANTITIES[name]
+        base = _scoped_quantity(name, self.owner_names())
+        if base is not None:
+            q = QUANTITIES[base]
+            owner = name[len(base) + 1:]
+            return Quantity(name, q.unit, q.low, q.high, rf"{q.latex}^{{({owner})}}",
+                            f"{q.meaning} ({owner})", q.low_inclusive)
         par = self.parameters[name]
         return Quantity(name, par.unit, par.low, par.high, sp.latex(sp.Symbol(name)),
                         par.note or "user-declared parameter")
 
 
-def _parameter_problems(parameters: dict[str, Parameter]) -> list[str]:
-    """Built-in parameters: unit and range; others: a valid name, a unit and a range."""
+def _scoped_quantity(name: str, owners: list[str]) -> str | None:
+    """The built-in quantity of ``name = <quantity>_<owner>``, or None."""
+    for owner in owners:
+        base = name.removesuffix(f"_{owner}")
+        if base != name and base in QUANTITIES:
+            return base
+    return None
+
+
+def _layout_problems(spec: Spec) -> list[str]:
+    """Names unique, bearings between known bodies, one way of giving the balls."""
     problems: list[str] = []
-    for name, par in parameters.items():
-        q = QUANTITIES.get(name)
+    if spec.structure is not None and (spec.bodies is not None or spec.bearings is not None):
+        problems.append("structure: only in a spec without [[bodies]] and [[bearings]]; give "
+                        "each bearing its n_balls in [[bearings]]")
+    if spec.bodies is not None and not spec.bodies:
+        problems.append("bodies: must not be empty")
+    names = spec.owner_names()
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        problems.append(f"bodies/bearings: the name '{name}' is used {names.count(name)} "
+                        "times; each body and bearing needs its own name")
+    bodies = {b.name: b for b in spec.body_list()}
+    for i, bearing in enumerate(spec.bearing_list()):
+        for side in ("inner", "outer"):
+            name = getattr(bearing, side)
+            allowed = [*bodies, GROUND] if side == "outer" else list(bodies)
+            if name not in allowed:
+                problems.append(f"bearings[{i}].{side}: unknown body '{name}'"
+                                f"{_suggest(name, allowed)}; bodies: {', '.join(allowed)}")
+            elif name != GROUND and bodies[name].motion == "linear":
+                problems.append(f"bearings[{i}].{side}: body '{name}' moves along x only; a "
+                                "bearing needs planar bodies (motion = 'planar' or "
+                                "'planar_tilt')")
+        if bearing.inner == bearing.outer:
+            problems.append(f"bearings[{i}].outer: must differ from the inner body")
+    if GROUND in bodies:
+        problems.append("bodies: 'ground' is the fixed frame; give the body another name")
+    for i, body in enumerate(spec.body_list()):
+        if body.inertia is not None and body.motion != "planar_tilt":
+            problems.append(f"bodies[{i}].inertia: only a 'planar_tilt' body has an inertia")
+    return problems
+
+
+def _parameter_problems(spec: Spec) -> list[str]:
+    """Built-in parameters (also those of one body or bearing, ``<quantity>_<owner>``):
+    unit and range; others: a valid name, a unit and a range."""
+    problems: list[str] = []
+    owners = spec.owner_names()
+    for name, par in spec.parameters.items():
+        base = name if name in QUANTITIES else _scoped_quantity(name, owners)
+        q = spec.quantity(name) if base is not None else None
         declared = par.low is not None or par.high is not None
         if q is not None and declared:
             problems.append(f"parameters.{name}: '{name}' is built in with the fixed range "
@@ -177,6 +382,9 @@ def _parameter_problems(parameters: dict[str, Parameter]) -> list[str]:
             problems.append(f"parameters.{name}: unknown parameter{_suggest(name, QUANTITIES)}"
                             f" (known: {', '.join(QUANTITIES)}); a new parameter needs its "
                             "allowed range: low = …, high = …")
+        elif name in spec.state_names():
+            problems.append(f"parameters.{name}: '{name}' is a state of the model; give the "
+                            "parameter another name")
         else:
             problems.extend(_user_parameter_problems(name, par))
     return problems
@@ -206,73 +414,138 @@ def _user_parameter_problems(name: str, par: Parameter) -> list[str]:
     return problems
 
 
-def _structure_problems(spec: Spec) -> list[str]:
-    """Balls exist exactly when a contact term does; ball terms need them."""
+def _attachment_problems(spec: Spec) -> list[str]:
+    """Every term acts on a known body or bearing, of the kind it can act on."""
     problems: list[str] = []
-    if spec.contact() is not None:
-        if spec.structure is None:
-            problems.append("structure: missing; a model with a 'hertz_contact' term needs "
-                            f"[structure] n_balls in [{N_BALLS_RANGE[0]}, {N_BALLS_RANGE[1]}]")
-        return problems
-    if spec.structure is not None:
-        problems.append("structure: a model without a 'hertz_contact' term has no balls; "
-                        "remove [structure]")
-    known = {*QUANTITIES, *spec.parameters}
-    probe = make_context(sorted(known))
-    probe.omega_cage = sp.Symbol("omega_cage", real=True)  # ball terms use the cage speed
+    pools = {"body": [b.name for b in spec.body_list()],
+             "bearing": [b.name for b in spec.bearing_list()]}
     for i, term in enumerate(spec.terms):
-        try:
-            acts_on_balls = term.ball_load(probe) is not None
-        except ExpressionError:  # reported by _term_problems
+        for owner in ("body", "bearing"):
+            named = getattr(term, owner)
+            if named is not None and owner not in term.owners():
+                where = " or ".join(f"a {o}" for o in term.attaches)
+                hint = " (fx, fy: a body; ball: a bearing)" if term.kind == "expression" else ""
+                problems.append(f"terms[{i}] ({term.kind}).{owner}: this term acts on "
+                                f"{where}{hint}")
+            elif named is not None and named not in pools[owner]:
+                problems.append(f"terms[{i}] ({term.kind}).{owner}: unknown {owner} '{named}'"
+                                f"{_suggest(named, pools[owner])}; {owner}s: "
+                                f"{', '.join(pools[owner]) or 'none'}")
+        if problems:
             continue
-        if set(term.required_parameters()) <= known and acts_on_balls:
-            problems.append(f"terms[{i}] ({term.kind}): acts on the balls and needs a "
-                            "'hertz_contact' term")
+        found = spec.attachment(term)
+        for owner in term.owners():
+            if owner in found:
+                continue
+            if owner == "bearing" and not pools["bearing"]:
+                problems.append(f"terms[{i}] ({term.kind}): acts on the balls and needs a "
+                                "bearing ([structure] n_balls in a one-body spec, else "
+                                "[[bearings]]) with a 'hertz_contact' term")
+            else:
+                problems.append(f"terms[{i}] ({term.kind}).{owner}: missing; name the "
+                                f"{owner} it acts on, one of: {', '.join(pools[owner])}")
+    return problems
+
+
+def _structure_problems(spec: Spec) -> list[str]:
+    """Each bearing has exactly one contact term."""
+    problems: list[str] = []
+    contacts = spec.contacts()
+    for i, bearing in enumerate(spec.bearing_list()):
+        if bearing.name not in contacts:
+            where = "structure" if spec.structure is not None else f"bearings[{i}]"
+            problems.append(f"{where}: bearing '{bearing.name}' has no contact term; add "
+                            "[[terms]] kind = 'hertz_contact' (or 'two_contact') for it, or "
+                            "remove the bearing")
     return problems
 
 
 def _term_problems(spec: Spec) -> list[str]:
-    """Each built-in term at most once; every parameter a term uses is declared."""
+    """Each built-in term at most once per body or bearing; every parameter a term uses is
+    declared (for its body or bearing, or for the whole model)."""
     problems: list[str] = []
-    kinds = [t.kind for t in spec.terms if not isinstance(t, ExpressionTerm)]
-    for kind in sorted({k for k in kinds if kinds.count(k) > 1}):
-        problems.append(f"terms: '{kind}' appears {kinds.count(kind)} times; at most once")
-    ctx = make_context([*spec.parameters, *(n for n in QUANTITIES if n not in spec.parameters)])
+    kinds = [(t.kind, tuple(sorted(spec.attachment(t).items()))) for t in spec.terms
+             if not isinstance(t, ExpressionTerm)]
+    for kind, where in sorted({k for k in kinds if kinds.count(k) > 1}):
+        several = len(spec.owner_names()) > 2
+        owner = f" on {' '.join(f'{k} {v!r}' for k, v in where)}" if several else ""
+        problems.append(f"terms: '{kind}' appears {kinds.count((kind, where))} times{owner}; "
+                        "at most once")
+    state = spec.state_names()
+    ctx = make_context([*spec.parameters, *(n for n in QUANTITIES if n not in spec.parameters)],
+                       state_names=state)
     for i, term in enumerate(spec.terms):
         if isinstance(term, ExpressionTerm):
-            problems.extend(_expression_problems(i, term, spec.parameters, ctx))
-    needed = {"rotor_mass": "the equations of motion"}
+            problems.extend(_expression_problems(i, term, spec, ctx))
+    needed: dict[tuple[str, str], str] = {}
+    for body in spec.body_list():
+        for name in dict.fromkeys(body.inertias()):
+            needed.setdefault((name, ""), f"body '{body.name}'")
+        for name in (body.support.stiffness, body.support.damping) if body.support else ():
+            if name is not None:
+                needed.setdefault((name, ""), f"the support of body '{body.name}'")
     for i, term in enumerate(spec.terms):
-        for name in term.required_parameters():
-            needed.setdefault(name, f"terms[{i}] ({term.kind})")
-    for name, user in needed.items():
-        if name in QUANTITIES and name not in spec.parameters:
+        scope = next(iter(spec.attachment(term).values()), "")
+        names = (term.required_parameters(state) if isinstance(term, ExpressionTerm)
+                 else term.required_parameters())
+        for name in names:
+            needed.setdefault((name, scope), f"terms[{i}] ({term.kind})")
+    for (name, scope), user in needed.items():
+        if name in spec.parameters or f"{name}_{scope}" in spec.parameters:
+            continue
+        if name in QUANTITIES:
             problems.append(f"parameters.{name}: missing; {user} needs it "
                             f"(allowed range {QUANTITIES[name].range_text()})")
+        elif not user.startswith("terms"):  # expression names: _expression_problems
+            problems.append(f"parameters.{name}: missing; {user} needs it (declare it with "
+                            "value, unit, source, low and high)")
     return problems
 
 
 def _contact_problems(spec: Spec) -> list[str]:
-    """One contact term; a two-contact model already holds the balls' centrifugal force."""
-    contacts = sorted({t.kind for t in spec.terms if isinstance(t, HertzContact)})
-    if len(contacts) > 1:  # the same kind twice is reported by _term_problems
-        return [f"terms: {' and '.join(repr(k) for k in contacts)} both model the ball "
-                "contacts; keep one"]
-    if contacts != ["two_contact"]:
-        return []
-    return [f"terms[{i}] (centrifugal): 'two_contact' already holds the centrifugal force of "
-            "the balls (outer load = inner load + F_c); remove this term"
-            for i, t in enumerate(spec.terms) if isinstance(t, Centrifugal)]
+    """One contact term per bearing; a two-contact bearing already holds the balls'
+    centrifugal force."""
+    problems: list[str] = []
+    for bearing in spec.bearing_list():
+        terms = [(i, t) for i, t in enumerate(spec.terms)
+                 if spec.attachment(t).get("bearing") == bearing.name]
+        contacts = sorted({t.kind for _, t in terms if isinstance(t, HertzContact)})
+        if len(contacts) > 1:  # the same kind twice is reported by _term_problems
+            problems.append(f"terms: {' and '.join(repr(k) for k in contacts)} both model the "
+                            "ball contacts; keep one")
+        if contacts == ["two_contact"]:
+            problems.extend(
+                f"terms[{i}] (centrifugal): 'two_contact' already holds the centrifugal force "
+                "of the balls (outer load = inner load + F_c); remove this term"
+                for i, t in terms if isinstance(t, Centrifugal))
+    return problems
 
 
-def _expression_problems(i: int, term: ExpressionTerm, parameters: dict[str, Parameter],
-                         ctx: Context) -> list[str]:
+def _initial_problems(spec: Spec) -> list[str]:
+    """Initial values name states of the model."""
+    names = spec.state_names()
+    problems = [f"simulation.{name}0: the model has no state '{name}' (state: "
+                f"{', '.join(names)}); use simulation.initial"
+                for name in ("x", "y", "vx", "vy")
+                if getattr(spec.simulation, f"{name}0") is not None and name not in names]
+    for name, value in spec.simulation.initial.items():
+        if name not in names:
+            problems.append(f"simulation.initial.{name}: unknown state{_suggest(name, names)}; "
+                            f"state: {', '.join(names)}")
+        elif not math.isfinite(value):
+            problems.append(f"simulation.initial.{name}: must be a finite number, got {value}")
+    return problems
+
+
+def _expression_problems(i: int, term: ExpressionTerm, spec: Spec, ctx: Context) -> list[str]:
     """Undeclared names; then what only building the expression shows (1/0, sqrt(-1))."""
     problems = []
-    for field, names in term.names().items():
+    parameters = spec.parameters
+    state = spec.state_names()
+    for field, names in term.names(state).items():
         unknown = sorted(names - parameters.keys() - QUANTITIES.keys())
         for name in unknown:
-            symbols = (*ROTOR_SYMBOLS, *(BALL_SYMBOLS if field == "ball" else ()))
+            symbols = (*state, *TIME_SYMBOLS, *(BALL_SYMBOLS if field == "ball" else ()))
             problems.append(f"terms.{i}.{field}: unknown name '{name}'"
                             f"{_suggest(name, [*parameters, *symbols])}; a new parameter "
                             f"needs a declaration [parameters.{name}] with value, unit, "
@@ -285,40 +558,82 @@ def _expression_problems(i: int, term: ExpressionTerm, parameters: dict[str, Par
     return problems
 
 
+def _scoped_values(spec: Spec, owner: str) -> dict[str, float]:
+    """The parameter values as the body or bearing ``owner`` sees them (m, …)."""
+    values = spec.parameter_values()
+    values.update({n[: -len(owner) - 1]: v for n, v in values.items()
+                   if n.endswith(f"_{owner}") and n[: -len(owner) - 1] in QUANTITIES})
+    return values
+
+
+def fitting_balls(spec: Spec, bearing: Bearing) -> int | None:
+    """How many balls of the bearing's diameter fit on its pitch circle (None without
+    geometry): floor(π / asin(D_b / D_m))."""
+    p = _scoped_values(spec, bearing.name)
+    d_i, d_o = p.get("inner_race_diameter"), p.get("outer_race_diameter")
+    d_m, d_b = p.get("pitch_diameter"), p.get("ball_diameter")
+    pitch = d_m if d_m is not None else (d_i + d_o) / 2 if None not in (d_i, d_o) else None
+    if d_b is None or pitch is None or not 0 < d_b < pitch:
+        return None
+    return math.floor(math.pi / math.asin(d_b / pitch))
+
+
+def n_balls_range(spec: Spec, bearing: Bearing) -> tuple[int, int]:
+    """Allowed numbers of balls of ``bearing``: [3, 64] and no more than fit."""
+    fit = fitting_balls(spec, bearing)
+    high = N_BALLS_RANGE[1] if fit is None else min(N_BALLS_RANGE[1], fit)
+    return N_BALLS_RANGE[0], high
+
+
 def _geometry_problems(spec: Spec) -> list[str]:
-    """The races, balls and pitch circle fit together (m)."""
-    p = spec.parameter_values()
+    """The races, balls and pitch circle of every bearing fit together (m)."""
+    problems: list[str] = []
+    for index, bearing in enumerate(spec.bearing_list()):
+        problems.extend(_bearing_geometry_problems(spec, index, bearing))
+    return problems
+
+
+def _bearing_geometry_problems(spec: Spec, index: int, bearing: Bearing) -> list[str]:
+    p = _scoped_values(spec, bearing.name)
+    suffix = "" if spec.structure is not None else f"_{bearing.name}"
+
+    def field(name: str) -> str:
+        return f"parameters.{name}{suffix}" if f"{name}{suffix}" in spec.parameters \
+            else f"parameters.{name}"
+
     d_i, d_o = p.get("inner_race_diameter"), p.get("outer_race_diameter")
     d_m, d_b = p.get("pitch_diameter"), p.get("ball_diameter")
     problems: list[str] = []
     races = d_i is not None and d_o is not None
     if races and not d_i < d_o:
-        return [f"parameters.inner_race_diameter: must be smaller than outer_race_diameter "
+        return [f"{field('inner_race_diameter')}: must be smaller than outer_race_diameter "
                 f"({d_o:g} m), got {d_i:g} m"]
     if races:
         gap = (d_o - d_i) / 2
         if d_b is not None and d_b > gap * (1 + RACE_GAP_TOLERANCE):
-            problems.append(f"parameters.ball_diameter: must be at most the race gap "
+            problems.append(f"{field('ball_diameter')}: must be at most the race gap "
                             f"(outer_race_diameter − inner_race_diameter)/2 = {gap:g} m, "
                             f"got {d_b:g} m")
         if d_m is not None and not d_i < d_m < d_o:
-            problems.append(f"parameters.pitch_diameter: must be in ({d_i:g}, {d_o:g}) m, "
+            problems.append(f"{field('pitch_diameter')}: must be in ({d_i:g}, {d_o:g}) m, "
                             f"between the races, got {d_m:g} m")
     pitch = d_m if d_m is not None else (d_i + d_o) / 2 if races else None
     if d_b is not None and pitch is not None and not problems:
+        where = "structure" if spec.structure is not None else f"bearings[{index}]"
         if not d_b < pitch:
-            problems.append(f"parameters.ball_diameter: must be smaller than the pitch "
+            problems.append(f"{field('ball_diameter')}: must be smaller than the pitch "
                             f"diameter ({pitch:g} m), got {d_b:g} m")
-        elif spec.n_balls > (fit := math.floor(math.pi / math.asin(d_b / pitch))):
-            problems.append(f"structure.n_balls: must be in [{N_BALLS_RANGE[0]}, {fit}]: "
+        elif bearing.n_balls > (fit := math.floor(math.pi / math.asin(d_b / pitch))):
+            problems.append(f"{where}.n_balls: must be in [{N_BALLS_RANGE[0]}, {fit}]: "
                             f"at most {fit} balls of {d_b:g} m fit on the pitch circle "
-                            f"({pitch:g} m), got {spec.n_balls}")
+                            f"({pitch:g} m), got {bearing.n_balls}")
     return problems
 
 
 def _all_field_names() -> set[str]:
     names: set[str] = set(QUANTITIES) | {"kind", "variant", "cage"}
-    for cls in (Spec, ModelInfo, Structure, SimulationDefaults, Parameter, *TERM_CLASSES):
+    for cls in (Spec, ModelInfo, Structure, SimulationDefaults, Parameter, Body, Bearing,
+                Support, *TERM_CLASSES):
         names |= set(cls.model_fields)
     return names
 
@@ -389,7 +704,8 @@ def _allowed(loc: tuple) -> str:
     """' in [low, high] unit' of the field at ``loc``, ' (unit)' when it has no bounds."""
     if len(loc) == 3 and loc[0] == "parameters" and loc[2] == "value" and loc[1] in QUANTITIES:
         return f" in {QUANTITIES[loc[1]].range_text()}"
-    section = {"simulation": SimulationDefaults, "structure": Structure}.get(str(loc[0]))
+    section = {"simulation": SimulationDefaults, "structure": Structure,
+               "bearings": Bearing, "bodies": Body}.get(str(loc[0]))
     info = section.model_fields.get(str(loc[-1])) if section else None
     low, high, left, right = "-inf", "inf", "(", ")"
     for rule in info.metadata if info else ():
@@ -422,28 +738,32 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
 
 
 def spec_path(name_or_path: str | Path) -> Path:
-    """The TOML file of a shipped spec name (``vakharia2015``) or an explicit path."""
+    """The TOML file of a spec: an explicit path, a shipped name (``vakharia2015``), or the
+    name of a spec in a ``BEARINGDYN_MODELS`` folder."""
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists():
         return candidate
-    shipped = resources.files("modelgen") / SPEC_DIR / f"{name_or_path}.toml"
-    path = Path(str(shipped))
-    if not path.exists():
-        known = shipped_spec_names()
-        raise SpecError(str(name_or_path), [f"model: no spec named '{name_or_path}'"
-                                            f"{_suggest(name_or_path, known)}; "
-                                            f"shipped specs: {', '.join(known)}"])
-    return path
+    path = shipped_spec_dir() / f"{name_or_path}.toml"
+    if path.exists():
+        return path
+    users = user_specs()
+    if str(name_or_path) in users:
+        return users[str(name_or_path)]
+    known = [*shipped_spec_names(), *users]
+    raise SpecError(str(name_or_path), [f"model: no spec named '{name_or_path}'"
+                                        f"{_suggest(name_or_path, known)}; "
+                                        f"known specs: {', '.join(known)} (a spec of your "
+                                        f"own: give its .toml path, or put its folder in "
+                                        f"{MODELS_ENV})"])
 
 
 def shipped_spec_names() -> list[str]:
-    folder = Path(str(resources.files("modelgen") / SPEC_DIR))
-    return sorted(p.stem for p in folder.glob("*.toml"))
+    return sorted(p.stem for p in shipped_spec_dir().glob("*.toml"))
 
 
 def spec_hash(path: Path) -> str:
     """SHA-256 of the spec file's bytes: ``sha256sum`` of the file gives the same digest."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    return spec_digest(path)
 
 
 def load_spec(name_or_path: str | Path) -> tuple[Spec, Path]:

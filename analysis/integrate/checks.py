@@ -46,10 +46,14 @@ def rk4_radius(angle: float) -> float:
     return low
 
 
-def probe_states(n_balls: int, values: dict[str, float]) -> list[np.ndarray]:
-    """States [x, y, vx, vy] where the linearised model is at its stiffest: the rotor at rest
-    at the centre and, with a Hertz contact, displaced into the balls (see the module)."""
-    states = [np.zeros(4)]
+def probe_states(model: Model, structure: tuple[int, ...],
+                 values: dict[str, float]) -> list[np.ndarray]:
+    """States where the linearised model is at its stiffest: every body at rest at the
+    centre and, with a Hertz contact, the first body displaced into the balls (see the
+    module)."""
+    states = [np.zeros(model.n_state)]
+    n_balls = structure[0] if structure else 1
+    (ix, iy), *_ = model.centre_indices()
     k = values.get("contact_stiffness")
     clearance = values.get("radial_clearance")
     if k is None or clearance is None or k <= 0:
@@ -60,23 +64,28 @@ def probe_states(n_balls: int, values: dict[str, float]) -> list[np.ndarray]:
     for sector in range(PROBE_SECTORS):
         for offset in range(PROBE_OFFSETS):
             phi = 2 * math.pi * (sector / PROBE_SECTORS + offset / (PROBE_OFFSETS * n_balls))
-            states.append(np.array([radius * math.cos(phi), radius * math.sin(phi), 0, 0]))
+            z = np.zeros(model.n_state)
+            z[ix] = radius * math.cos(phi)
+            if iy is not None:
+                z[iy] = radius * math.sin(phi)
+            states.append(z)
     return states
 
 
-def stable_step(model: Model, n_balls: int, values: dict[str, float]) -> tuple[float, float]:
+def stable_step(model: Model, n_balls: tuple[int, ...],
+                values: dict[str, float]) -> tuple[float, float]:
     """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states; memoised
     per model, number of balls and parameter values (sweeps ask again and again)."""
     return _stable_step(model, n_balls, tuple(sorted(values.items())))
 
 
 @functools.lru_cache(maxsize=4096)
-def _stable_step(model: Model, n_balls: int, items: tuple) -> tuple[float, float]:
+def _stable_step(model: Model, n_balls: tuple[int, ...], items: tuple) -> tuple[float, float]:
     values = dict(items)
     jac = model.functions(n_balls).jac
     p = model.parameter_vector(values)
     limit, largest = math.inf, 0.0
-    for z in probe_states(n_balls, values):
+    for z in probe_states(model, n_balls, values):
         for lam in np.linalg.eigvals(np.asarray(jac(0.0, z, p), dtype=float)):
             size = abs(lam)
             if not math.isfinite(size):
@@ -95,7 +104,7 @@ def nice_step(limit: float) -> float:
     return max(m * scale for m in (1, 2, 5) if m * scale <= target)
 
 
-def check_rk4_step(model: Model, n_balls: int, values: dict[str, float], dt: float,
+def check_rk4_step(model: Model, n_balls: tuple[int, ...], values: dict[str, float], dt: float,
                    method: str) -> None:
     """Raise ``InputError`` when the RK4 step ``dt`` (s) is above the stability limit of
     the model's stiffest linearisation with these parameter ``values``."""

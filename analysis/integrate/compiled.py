@@ -6,7 +6,8 @@ The block sizes are fixed (``BLOCK_SIZES``: 10 000, 1000, 100, 10, 1), so any nu
 is covered by at most 36 calls besides the full blocks, and a model needs one compilation
 for every run, whatever its duration or decimation.
 
-The step counter ``n`` travels with the state, ``[x, y, vx, vy, n]``, and the time of step
+The step counter ``n`` travels with the state, ``[z…, n]`` (z the model's state of any size),
+and the time of step
 ``n`` is ``t0 + n·h``: exact to one rounding however long the run, and the same whichever
 blocks cover it, so a result does not depend on how the run was cut into calls.
 
@@ -80,25 +81,25 @@ def compiler_command() -> list[str]:
 def rk4_blocks(funcs: Any) -> dict[int, ca.Function]:
     """The block Functions of a model's ``rk4_step``, by size.
 
-    ``rk4_block<size>(zn [5], p, h, t0) -> Z [5 x size]``: ``zn = [x, y, vx, vy, n]`` is the
-    state (m, m/s) after step ``n``; column ``j`` of ``Z`` is the state after step
+    ``rk4_block<size>(zn [n+1], p, h, t0) -> Z [n+1 x size]``: ``zn = [z…, n]`` is the
+    state (SI units) after step ``n``; column ``j`` of ``Z`` is the state after step
     ``n + j + 1``; step ``k`` runs from ``t0 + k·h`` to ``t0 + (k + 1)·h`` (s). The
     subexpressions of a step that depend on ``p``, ``h`` and ``t0`` only (cage speed, the
     rotations of the cage angle by ω_cage·h/2 and ω_cage·h, …) are computed once per call
     (``casadi.extract_parametric``): the same operations as per step, so the same values.
     """
-    n_par = funcs.rk4_step.size1_in(2)
-    zn, p = ca.SX.sym("zn", 5), ca.SX.sym("p", n_par)
+    n_par, n = funcs.rk4_step.size1_in(2), funcs.rk4_step.size1_in(1)
+    zn, p = ca.SX.sym("zn", n + 1), ca.SX.sym("p", n_par)
     h, t0 = ca.SX.sym("h"), ca.SX.sym("t0")
-    z_next = funcs.rk4_step(t0 + zn[4] * h, zn[:4], p, h)
-    step, extracted, values = ca.extract_parametric(ca.vertcat(z_next, zn[4] + 1),
+    z_next = funcs.rk4_step(t0 + zn[n] * h, zn[:n], p, h)
+    step, extracted, values = ca.extract_parametric(ca.vertcat(z_next, zn[n] + 1),
                                                     ca.vertcat(p, h, t0))
     q = ca.vertcat(*extracted)
     constants = ca.Function("rk4_constants", [p, h, t0], [ca.vertcat(*values)])
     inner = {1: ca.Function("rk4_steps1", [zn, p, h, t0, q], [step])}
     names, blocks = ["zn", "p", "h", "t0"], {}
     for size in sorted(BLOCK_SIZES):
-        zn_m, p_m = ca.MX.sym("zn", 5), ca.MX.sym("p", n_par)
+        zn_m, p_m = ca.MX.sym("zn", n + 1), ca.MX.sym("p", n_par)
         h_m, t0_m, q_m = ca.MX.sym("h"), ca.MX.sym("t0"), ca.MX.sym("q", q.numel())
         if size > 1:  # ten calls of the next smaller size
             parts, current = [], zn_m
@@ -151,7 +152,7 @@ def _compile(source: str, target: Path, command: list[str]) -> None:
 
 @dataclass
 class Library:
-    """Functions of one model and number of balls, compiled or in the VM."""
+    """Functions of one model and its numbers of balls, compiled or in the VM."""
 
     backend: str
     """``"compiled"`` or ``"casadi-vm"``."""
@@ -194,30 +195,34 @@ def vm_library(funcs: Any) -> Library:
     return Library("casadi-vm", rk4_blocks(funcs), funcs.rhs, funcs.jac, funcs.rk4_step)
 
 
-def library(model: Any, n_balls: int, compiled: bool = True) -> Library:
-    """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``n_balls`` balls.
+def library(model: Any, structure: tuple[int, ...], compiled: bool = True) -> Library:
+    """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``structure`` balls per
+    bearing.
 
     ``compiled``: load the shared library from the cache, or build it there once; when no
     compiler works, warn once and use the VM. ``compiled=False``: the VM. Memoised per
     process.
     """
     command = compiler_command() if compiled else []
-    memo = (model.name, model.spec_sha256, n_balls, tuple(command), str(cache_dir()))
+    structure = tuple(structure)
+    memo = (model.name, model.spec_sha256, structure, tuple(command), str(cache_dir()))
     if memo not in _REGISTRY.libraries:
-        funcs = model.functions(n_balls)
+        funcs = model.functions(structure)
         lib = None
         if compiled:
             try:
-                lib = _compiled_library(model, n_balls, funcs, command)
+                lib = _compiled_library(model, structure, funcs, command)
             except CompileError as exc:
                 _fallback_warning(str(exc))
         _REGISTRY.libraries[memo] = lib or vm_library(funcs)
     return _REGISTRY.libraries[memo]
 
 
-def _compiled_library(model: Any, n_balls: int, funcs: Any, command: list[str]) -> Library:
+def _compiled_library(model: Any, structure: tuple[int, ...], funcs: Any,
+                      command: list[str]) -> Library:
     functions = _library_functions(funcs)
-    stem = f"bd_{model.name.replace('-', '_')}_nb{n_balls}"
+    balls = "_".join(str(n) for n in structure) or "0"
+    stem = f"bd_{model.name.replace('-', '_')}_nb{balls}"
     source = _c_source(functions, stem)
     key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
                          .encode()).hexdigest()
@@ -240,7 +245,8 @@ def _compiled_library(model: Any, n_balls: int, funcs: Any, command: list[str]) 
 def _checked_load(path: Path, functions: list[ca.Function], p: np.ndarray) -> Library | None:
     """The library at ``path``, or None when it does not load or its ``rk4_step`` and
     10-step block do not reproduce the VM's (``functions``) on a test state."""
-    z = np.array([1.3e-5, -4e-6, 2e-3, -1e-3])
+    n = functions[2].size1_in(1)
+    z = test_state(n)
     tests = {2: (0.1234, z, p, 1e-5), len(functions) - 2: (np.append(z, 7.0), p, 1e-5, 0.1)}
     try:
         loaded = [ca.external(f.name(), str(path)) for f in functions]
@@ -254,6 +260,17 @@ def _checked_load(path: Path, functions: list[ca.Function], p: np.ndarray) -> Li
     rhs, jac, step, *blocks = loaded
     return Library("compiled", dict(zip(BLOCK_SIZES, blocks, strict=True)), rhs, jac, step,
                    path)
+
+
+def test_state(n: int) -> np.ndarray:
+    """A state of size ``n`` for self-tests: displacements of some µm, velocities of some
+    mm/s, every value different (n = 4: [1.3e-5, -4e-6, 2e-3, -1e-3])."""
+    half = n // 2
+    positions = [1.3e-5, -4e-6, 7e-6, -2e-6] * (half // 4 + 1)
+    velocities = [2e-3, -1e-3, 1.5e-3, -0.5e-3] * (half // 4 + 1)
+    scale = [1 + 0.1 * (k // 4) for k in range(half)]
+    return np.array([*(positions[k] * scale[k] for k in range(half)),
+                     *(velocities[k] * scale[k] for k in range(half))])
 
 
 def block_plan(n_steps: int) -> list[int]:
@@ -271,24 +288,25 @@ class Runner:
 
     def __init__(self, lib: Library, p: np.ndarray, h: float, t0: float = 0.0):
         self.backend = lib.backend
-        self._zn = np.zeros(5)
+        self.n = lib.rk4_step.size1_in(1)
+        self._zn = np.zeros(self.n + 1)
         self._p = np.ascontiguousarray(p, dtype=float)
         self._h, self._t0 = np.array([float(h)]), np.array([float(t0)])
         self._calls: dict[int, tuple[Any, np.ndarray, Any]] = {}
         for size, fn in lib.blocks.items():
             buf, call = fn.buffer()
-            out = np.empty((size, 5))  # CasADi's column-major 5 x size
+            out = np.empty((size, self.n + 1))  # CasADi's column-major (n+1) x size
             for i, arr in enumerate((self._zn, self._p, self._h, self._t0)):
                 buf.set_arg(i, memoryview(arr))
             buf.set_res(0, memoryview(out))
             self._calls[size] = (buf, out, call)
 
     def blocks(self, z0: np.ndarray, n_steps: int) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield ``(n, states)`` per block: ``states[j]`` is ``[x, y, vx, vy, n + j + 1]``
-        after step ``n + j + 1``. The array is reused by the next block: copy what you keep.
+        """Yield ``(k, states)`` per block: ``states[j]`` is ``[z…, k + j + 1]`` after step
+        ``k + j + 1``. The array is reused by the next block: copy what you keep.
         """
-        self._zn[:4] = z0
-        self._zn[4] = 0.0
+        self._zn[:self.n] = z0
+        self._zn[self.n] = 0.0
         done = 0
         for size in block_plan(n_steps):
             _, out, call = self._calls[size]
@@ -302,16 +320,17 @@ def run_rk4(lib: Library, p: np.ndarray, z0: np.ndarray, h: float, n_steps: int,
             save_every: int = 1, t0: float = 0.0,
             check: Callable[[np.ndarray], None] | None = None) -> np.ndarray:
     """``n_steps`` RK4 steps of ``h`` seconds from ``z0`` at ``t0``; the states after every
-    ``save_every``-th step, shape (4, 1 + n_steps // save_every), ``z0`` first.
+    ``save_every``-th step, shape (n, 1 + n_steps // save_every), ``z0`` first.
 
-    ``check(states)`` sees every block as it is done (rows ``[x, y, vx, vy, n]``, ``n`` the
-    step after which the row holds) and may raise to stop the run.
+    ``check(states)`` sees every block as it is done (rows ``[z…, k]``, ``k`` the step after
+    which the row holds) and may raise to stop the run.
     """
-    out = np.empty((4, 1 + n_steps // save_every))
+    runner = Runner(lib, p, h, t0)
+    out = np.empty((runner.n, 1 + n_steps // save_every))
     out[:, 0] = z0
-    for done, block in Runner(lib, p, h, t0).blocks(z0, n_steps):
+    for done, block in runner.blocks(z0, n_steps):
         first = -(done + 1) % save_every  # row of the first step to keep
-        kept = block[first::save_every, :4]
+        kept = block[first::save_every, :runner.n]
         start = (done + first + 1) // save_every
         out[:, start:start + len(kept)] = kept.T
         if check is not None:

@@ -1,16 +1,19 @@
 """Time integration of a generated model: fixed-step RK4 (the paper) and adaptive CVODES.
 
-Both return an ``xarray.Dataset`` with coordinate ``t`` (s) and variables ``x``, ``y`` (m),
-``vx``, ``vy`` (m/s) from the end of the transient on, and attrs that trace the run to the
-exact generated code: model name, spec sha256, number of balls, every parameter value,
-method and step, the characteristic frequencies and the package versions.
+Both return an ``xarray.Dataset`` with coordinate ``t`` (s) and one variable per state (``x``,
+``y`` (m), ``vx``, ``vy`` (m/s) for the paper's rotor; ``x_rotor``, ``vx_housing`` … for
+models of several bodies) from the end of the transient on, and attrs that trace the run to
+the exact generated code: model name, spec path and sha256, balls per bearing, every
+parameter value, method and step, the characteristic frequencies and the package versions.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from importlib import metadata
+from pathlib import Path
 from typing import Literal
 
 import casadi as ca
@@ -20,7 +23,7 @@ import xarray as xr
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import check_rk4_step
 from analysis.integrate.compiled import library, run_rk4
-from analysis.model import Model, load_model
+from analysis.model import BallCounts, Model, Structure, System, as_system
 
 Method = Literal["rk4", "cvodes"]
 BLOW_UP_FACTOR = 1000.0
@@ -38,10 +41,6 @@ def package_version() -> str:
         return "0+unknown"
 
 
-def _resolve(model: Model | str) -> Model:
-    return load_model(model) if isinstance(model, str) else model
-
-
 def _check_times(duration: float, transient: float, dt: float) -> None:
     for name, value in (("duration", duration), ("dt", dt)):
         if not (math.isfinite(value) and value > 0):
@@ -54,38 +53,44 @@ def _check_times(duration: float, transient: float, dt: float) -> None:
 
 
 def simulate(
-    model: Model | str,
-    n_balls: int | None = None,
+    system: System | Model | str | Path,
+    n_balls: BallCounts = None,
     *,
     duration: float | None = None,
     transient: float | None = None,
     dt: float | None = None,
     method: Method = "rk4",
     save_every: int = 1,
-    initial_state: tuple[float, float, float, float] | None = None,
+    initial_state: Sequence[float] | None = None,
     rtol: float = 1e-10,
     atol: float = 1e-16,
     compiled: bool = True,
     **parameters: float,
 ) -> xr.Dataset:
-    """Integrate ``model`` and return the motion after ``transient``.
+    """Integrate a system and return its motion after ``transient``.
 
     Parameters (SI units; speed in rpm)
     ----------
-    n_balls: number of balls (default: the spec's).
+    system: a ``System`` (model, balls, parameters, initial state), or a model (name, spec
+        path, folder or ``Model``) completed by the arguments below.
+    n_balls: balls per bearing (default: the spec's); one number for a one-bearing model,
+        else a mapping bearing name -> number.
     duration: simulated time in s, transient included (default: the spec's).
     transient: time in s dropped from the output (default: the spec's).
     dt: RK4 step in s (paper: 1e-5), and the output spacing of both methods.
     method: ``"rk4"`` fixed step, or ``"cvodes"`` adaptive BDF with ``rtol``/``atol``.
     save_every: keep every n-th RK4 step only (output spacing ``save_every * dt``).
-    initial_state: (x0, y0, vx0, vy0) in m and m/s (default: the spec's, paper 1e-6 m).
-    compiled: run RK4 as compiled C (built once per model and N_b, then cached; see
+    initial_state: the state at t = 0 in the order of the model's state names (default:
+        the system's, else the spec's; the paper's 1e-6 m for its model).
+    compiled: run RK4 as compiled C (built once per model and balls, then cached; see
         ``analysis.integrate.compiled``); ``False``: the CasADi virtual machine (same results).
     **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``.
+
+    Returns an ``xarray.Dataset`` with one variable per state (units and meaning in its
+    attributes) over ``t`` (s) and the run's provenance in ``attrs``.
     """
-    model = _resolve(model)
-    n = model.check_n_balls(n_balls)
-    values = model.parameters(parameters)
+    system = as_system(system, n_balls, initial_state, **parameters)
+    model, n, values = system.model, system.structure, dict(system.parameters)
     sim = model.simulation_defaults
     duration = float(sim["duration"] if duration is None else duration)
     transient = float(sim["transient"] if transient is None else transient)
@@ -94,70 +99,98 @@ def simulate(
     check_rk4_step(model, n, values, dt, method)
     if not (isinstance(save_every, int) and save_every >= 1):
         raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
-    z0 = np.array(initial_state if initial_state is not None
-                  else (sim["x0"], sim["y0"], sim["vx0"], sim["vy0"]), dtype=float)
-    if z0.shape != (4,) or not np.all(np.isfinite(z0)):
-        raise InputError(f"initial_state: must be 4 finite numbers (x0, y0, vx0, vy0), "
-                         f"got {initial_state!r}")
+    z0 = system.state
     n_steps = round(duration / dt)
     n_saved = n_steps // save_every
     times = np.arange(n_saved + 1) * (save_every * dt)
-    p = model.parameter_vector(values)
-    clearance = abs(values.get("radial_clearance", 0.0))
-    limit = BLOW_UP_FACTOR * clearance if clearance > 0 else np.inf  # else: non-finite only
+    p = system.p
+    limit = blow_up_limit(values)
     if method == "rk4":
-        states = _run_rk4(model, n, p, z0, dt, save_every, n_saved, limit, compiled)
+        states = _run_rk4(system, p, z0, dt, save_every, n_saved, limit, compiled)
     elif method == "cvodes":
         if not (math.isfinite(rtol) and 0 < rtol < 1):
             raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
         if not (math.isfinite(atol) and 0 <= atol < 1):
             raise InputError(f"atol: must be in [0, 1), got {atol!r}")
-        states = _run_cvodes(model, n, p, z0, times, rtol, atol, limit)
+        states = _run_cvodes(system, p, z0, times, rtol, atol, limit)
     else:
         raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
     keep = times >= transient - 1e-12 * duration
     attrs = run_attrs(model, n, values)
     attrs.update(method=method, dt=dt, save_every=save_every, duration=duration,
-                 transient=transient, x0=z0[0], y0=z0[1], vx0=z0[2], vy0=z0[3])
+                 transient=transient)
+    attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, z0, strict=True)})
     if method == "cvodes":
         attrs.update(rtol=rtol, atol=atol)
-    return to_dataset(times[keep], states[:, keep], attrs)
+    return to_dataset(times[keep], states[:, keep], attrs, model)
 
 
-def run_attrs(model: Model, n_balls: int, values: dict[str, float]) -> dict:
-    """Provenance of a run: model, spec hash, versions, every parameter, frequencies."""
-    attrs = {"model": model.name, "spec_sha256": model.spec_sha256, "n_balls": n_balls,
+def blow_up_limit(values: dict[str, float]) -> float:
+    """Displacement (m) beyond which a run has blown up: ``BLOW_UP_FACTOR`` times the largest
+    radial clearance of the model's bearings (inf without one: non-finite values only)."""
+    clearance = max((abs(v) for k, v in values.items() if k.startswith("radial_clearance")),
+                    default=0.0)
+    return BLOW_UP_FACTOR * clearance if clearance > 0 else np.inf
+
+
+def run_attrs(model: Model, structure: Structure, values: dict[str, float]) -> dict:
+    """Provenance of a run: model, spec path and hash, versions, balls, every parameter,
+    frequencies, the state names."""
+    attrs = {"model": model.name, "spec_sha256": model.spec_sha256,
+             "spec_file": model.spec_file, **model.structure_attrs(structure),
+             "state_names": " ".join(model.state_names),
              "bearingdyn_version": package_version(),
              "generator": ", ".join(f"{k} {v}" for k, v in model.module.GENERATOR.items()),
              "casadi_version": ca.__version__}
     attrs.update(values)
-    attrs.update(model.frequencies(n_balls, values).as_dict())
+    attrs.update(model.frequencies(structure, values).as_dict())
     return attrs
 
 
-STATE = ("x", "y", "vx", "vy")
-"""The state variables of a run, in the order of the state vector."""
+def state_names(ds: xr.Dataset) -> tuple[str, ...]:
+    """The state variables of a run, in the order of the state vector."""
+    return tuple(ds.attrs.get("state_names", "x y vx vy").split())
 
 
 def state_at(ds: xr.Dataset, index: int) -> np.ndarray:
-    """The state [x, y, vx, vy] (m, m/s) at sample ``index`` of a run (-1: the last)."""
-    return np.array([float(ds[v][index]) for v in STATE])
+    """The state (SI units, the model's order) at sample ``index`` of a run (-1: the last)."""
+    return np.array([float(ds[v][index]) for v in state_names(ds)])
 
 
-def to_dataset(t: np.ndarray, states: np.ndarray, attrs: dict) -> xr.Dataset:
-    units = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
-    meaning = {"x": "rotor displacement along the radial load",
-               "y": "rotor displacement across the radial load",
-               "vx": "rotor velocity along the radial load",
-               "vy": "rotor velocity across the radial load"}
-    data = {name: ("t", states[i], {"units": units[name], "long_name": meaning[name]})
-            for i, name in enumerate(units)}
+def state_meaning(model: Model, name: str) -> str:
+    """Words for a state variable: 'rotor displacement along the radial load', …"""
+    velocity = name.startswith("v") and name[1:] in model.state_names
+    base = name[1:] if velocity else name
+    coordinate, _, body = base.partition("_")
+    body = body or model.module.BODIES[0][0]
+    what = {"x": "displacement along the radial load", "y": "displacement across the radial load",
+            "tx": "tilt dx/dz", "ty": "tilt dy/dz"}[coordinate]
+    if velocity:
+        what = what.replace("displacement", "velocity").replace("tilt", "tilt rate")
+    return f"{body} {what}"
+
+
+def to_dataset(t: np.ndarray, states: np.ndarray, attrs: dict, model: Model) -> xr.Dataset:
+    """A run as a Dataset: one variable per state over ``t`` (s)."""
+    units = model.state_units
+    data = {name: ("t", states[i], {"units": units[name],
+                                    "long_name": state_meaning(model, name)})
+            for i, name in enumerate(model.state_names)}
     return xr.Dataset(data, coords={"t": ("t", t, {"units": "s", "long_name": "time"})},
                       attrs=attrs)
 
 
-def _blow_up(states: np.ndarray, times: np.ndarray, limit: float) -> None:
-    bad = ~np.all(np.isfinite(states), axis=0) | (np.hypot(states[0], states[1]) > limit)
+def _displacement(states: np.ndarray, pairs: list[tuple[int, int | None]]) -> np.ndarray:
+    """Largest centre displacement of any body (m) in each column of ``states``."""
+    out = np.zeros(states.shape[1])
+    for i, j in pairs:
+        out = np.maximum(out, np.abs(states[i]) if j is None else np.hypot(states[i], states[j]))
+    return out
+
+
+def _blow_up(states: np.ndarray, times: np.ndarray, limit: float,
+             pairs: list[tuple[int, int | None]]) -> None:
+    bad = ~np.all(np.isfinite(states), axis=0) | (_displacement(states, pairs) > limit)
     if np.any(bad):
         when = times[int(np.argmax(bad))]
         bound = f"beyond {limit:g} m" if np.isfinite(limit) else "growing without bound"
@@ -166,27 +199,29 @@ def _blow_up(states: np.ndarray, times: np.ndarray, limit: float) -> None:
             "try a smaller dt, more damping, or check the parameters")
 
 
-def _run_rk4(model: Model, n_balls: int, p: np.ndarray, z0: np.ndarray, dt: float,
+def _run_rk4(system: System, p: np.ndarray, z0: np.ndarray, dt: float,
              save_every: int, n_saved: int, limit: float, compiled: bool = True) -> np.ndarray:
     """RK4 in blocks of up to 1e4 steps (``analysis.integrate.compiled``: compiled C, or the VM).
 
     A blow-up is looked for at the end of every block (non-finite values propagate), then
     reported with the time of the first bad state of that block."""
+    n, pairs = system.n_state, system.model.centre_indices()
+
     def check(block: np.ndarray) -> None:
         try:
-            _blow_up(block[-1:, :4].T, block[-1:, 4] * dt, limit)
+            _blow_up(block[-1:, :n].T, block[-1:, n] * dt, limit, pairs)
         except SimulationError:
-            _blow_up(block[:, :4].T, block[:, 4] * dt, limit)
+            _blow_up(block[:, :n].T, block[:, n] * dt, limit, pairs)
             raise
 
-    return run_rk4(library(model, n_balls, compiled), p, z0, dt, n_saved * save_every,
-                   save_every, check=check)
+    return run_rk4(library(system.model, system.structure, compiled), p, z0, dt,
+                   n_saved * save_every, save_every, check=check)
 
 
-def _run_cvodes(model: Model, n_balls: int, p: np.ndarray, z0: np.ndarray,
+def _run_cvodes(system: System, p: np.ndarray, z0: np.ndarray,
                 times: np.ndarray, rtol: float, atol: float, limit: float) -> np.ndarray:
-    rhs = model.functions(n_balls).rhs
-    t, z, par = ca.SX.sym("t"), ca.SX.sym("z", 4), ca.SX.sym("p", len(p))
+    rhs = system.functions.rhs
+    t, z, par = ca.SX.sym("t"), ca.SX.sym("z", system.n_state), ca.SX.sym("p", len(p))
     dae = {"t": t, "x": z, "p": par, "ode": rhs(t, z, par)}
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000,
             "max_step_size": float(times[1] - times[0]) if len(times) > 1 else 0.0}
@@ -197,5 +232,5 @@ def _run_cvodes(model: Model, n_balls: int, p: np.ndarray, z0: np.ndarray,
     except RuntimeError as exc:
         raise SimulationError(f"CVODES failed: {str(exc).splitlines()[-1]}") from None
     states = np.concatenate([z0[:, None], zs], axis=1)
-    _blow_up(states, times, limit)
+    _blow_up(states, times, limit, system.model.centre_indices())
     return states

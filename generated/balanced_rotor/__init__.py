@@ -14,15 +14,25 @@ from .._runtime import ModelFunctions, hertz15
 NAME = 'balanced-rotor'
 TITLE = 'Balanced rotor on a 6205 ball bearing: pure varying-compliance excitation'
 REFERENCE = 'Vakharia et al. (seed paper) geometry and loads, unbalance removed'
-SPEC_FILE = 'balanced-rotor.toml'
+SPEC_FILE = 'modelgen/specs/balanced-rotor.toml'
 SPEC_SHA256 = 'f3f31606308afd7c0d3926b83f6ec7c5d268b88387dbcdebceb7747bfdd4a4d4'
 GENERATOR = {'bearingdyn': '0.1.0', 'sympy': '1.14.0', 'casadi': '3.8.2'}
-DEFAULT_N_BALLS = 8
-N_BALLS_RANGE = (3, 64)
-SIMULATION = {'dt': 1e-05, 'duration': 2.0, 'transient': 1.0, 'x0': 1e-06, 'y0': 1e-06, 'vx0': 0.0, 'vy0': 0.0}
+STATE = ('x', 'y', 'vx', 'vy')
+STATE_UNITS = ('m', 'm', 'm/s', 'm/s')
+BODIES = (
+    # name, motion, coordinates
+    ('rotor', 'planar', ('x', 'y')),
+)
+BEARINGS = (
+    # name, inner, outer, default balls, (fewest, most)
+    ('bearing', 'rotor', 'ground', 8, (3, 64)),
+)
+DEFAULT_N_BALLS = (8,)
+SIMULATION = {'dt': 1e-05, 'duration': 2.0, 'transient': 1.0}
+INITIAL_STATE = (1e-06, 1e-06, 0.0, 0.0)
 TERMS = (
     'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} per ball (paper Eqs. 3–6); cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1)',
-    'linear viscous damping −c·(ẋ, ẏ) on the rotor',
+    'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',
 )
 PARAMETERS = (
@@ -49,24 +59,19 @@ RANGES = {
 }
 
 
-def ball_load(c, s, x, y, vx, vy, t, p):
-    """Radial load of one ball at (cos θ, sin θ) = (c, s) on the rotor, N."""
-    contact_stiffness = p[2]
-    radial_clearance = p[4]
-    return contact_stiffness*hertz15(c*x - radial_clearance + s*y)
-
-
-def rotor_force(x, y, vx, vy, t, p):
-    """Force of the loads and damping on the rotor, (F_x, F_y) in N."""
+def external_force(z, t, p):
+    """Generalised force on each coordinate besides the ball loads (loads, springs, damping, supports), N or N·m."""
+    vx = z[2]
+    vy = z[3]
     damping = p[3]
     radial_load = p[5]
     return -damping*vx + radial_load, -damping*vy
 
 
-def rotor_mass(p):
-    """Rotor mass M_R, kg."""
+def mass(p):
+    """Mass (kg) or transverse inertia (kg·m²) of each coordinate."""
     rotor_mass = p[1]
-    return rotor_mass
+    return rotor_mass, rotor_mass
 
 
 def shaft_speed(p):
@@ -75,14 +80,30 @@ def shaft_speed(p):
     return math.pi*speed_rpm/30
 
 
-def cage_speed(p):
-    """Cage angular speed ω_cage, rad/s."""
+def ball_load_bearing(c, s, i, n_balls, z, t, p):
+    """Radial load of ball i (1 … n_balls) of bearing 'bearing' at (cos θ, sin θ) = (c, s) on its inner race, N."""
+    x = z[0]
+    y = z[1]
+    contact_stiffness = p[2]
+    radial_clearance = p[4]
+    return contact_stiffness*hertz15(c*x - radial_clearance + s*y)
+
+
+def cage_speed_bearing(p):
+    """Cage angular speed ω_cage of bearing 'bearing', rad/s."""
     speed_rpm = p[0]
     inner_race_diameter = p[6]
     outer_race_diameter = p[7]
     return math.pi*inner_race_diameter*speed_rpm/(30*(inner_race_diameter + outer_race_diameter))
 
 
-def build(n_balls: int = DEFAULT_N_BALLS) -> ModelFunctions:
-    """CasADi Functions (rhs, jac, rk4_step, simulator) for n_balls balls."""
-    return ModelFunctions(sys.modules[__name__], n_balls)
+def station_bearing(p):
+    """(state index, ∂X/∂q, ∂Y/∂q) of bearing 'bearing': how its races' relative displacement (X, Y) moves with each coordinate."""
+    return ((0, 1, 0), (1, 0, 1))
+
+
+def build(n_balls=None) -> ModelFunctions:
+    """CasADi Functions (rhs, jac, rk4_step, simulator) for the numbers of balls
+    of the bearings (a tuple in the order of BEARINGS; default: DEFAULT_N_BALLS).
+    """
+    return ModelFunctions(sys.modules[__name__], n_balls or DEFAULT_N_BALLS)

@@ -16,15 +16,24 @@ from .._runtime import ModelFunctions
 NAME = 'duffing'
 TITLE = "Forced Duffing oscillator (Ueda's parameters by default)"
 REFERENCE = "Y. Ueda, Randomly transitional phenomena in the system governed by Duffing's equation, J. Stat. Phys. 20 (1979); textbook Duffing primary resonance"
-SPEC_FILE = 'duffing.toml'
+SPEC_FILE = 'modelgen/specs/duffing.toml'
 SPEC_SHA256 = '32d6536cb5c288b44ab5f4bbda1e72793c2c5aad351536c9b96f6dbf535a8141'
 GENERATOR = {'bearingdyn': '0.1.0', 'sympy': '1.14.0', 'casadi': '3.8.2'}
-DEFAULT_N_BALLS = 0
-N_BALLS_RANGE = (0, 0)
-SIMULATION = {'dt': 0.01, 'duration': 600.0, 'transient': 300.0, 'x0': 0.0, 'y0': 0.0, 'vx0': 0.0, 'vy0': 0.0}
+STATE = ('x', 'y', 'vx', 'vy')
+STATE_UNITS = ('m', 'm', 'm/s', 'm/s')
+BODIES = (
+    # name, motion, coordinates
+    ('rotor', 'planar', ('x', 'y')),
+)
+BEARINGS = (
+    # name, inner, outer, default balls, (fewest, most)
+)
+DEFAULT_N_BALLS = ()
+SIMULATION = {'dt': 0.01, 'duration': 600.0, 'transient': 300.0}
+INITIAL_STATE = (0.0, 0.0, 0.0, 0.0)
 TERMS = (
     'spring −k_1·(x, y) − k_3·(x³, y³) on the rotor',
-    'linear viscous damping −c·(ẋ, ẏ) on the rotor',
+    'linear viscous damping −c·(ẋ, ẏ)',
     'harmonic force F·cos(ωt) in x',
 )
 PARAMETERS = (
@@ -47,13 +56,12 @@ RANGES = {
 }
 
 
-def ball_load(c, s, x, y, vx, vy, t, p):
-    """Radial load of one ball at (cos θ, sin θ) = (c, s) on the rotor, N."""
-    return 0
-
-
-def rotor_force(x, y, vx, vy, t, p):
-    """Force of the loads and damping on the rotor, (F_x, F_y) in N."""
+def external_force(z, t, p):
+    """Generalised force on each coordinate besides the ball loads (loads, springs, damping, supports), N or N·m."""
+    x = z[0]
+    y = z[1]
+    vx = z[2]
+    vy = z[3]
     speed_rpm = p[0]
     damping = p[2]
     linear_stiffness = p[3]
@@ -62,10 +70,10 @@ def rotor_force(x, y, vx, vy, t, p):
     return -cubic_stiffness*x**3 - damping*vx + forcing_amplitude*ca.cos(math.pi*speed_rpm*t/30) - linear_stiffness*x, -cubic_stiffness*y**3 - damping*vy - linear_stiffness*y
 
 
-def rotor_mass(p):
-    """Rotor mass M_R, kg."""
+def mass(p):
+    """Mass (kg) or transverse inertia (kg·m²) of each coordinate."""
     rotor_mass = p[1]
-    return rotor_mass
+    return rotor_mass, rotor_mass
 
 
 def shaft_speed(p):
@@ -74,11 +82,8 @@ def shaft_speed(p):
     return math.pi*speed_rpm/30
 
 
-def cage_speed(p):
-    """Cage angular speed ω_cage, rad/s."""
-    return 0
-
-
-def build(n_balls: int = DEFAULT_N_BALLS) -> ModelFunctions:
-    """CasADi Functions (rhs, jac, rk4_step, simulator) for n_balls balls."""
-    return ModelFunctions(sys.modules[__name__], n_balls)
+def build(n_balls=None) -> ModelFunctions:
+    """CasADi Functions (rhs, jac, rk4_step, simulator) for the numbers of balls
+    of the bearings (a tuple in the order of BEARINGS; default: DEFAULT_N_BALLS).
+    """
+    return ModelFunctions(sys.modules[__name__], n_balls or DEFAULT_N_BALLS)

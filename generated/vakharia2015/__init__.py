@@ -16,16 +16,26 @@ from .._runtime import ModelFunctions, hertz15
 NAME = 'vakharia2015'
 TITLE = 'Unbalanced rotor on a 6205 ball bearing, paper-literal (Vakharia et al.)'
 REFERENCE = 'Vakharia, Gupta, Kankar: Nonlinear dynamic analysis of ball bearings due to varying number of balls and centrifugal force; Eqs. 1-12, Table 1'
-SPEC_FILE = 'vakharia2015.toml'
+SPEC_FILE = 'modelgen/specs/vakharia2015.toml'
 SPEC_SHA256 = 'ed78013e1b747ed7d98eecc892d8835372cc38c2487da14e078ec195fbc78d4c'
 GENERATOR = {'bearingdyn': '0.1.0', 'sympy': '1.14.0', 'casadi': '3.8.2'}
-DEFAULT_N_BALLS = 6
-N_BALLS_RANGE = (3, 64)
-SIMULATION = {'dt': 1e-05, 'duration': 3.0, 'transient': 1.0, 'x0': 1e-06, 'y0': 1e-06, 'vx0': 0.0, 'vy0': 0.0}
+STATE = ('x', 'y', 'vx', 'vy')
+STATE_UNITS = ('m', 'm', 'm/s', 'm/s')
+BODIES = (
+    # name, motion, coordinates
+    ('rotor', 'planar', ('x', 'y')),
+)
+BEARINGS = (
+    # name, inner, outer, default balls, (fewest, most)
+    ('bearing', 'rotor', 'ground', 6, (3, 17)),
+)
+DEFAULT_N_BALLS = (6,)
+SIMULATION = {'dt': 1e-05, 'duration': 3.0, 'transient': 1.0}
+INITIAL_STATE = (1e-06, 1e-06, 0.0, 0.0)
 TERMS = (
     'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} per ball (paper Eqs. 3–6); cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1)',
     "centrifugal force P_c of paper Eq. 9 (2.26e-11·D_b²·ω_cage·D_m, mm and rpm), subtracted from every ball's load as in Eqs. 7–8: cancels exactly for equally spaced balls",
-    'linear viscous damping −c·(ẋ, ẏ) on the rotor',
+    'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',
     'rotating unbalance P_u·(cos ωt, sin ωt)',
 )
@@ -59,8 +69,34 @@ RANGES = {
 }
 
 
-def ball_load(c, s, x, y, vx, vy, t, p):
-    """Radial load of one ball at (cos θ, sin θ) = (c, s) on the rotor, N."""
+def external_force(z, t, p):
+    """Generalised force on each coordinate besides the ball loads (loads, springs, damping, supports), N or N·m."""
+    vx = z[2]
+    vy = z[3]
+    speed_rpm = p[0]
+    damping = p[3]
+    radial_load = p[5]
+    unbalance_force = p[6]
+    w0 = math.pi*speed_rpm*t/30
+    return -damping*vx + radial_load + unbalance_force*ca.cos(w0), -damping*vy + unbalance_force*ca.sin(w0)
+
+
+def mass(p):
+    """Mass (kg) or transverse inertia (kg·m²) of each coordinate."""
+    rotor_mass = p[1]
+    return rotor_mass, rotor_mass
+
+
+def shaft_speed(p):
+    """Shaft angular speed ω, rad/s."""
+    speed_rpm = p[0]
+    return math.pi*speed_rpm/30
+
+
+def ball_load_bearing(c, s, i, n_balls, z, t, p):
+    """Radial load of ball i (1 … n_balls) of bearing 'bearing' at (cos θ, sin θ) = (c, s) on its inner race, N."""
+    x = z[0]
+    y = z[1]
     speed_rpm = p[0]
     contact_stiffness = p[2]
     radial_clearance = p[4]
@@ -71,36 +107,21 @@ def ball_load(c, s, x, y, vx, vy, t, p):
     return -0.022600000000000002*ball_diameter**2*inner_race_diameter*pitch_diameter*speed_rpm/(inner_race_diameter + outer_race_diameter) + contact_stiffness*hertz15(c*x - radial_clearance + s*y)
 
 
-def rotor_force(x, y, vx, vy, t, p):
-    """Force of the loads and damping on the rotor, (F_x, F_y) in N."""
-    speed_rpm = p[0]
-    damping = p[3]
-    radial_load = p[5]
-    unbalance_force = p[6]
-    w0 = math.pi*speed_rpm*t/30
-    return -damping*vx + radial_load + unbalance_force*ca.cos(w0), -damping*vy + unbalance_force*ca.sin(w0)
-
-
-def rotor_mass(p):
-    """Rotor mass M_R, kg."""
-    rotor_mass = p[1]
-    return rotor_mass
-
-
-def shaft_speed(p):
-    """Shaft angular speed ω, rad/s."""
-    speed_rpm = p[0]
-    return math.pi*speed_rpm/30
-
-
-def cage_speed(p):
-    """Cage angular speed ω_cage, rad/s."""
+def cage_speed_bearing(p):
+    """Cage angular speed ω_cage of bearing 'bearing', rad/s."""
     speed_rpm = p[0]
     inner_race_diameter = p[7]
     outer_race_diameter = p[8]
     return math.pi*inner_race_diameter*speed_rpm/(30*(inner_race_diameter + outer_race_diameter))
 
 
-def build(n_balls: int = DEFAULT_N_BALLS) -> ModelFunctions:
-    """CasADi Functions (rhs, jac, rk4_step, simulator) for n_balls balls."""
-    return ModelFunctions(sys.modules[__name__], n_balls)
+def station_bearing(p):
+    """(state index, ∂X/∂q, ∂Y/∂q) of bearing 'bearing': how its races' relative displacement (X, Y) moves with each coordinate."""
+    return ((0, 1, 0), (1, 0, 1))
+
+
+def build(n_balls=None) -> ModelFunctions:
+    """CasADi Functions (rhs, jac, rk4_step, simulator) for the numbers of balls
+    of the bearings (a tuple in the order of BEARINGS; default: DEFAULT_N_BALLS).
+    """
+    return ModelFunctions(sys.modules[__name__], n_balls or DEFAULT_N_BALLS)

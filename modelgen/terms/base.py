@@ -1,31 +1,51 @@
 """What a force term is: a validated spec entry that returns SymPy force expressions.
 
-A term contributes either to the radial load of every ball (``ball_load``, N, positive when
-the ball pushes the rotor back towards the bearing centre) or directly to the rotor
-(``rotor_force``, (F_x, F_y) in N), or both. A ball load marked ``gated`` acts only while the
-ball is in contact: the gated loads of one ball are summed and clamped at zero, because a
-ball can push the inner race but never pull it.
+A term attaches to a **body** or to a **bearing** (``body = "…"`` / ``bearing = "…"`` in the
+spec; left out when the model has one body or one bearing). It contributes
+
+- ``body_force``: a force (F_x, F_y) in N. On a body it acts at the body's centre; on a
+  bearing it acts between the bearing's races (on the inner body, and the opposite on the
+  outer one), with ``ctx.x, ctx.vx`` … the relative motion of the races;
+- ``ball_load``: the radial load of every rolling element of a bearing (N, positive when
+  the ball pushes the inner race back towards the bearing centre). A ball load marked
+  ``gated`` acts only while the ball is in contact: the gated loads of one ball are summed
+  and clamped at zero, because a ball can push the inner race but never pull it.
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 import sympy as sp
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field
 
 from modelgen.symbols import Context
+
+Owner = Literal["body", "bearing"]
+OWNER_NAME = r"^[a-z][a-z0-9_]{0,23}$"
+"""Names of bodies and bearings: lower case letters, digits and '_' (at most 24)."""
 
 
 class Term(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
+    body: str | None = Field(None, pattern=OWNER_NAME)
+    """The body the term acts on (default: the model's only body)."""
+    bearing: str | None = Field(None, pattern=OWNER_NAME)
+    """The bearing the term belongs to (default: the model's only bearing)."""
+
     needs: ClassVar[tuple[str, ...]] = ()
     """Runtime parameters the term's expressions use."""
+    attaches: ClassVar[tuple[Owner, ...]] = ("body",)
+    """Where the term may act, the default first."""
     gated: ClassVar[bool] = True
     """Whether the ball load acts only while the ball is in contact."""
     summary: ClassVar[str] = ""
     """One line for the model card."""
+
+    def owners(self) -> tuple[Owner, ...]:
+        """Where this term, as configured, acts (a body, a bearing, or both)."""
+        return self.attaches[:1]
 
     def required_parameters(self) -> tuple[str, ...]:
         """Runtime parameters this term, as configured, needs."""
@@ -36,11 +56,11 @@ class Term(BaseModel):
         return self.gated
 
     def ball_load(self, ctx: Context) -> sp.Expr | None:
-        """Radial load of one ball on the rotor (N), in terms of ``ctx.c``, ``ctx.s``."""
+        """Radial load of one ball on the inner race (N), in terms of ``ctx.c``, ``ctx.s``."""
         return None
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr] | None:
-        """External force on the rotor (F_x, F_y) in N."""
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr] | None:
+        """Force (F_x, F_y) in N on the body in scope (or between a bearing's races)."""
         return None
 
     def describe(self) -> str:

@@ -20,7 +20,7 @@ from typing import ClassVar, Literal
 import sympy as sp
 
 from modelgen.symbols import Context
-from modelgen.terms.base import Term
+from modelgen.terms.base import Owner, Term
 
 HARRIS_STEEL_COEFFICIENT = sp.Float("2.26e-11")
 """Harris' coefficient for steel balls, N/(mm^3 · mm · rpm^2); Eq. 9 of the paper uses it."""
@@ -45,6 +45,7 @@ class Centrifugal(Term):
     kind: Literal["centrifugal"] = "centrifugal"
     variant: Literal["paper_eq9", "loaded_zone"]
 
+    attaches: ClassVar[tuple[Owner, ...]] = ("bearing",)
     summary: ClassVar[str] = "centrifugal ball force"
 
     def required_parameters(self) -> tuple[str, ...]:

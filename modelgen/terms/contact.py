@@ -23,7 +23,7 @@ import sympy as sp
 
 from modelgen.hertz import RaceStiffness, combined_stiffness
 from modelgen.symbols import Context
-from modelgen.terms.base import Term
+from modelgen.terms.base import Owner, Term
 from modelgen.terms.contact_damping import (
     DAMPING_PARAMETERS,
     DampingLaw,
@@ -78,6 +78,7 @@ class HertzContact(Term):
     damping: DampingLaw = "none"
 
     needs: ClassVar[tuple[str, ...]] = ("speed_rpm",)
+    attaches: ClassVar[tuple[Owner, ...]] = ("bearing",)
     summary: ClassVar[str] = (
         "Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} "
         "per ball (paper Eqs. 3–6)"

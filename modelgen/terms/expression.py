@@ -7,15 +7,18 @@
     fy = "-k3*y**3"              # N, force on the rotor in y
     ball = "cb*(vx*c + vy*s)"    # N, radial load of every ball, only while it is in contact
 
-``fx``, ``fy`` (rotor force, N) may use the state ``x, y`` (m), ``vx, vy`` (m/s), the time
-``t`` (s), ``omega`` (shaft speed, rad/s), ``pi`` and the model's parameters. ``ball`` (the
-radial load of one ball on the rotor, N, positive pushing it back towards the bearing
-centre) may also use ``c = cos θ_i``, ``s = sin θ_i`` and ``delta``, the contact deflection
-δ_i = x c + y s − γ_0 (m). The ball load is gated: it acts only while δ_i > 0, and it is added
-to the Hertz load before the sum is clamped at zero (a ball never pulls). Parameters that
-are not built-in quantities are declared in the spec with a unit and a range
-(``low``, ``high``). The strings are read by ``modelgen.expressions`` (a whitelist over
-Python's syntax tree); nothing in them is ever executed.
+``fx``, ``fy`` (force on the term's body, N) may use every state name of the model (``x, y,
+vx, vy`` in a one-body model; ``x_rotor, vx_housing`` … with several bodies; m, m/s, rad,
+rad/s), the time ``t`` (s), ``omega`` (shaft speed, rad/s), ``pi`` and the model's
+parameters. ``ball`` (the radial load of one ball of the term's bearing on its inner race,
+N, positive pushing it back towards the bearing centre) may also use ``c = cos θ_i``,
+``s = sin θ_i``, ``theta`` (θ_i, rad), the ball index ``i`` (1 … N_b), ``n_balls`` (N_b) and
+``delta``, the contact deflection δ_i = x c + y s − γ_0 (m) of the races' relative
+displacement. The ball load is gated: it acts only while δ_i > 0, and it is added to the
+Hertz load before the sum is clamped at zero (a ball never pulls). Parameters that are not
+built-in quantities are declared in the spec with a unit and a range (``low``, ``high``).
+The strings are read by ``modelgen.expressions`` (a whitelist over Python's syntax tree);
+nothing in them is ever executed.
 """
 
 from __future__ import annotations
@@ -27,12 +30,14 @@ from pydantic import ValidationInfo, field_validator, model_serializer, model_va
 
 from modelgen.expressions import check_expression, parse_expression
 from modelgen.symbols import STATE_NAMES, Context
-from modelgen.terms.base import Term
+from modelgen.terms.base import Owner, Term
 from modelgen.terms.contact import deflection
 
-ROTOR_SYMBOLS = (*STATE_NAMES, "t", "omega")
-"""Names every force expression may use besides parameters (and ``pi``)."""
-BALL_SYMBOLS = ("c", "s", "delta")
+TIME_SYMBOLS = ("t", "omega")
+"""Names every force expression may use besides the state, parameters (and ``pi``)."""
+ROTOR_SYMBOLS = (*STATE_NAMES, *TIME_SYMBOLS)
+"""The symbols of a one-body model's expressions (besides parameters)."""
+BALL_SYMBOLS = ("c", "s", "delta", "theta", "i", "n_balls")
 """Names only the per-ball expression ``ball`` may use."""
 IMPLIED_PARAMETERS = {"delta": "radial_clearance", "omega": "speed_rpm"}
 """Parameters a symbol is computed from."""
@@ -74,28 +79,34 @@ class ExpressionTerm(Term):
         """Leave out the expressions not given, so a dump is valid TOML (no None)."""
         return {k: v for k, v in handler(self).items() if v is not None}
 
+    def owners(self) -> tuple[Owner, ...]:
+        return ((("body",) if self.fx is not None or self.fy is not None else ())
+                + (("bearing",) if self.ball is not None else ()))
+
     def expressions(self) -> dict[str, str]:
         """The given expression strings by field name."""
         return {k: v for k, v in (("fx", self.fx), ("fy", self.fy), ("ball", self.ball))
                 if v is not None}
 
-    def names(self) -> dict[str, frozenset[str]]:
-        """Names each expression uses that must be parameters (not symbols)."""
-        symbols = {*ROTOR_SYMBOLS, *BALL_SYMBOLS}
+    def names(self, state: tuple[str, ...] = STATE_NAMES) -> dict[str, frozenset[str]]:
+        """Names each expression uses that must be parameters (not symbols of a model with
+        the state names ``state``)."""
+        symbols = {*state, *TIME_SYMBOLS, *BALL_SYMBOLS}
         return {k: check_expression(v) - symbols for k, v in self.expressions().items()}
 
-    def required_parameters(self) -> tuple[str, ...]:
+    def required_parameters(self, state: tuple[str, ...] = STATE_NAMES) -> tuple[str, ...]:
         used: set[str] = set().union(*(check_expression(v) for v in self.expressions().values()))
         implied = {IMPLIED_PARAMETERS[n] for n in used if n in IMPLIED_PARAMETERS}
-        symbols = {*ROTOR_SYMBOLS, *BALL_SYMBOLS}
+        symbols = {*state, *TIME_SYMBOLS, *BALL_SYMBOLS}
         return tuple(sorted((used - symbols) | implied))
 
     def _symbols(self, ctx: Context, ball: bool) -> dict[str, sp.Expr]:
-        table: dict[str, sp.Expr] = {n: getattr(ctx, n) for n in (*STATE_NAMES, "t")}
-        table["omega"] = ctx.omega
+        table: dict[str, sp.Expr] = dict(ctx.named)
+        table.update(t=ctx.t, omega=ctx.omega)
         if ball:
-            table.update(c=ctx.c, s=ctx.s)
-            if "radial_clearance" in ctx.params:
+            table.update(c=ctx.c, s=ctx.s, theta=sp.atan2(ctx.s, ctx.c), i=ctx.i,
+                         n_balls=ctx.n_balls)
+            if ctx.has("radial_clearance"):
                 table["delta"] = deflection(ctx)
         table.update(ctx.params)
         return table
@@ -107,7 +118,7 @@ class ExpressionTerm(Term):
             return sp.Integer(0)
         return parse_expression(text, self._symbols(ctx, ball=field == "ball"))
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr] | None:
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr] | None:
         if self.fx is None and self.fy is None:
             return None
         return self.parse("fx", ctx), self.parse("fy", ctx)

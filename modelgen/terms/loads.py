@@ -17,7 +17,7 @@ class RadialLoad(Term):
     needs: ClassVar[tuple[str, ...]] = ("radial_load",)
     summary: ClassVar[str] = "constant radial load P_r in +x"
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         return (ctx.p("radial_load"), sp.Integer(0))
 
 
@@ -27,7 +27,7 @@ class Unbalance(Term):
     needs: ClassVar[tuple[str, ...]] = ("unbalance_force", "speed_rpm")
     summary: ClassVar[str] = "rotating unbalance P_u·(cos ωt, sin ωt)"
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         p_u, wt = ctx.p("unbalance_force"), ctx.omega * ctx.t
         return (p_u * sp.cos(wt), p_u * sp.sin(wt))
 
@@ -40,5 +40,5 @@ class HarmonicForce(Term):
     needs: ClassVar[tuple[str, ...]] = ("forcing_amplitude", "speed_rpm")
     summary: ClassVar[str] = "harmonic force F·cos(ωt) in x"
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         return (ctx.p("forcing_amplitude") * sp.cos(ctx.omega * ctx.t), sp.Integer(0))

@@ -21,6 +21,6 @@ class CubicSpring(Term):
     needs: ClassVar[tuple[str, ...]] = ("linear_stiffness", "cubic_stiffness")
     summary: ClassVar[str] = "spring −k_1·(x, y) − k_3·(x³, y³) on the rotor"
 
-    def rotor_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
+    def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         k1, k3 = ctx.p("linear_stiffness"), ctx.p("cubic_stiffness")
         return (-k1 * ctx.x - k3 * ctx.x**3, -k1 * ctx.y - k3 * ctx.y**3)
