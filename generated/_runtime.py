@@ -8,6 +8,7 @@ import math
 
 import casadi as ca
 
+
 def hertz15(d):
     """max(0, d)^(3/2) written as d·sqrt(|d|) behind a switch (a select, no branch in C).
 
@@ -43,7 +44,7 @@ class ModelFunctions:
         self.structure = tuple(int(n) for n in structure)
         self.bearings = [(row[0], n, getattr(model, f"ball_load_{row[0]}"),
                           getattr(model, f"cage_speed_{row[0]}"),
-                          getattr(model, f"station_{row[0]}"))
+                          getattr(model, f"station_map_{row[0]}"))
                          for row, n in zip(model.BEARINGS, self.structure, strict=True)]
         n_state, n_par = len(model.STATE), len(model.PARAMETERS)
         t, h = ca.SX.sym("t"), ca.SX.sym("h")

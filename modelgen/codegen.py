@@ -119,7 +119,7 @@ def _function_source(name: str, args: str, doc: str, exprs: list[sp.Expr],
     for sym, rhs in replacements:
         lines.append(f"    {sym} = {printer.doprint(rhs)}")
     body = [printer.doprint(e) for e in reduced]
-    ret = ", ".join(body) if returns_tuple else body[0]
+    ret = (", ".join(body) + ("," if len(body) == 1 else "")) if returns_tuple else body[0]
     lines.append(f"    return {ret}")
     return "\n".join(lines) + "\n"
 
@@ -233,12 +233,12 @@ def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
 
 
 def _station_source(name: str, rows, ctx: Context) -> str:
-    """``station_<name>(p)``: (state index, ∂X/∂q, ∂Y/∂q) of the bearing's relative
+    """``station_map_<name>(p)``: (state index, ∂X/∂q, ∂Y/∂q) of the bearing's relative
     displacement; constants are printed as integers (the runtime then adds or subtracts the
     ball forces without a multiplication)."""
     printer = CasadiPrinter()
     used = set().union(*(sp.sympify(e).free_symbols for _, ax, ay in rows for e in (ax, ay)))
-    lines = [f"def station_{name}(p):",
+    lines = [f"def station_map_{name}(p):",
              f'    """(state index, ∂X/∂q, ∂Y/∂q) of bearing \'{name}\': how its races\' '
              'relative displacement (X, Y) moves with each coordinate."""']
     for index, (pname, sym) in enumerate(ctx.params.items()):

@@ -74,6 +74,18 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity("diametral_clearance", "m", -2.0e-3, 2.0e-3, r"P_d",
                  "diametral clearance, total free radial play (clearance = diametral; "
                  "negative: preload)"),
+        Quantity("housing_mass", "kg", 0.0, 1.0e5, r"M_H", "mass of the housing body",
+                 low_inclusive=False),
+        Quantity("housing_stiffness", "N/m", 0.0, 1.0e13, r"k_H",
+                 "stiffness of the housing's support to ground (each direction)"),
+        Quantity("housing_damping", "N*s/m", 0.0, 1.0e7, r"c_H",
+                 "damping of the housing's support to ground (each direction)"),
+        Quantity("rotor_inertia", "kg*m^2", 0.0, 1.0e5, r"J_R",
+                 "transverse moment of inertia of the rotor about its centre of mass",
+                 low_inclusive=False),
+        Quantity("station", "m", -100.0, 100.0, r"a",
+                 "axial position of a bearing on its tilting inner body, from the body's centre "
+                 "(station_<bearing>)"),
         Quantity("hunt_crossley_damping", "s/m", 0.0, 10.0, r"\alpha",
                  "Hunt-Crossley damping factor of the ball contacts (damping = hunt_crossley): "
                  "restitution e ≈ 1 − α v at impact speed v"),
@@ -82,11 +94,11 @@ QUANTITIES: dict[str, Quantity] = {
 
 TAKEN_NAMES = frozenset({
     # generated code: modules and helpers its functions use, their parameter vector
-    "ca", "math", "sys", "p", "hertz15", "race_stiffness", "inner_race_load",
+    "ca", "math", "sys", "p", "z", "hertz15", "race_stiffness", "inner_race_load",
     # attributes of result files besides the parameters (analysis.simulate.run_attrs)
     "model", "spec_sha256", "n_balls", "bearingdyn_version", "generator", "casadi_version",
     "method", "dt", "save_every", "duration", "transient", "x0", "y0", "vx0", "vy0", "rtol",
-    "atol", "shaft_hz", "cage_hz", "vc_hz",
+    "atol", "shaft_hz", "cage_hz", "vc_hz", "spec_file", "state_names",
 })
 """Names that are not quantities but already mean something where parameter names go (the
 generated code, result-file attributes): a user-declared parameter cannot take them."""

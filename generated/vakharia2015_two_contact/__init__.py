@@ -723,7 +723,7 @@ def cage_speed_bearing(p):
     return math.pi*inner_race_diameter*speed_rpm/(30*(inner_race_diameter + outer_race_diameter))
 
 
-def station_bearing(p):
+def station_map_bearing(p):
     """(state index, ∂X/∂q, ∂Y/∂q) of bearing 'bearing': how its races' relative displacement (X, Y) moves with each coordinate."""
     return ((0, 1, 0), (1, 0, 1))
 
