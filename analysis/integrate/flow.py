@@ -163,7 +163,8 @@ def evaluate(flow: ca.Function, z0, t0: float, p) -> tuple[np.ndarray, np.ndarra
 
 
 @cache
-def orbit_states(model: Model, n_balls: tuple[int, ...], period: Period, n_steps: int) -> ca.Function:
+def orbit_states(model: Model, n_balls: tuple[int, ...], period: Period,
+                 n_steps: int) -> ca.Function:
     """``orbit(z0, t0, p) -> Z`` (n × n_steps): the states after each RK4 step of one period."""
     advance, p = _advance(model, n_balls)
     n = model.n_state
