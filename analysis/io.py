@@ -64,9 +64,13 @@ def open_result(path: str | Path) -> xr.Dataset:
 
 
 def load_dataset(path: str | Path) -> xr.Dataset:
-    """Read a simulation run written by bearingdyn, or raise ``InputError`` saying why not."""
+    """Read a simulation run of any model written by bearingdyn, or raise ``InputError``
+    saying why not: it must have ``t`` and every state variable its ``state_names`` attr
+    names (``x``, ``y``, ``vx``, ``vy`` for files written before that attr)."""
+    from analysis.signal import run_state_names
+
     data = open_result(path)
-    missing = [v for v in ("x", "y", "vx", "vy") if v not in data]
+    missing = [v for v in run_state_names(data) if v not in data]
     if "t" not in data.coords or missing:
         raise InputError(f"result file: '{path}' is not a bearingdyn run "
                          f"(missing {', '.join(missing) or 't'})")

@@ -1,9 +1,17 @@
 """Amplitude spectra of simulated responses and their labelled peaks.
 
-A simulation result is an ``xarray.Dataset`` on a uniform time coordinate ``t`` (s) with the
-displacements ``x``, ``y`` (m) and velocities ``vx``, ``vy`` (m/s); its attrs carry the shaft
-frequency ``shaft_hz`` (X) and the varying-compliance frequency ``vc_hz`` (VC), both in Hz.
-Spectral peaks are named as combinations m·X + n·VC ("X", "VC-X", "2VC+X", ...).
+A simulation result is an ``xarray.Dataset`` on a uniform time coordinate ``t`` (s) with one
+variable per state (``x``, ``y`` (m), ``vx``, ``vy`` (m/s) for the paper's rotor; the names
+are in the ``state_names`` attr); its attrs carry the shaft frequency ``shaft_hz`` (X) and
+each bearing's varying-compliance frequency (VC), in Hz: ``vc_hz`` for a model with one
+bearing, ``vc_hz_<bearing>`` for several.
+
+Spectral peaks are named as combinations m·X + n·VC: "X", "VC-X", "2VC+X" for one bearing;
+"VC[left]", "2VC[right]-X" for several, each combination over one bearing's VC (mixtures
+of two bearings' VC are not tried). A model without bearings has no VC term: peaks are
+named by X only; a model that has no shaft either (``shaft_hz`` 0) but is forced at the
+period held by a parameter ``forcing_period`` (s) is labelled with F = 1/forcing_period in
+place of X ("F", "2F").
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.signal import displacement_names, vc_frequencies
 
 _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
 
@@ -79,47 +88,71 @@ def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> 
     )
 
 
-def _combination_label(m: int, n: int) -> str:
-    shaft = "X" if abs(m) == 1 else f"{abs(m)}X"
+def _combination_label(m: int, n: int, bearing: str = "", base: str = "X") -> str:
+    shaft = base if abs(m) == 1 else f"{abs(m)}{base}"
     if n == 0:
         return shaft
-    vc = "VC" if n == 1 else f"{n}VC"
+    symbol = f"VC[{bearing}]" if bearing else "VC"
+    vc = symbol if n == 1 else f"{n}{symbol}"
     if m == 0:
         return vc
     return f"{vc}{'+' if m > 0 else '-'}{shaft}"
 
 
-def label_frequency(f_hz: float, shaft_hz: float, vc_hz: float, tol_hz: float,
-                    max_shaft_order: int = 4,
+def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
+                   tol_hz: float, max_shaft_order: int = 4, max_vc_order: int = 3,
+                   base: str = "X") -> tuple[str, int, int, str | None] | None:
+    """Name ``f_hz`` (Hz) as m·X + n·VC of one bearing, within ``tol_hz`` (Hz).
+
+    ``vc_hz`` is the VC frequency of a model's only bearing (Hz), or a mapping bearing name
+    -> VC frequency (Hz) for several (labels ``VC[name]``; the key ``""`` means the only
+    bearing, labelled ``VC``; an empty mapping or 0: no VC term). Candidates have integers
+    |m| <= ``max_shaft_order``, 0 <= n <= ``max_vc_order``, (m, n) not both zero and a
+    positive combination frequency (so no "-X"). Among the candidates within the tolerance
+    the lowest order |m| + n wins, ties go to the smallest distance |f - f_mn|, then to the
+    first bearing. ``base`` names the shaft frequency in labels (``X``, or ``F`` for a
+    forcing period). Returns ``(label, m, n, bearing)`` (bearing None for a pure shaft
+    harmonic or the only bearing) or None when no candidate is within the tolerance.
+    """
+    vcs = vc_hz if isinstance(vc_hz, dict) else ({"": float(vc_hz)} if vc_hz else {})
+    vcs = {name: float(f) for name, f in vcs.items() if f > 0}
+    best: tuple[tuple, str, int, int, str | None] | None = None
+    for rank, (bearing, vc) in enumerate(vcs.items() or [("", 0.0)]):
+        for n in range(max_vc_order + 1 if vc > 0 else 1):
+            for m in range(-max_shaft_order, max_shaft_order + 1):
+                combination = m * shaft_hz + n * vc
+                if combination <= 0:
+                    continue
+                distance = abs(f_hz - combination)
+                if distance > tol_hz:
+                    continue
+                key = (abs(m) + n, distance, n, abs(m), rank if n else 0)
+                if best is None or key < best[0]:
+                    best = (key, _combination_label(m, n, bearing, base), m, n,
+                            (bearing or None) if n else None)
+    return None if best is None else best[1:]
+
+
+def label_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
+                    tol_hz: float, max_shaft_order: int = 4,
                     max_vc_order: int = 3) -> tuple[str, int, int] | None:
     """Name ``f_hz`` (Hz) as the combination m·X + n·VC within ``tol_hz`` (Hz).
 
-    Candidates have integers |m| <= ``max_shaft_order``, 0 <= n <= ``max_vc_order``, (m, n) not
-    both zero and a positive combination frequency (so no "-X"). Among the candidates within
-    the tolerance the lowest order |m| + n wins, ties go to the smallest distance |f - f_mn|.
-    Returns ``(label, m, n)`` with an ASCII label such as "X", "2X", "VC", "VC-2X", "2VC+X",
-    or None when no candidate is within the tolerance.
+    :func:`name_frequency` without the bearing: returns ``(label, m, n)`` with an ASCII
+    label such as "X", "2X", "VC", "VC-2X", "2VC+X" ("VC[left]-X" for a mapping of several
+    bearings' VC), or None when no candidate is within the tolerance.
     """
-    best: tuple[tuple[int, float, int, int], str, int, int] | None = None
-    for n in range(max_vc_order + 1):
-        for m in range(-max_shaft_order, max_shaft_order + 1):
-            combination = m * shaft_hz + n * vc_hz
-            if combination <= 0:
-                continue
-            distance = abs(f_hz - combination)
-            if distance > tol_hz:
-                continue
-            key = (abs(m) + n, distance, n, abs(m))
-            if best is None or key < best[0]:
-                best = (key, _combination_label(m, n), m, n)
-    return None if best is None else best[1:]
+    named = name_frequency(f_hz, shaft_hz, vc_hz, tol_hz, max_shaft_order, max_vc_order)
+    return None if named is None else named[:3]
 
 
 @dataclass(frozen=True)
 class Peak:
-    """A spectral line: ``direction`` is the variable ("x" or "y"), ``frequency_hz`` in Hz,
-    ``amplitude`` in the variable's unit (m for x, y), and its combination label m·X + n·VC
-    (``shaft_order`` m, ``vc_order`` n; all None when unlabelled)."""
+    """A spectral line: ``direction`` is the variable ("x", "y", "x_rotor", …),
+    ``frequency_hz`` in Hz, ``amplitude`` in the variable's unit (m for x, y), and its
+    combination label m·X + n·VC (``shaft_order`` m, ``vc_order`` n; all None when
+    unlabelled); ``bearing`` names the bearing whose VC the label uses, when the model has
+    several (else None)."""
 
     direction: str
     frequency_hz: float
@@ -127,14 +160,33 @@ class Peak:
     label: str | None
     shaft_order: int | None
     vc_order: int | None
+    bearing: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """The fields as a dict (``bearing`` only when set)."""
+        out = dataclasses.asdict(self)
+        if out["bearing"] is None:
+            del out["bearing"]
+        return out
 
 
-def find_peaks(ds: xr.Dataset, var: str = "x", max_peaks: int = 8,
+def label_frequencies(attrs: dict) -> tuple[float, dict[str, float], str]:
+    """What peaks of a run are named by: (base frequency Hz, VC per bearing Hz, base
+    symbol). The base is the shaft frequency X, or F = 1/``forcing_period`` for a model
+    without a shaft forced at a parameter's period."""
+    if "shaft_hz" not in attrs:
+        raise InputError("shaft_hz: missing from the dataset attrs")
+    shaft = float(attrs["shaft_hz"])
+    vcs = vc_frequencies(attrs)
+    if not shaft > 0 and float(attrs.get("forcing_period", 0.0)) > 0:
+        return 1.0 / float(attrs["forcing_period"]), vcs, "F"
+    return shaft, vcs, "X"
+
+
+def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
                min_relative_height: float = 0.02) -> list[Peak]:
-    """The ``max_peaks`` largest peaks of the Hann amplitude spectrum of ``ds[var]``.
+    """The ``max_peaks`` largest peaks of the Hann amplitude spectrum of ``ds[var]`` (any
+    state variable; default: the run's first displacement, ``x`` or ``x_rotor``).
 
     Peaks come from ``scipy.signal.find_peaks`` on the spectrum without its DC bin, with height
     >= ``min_relative_height`` × the largest amplitude and a prominence of at least half that
@@ -144,17 +196,17 @@ def find_peaks(ds: xr.Dataset, var: str = "x", max_peaks: int = 8,
     k-1, k, k+1; bias below 0.02 bin for Hann). The amplitude (unit of the variable) is the
     window-corrected magnitude of the windowed record's Fourier transform evaluated at that
     refined frequency, so it is free of the window's scalloping loss between bins.
-    Peaks are labelled with :func:`label_frequency` (``shaft_hz`` and ``vc_hz`` from
-    ``ds.attrs``, tolerance 1.5 bins) and returned by descending amplitude.
+    Peaks are labelled with :func:`name_frequency` (``shaft_hz`` and each bearing's VC from
+    ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins) and returned by
+    descending amplitude.
     """
+    var = displacement_names(ds)[0] if var is None else var
     if isinstance(max_peaks, bool) or not isinstance(max_peaks, (int, np.integer)) \
             or max_peaks < 1:
         raise InputError(f"max_peaks: must be an integer >= 1, got {max_peaks!r}")
     if not 0 < min_relative_height <= 1:
         raise InputError(f"min_relative_height: must be in (0, 1], got {min_relative_height!r}")
-    for key in ("shaft_hz", "vc_hz"):
-        if key not in ds.attrs:
-            raise InputError(f"{key}: missing from the dataset attrs")
+    base_hz, vcs, base = label_frequencies(ds.attrs)
     spectrum = amplitude_spectrum(ds, var)
     amplitude = spectrum.values
     df = float(spectrum["frequency"].values[1])
@@ -182,16 +234,14 @@ def find_peaks(ds: xr.Dataset, var: str = "x", max_peaks: int = 8,
     refined = _amplitude_at(ds, var, frequency)
 
     order = np.argsort(-refined, kind="stable")[:max_peaks]
-    shaft_hz = float(ds.attrs["shaft_hz"])
-    vc_hz = float(ds.attrs["vc_hz"])
     peaks = []
     for i in order:
-        named = label_frequency(float(frequency[i]), shaft_hz, vc_hz,
-                                tol_hz=_LABEL_TOLERANCE_BINS * df)
-        label, m, n = named if named is not None else (None, None, None)
+        named = name_frequency(float(frequency[i]), base_hz, vcs,
+                               tol_hz=_LABEL_TOLERANCE_BINS * df, base=base)
+        label, m, n, bearing = named if named is not None else (None, None, None, None)
         peaks.append(Peak(direction=var, frequency_hz=float(frequency[i]),
                           amplitude=float(refined[i]), label=label, shaft_order=m,
-                          vc_order=n))
+                          vc_order=n, bearing=bearing))
     return peaks
 
 
@@ -207,14 +257,18 @@ def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray
                      for f in frequency])
 
 
-def peak_table(ds: xr.Dataset, directions: tuple[str, ...] = ("x", "y"),
+def peak_table(ds: xr.Dataset, directions: tuple[str, ...] | None = None,
                **kwargs: Any) -> list[Peak]:
-    """:func:`find_peaks` for each variable in ``directions``, concatenated in that order."""
+    """:func:`find_peaks` for each variable in ``directions`` (default: the first body's
+    displacements, ``x`` and ``y`` for the paper's rotor), concatenated in that order."""
+    directions = displacement_names(ds) if directions is None else directions
     return [peak for var in directions for peak in find_peaks(ds, var, **kwargs)]
 
 
-def major_peak(ds: xr.Dataset, var: str = "x") -> Peak:
-    """The largest peak of the amplitude spectrum of ``ds[var]``."""
+def major_peak(ds: xr.Dataset, var: str | None = None) -> Peak:
+    """The largest peak of the amplitude spectrum of ``ds[var]`` (default: as
+    :func:`find_peaks`)."""
+    var = displacement_names(ds)[0] if var is None else var
     peaks = find_peaks(ds, var, max_peaks=1)
     if not peaks:
         raise InputError(f"{var}: the spectrum has no peak (constant signal?)")
