@@ -1,8 +1,10 @@
 """Bifurcation diagrams and stability charts over parameter grids.
 
-* ``bifurcation_diagram``: one parameter (speed, clearance, load, unbalance, damping or
-  n_balls) on a grid; at each value the motion is simulated, the transient dropped and
-  ``samples`` Poincaré points kept. With ``follow=True`` each point starts from the end state
+* ``bifurcation_diagram``: one runtime parameter of the model (speed, clearance, load,
+  unbalance, damping, …) or its structure (``n_balls`` for a model with one bearing,
+  ``n_balls[left]`` for the bearing ``left`` of a model with several) on a grid; at each
+  value the motion is simulated, the transient dropped and ``samples`` Poincaré points of
+  every state variable kept. With ``follow=True`` each point starts from the end state
   of the previous one, up and/or down the grid (hysteresis shows as different branches).
 * ``stability_chart``: a 2-D grid; each point classified (``analysis.stability.classify``) as
   periodic-n, quasi-periodic or chaotic, with its largest Lyapunov exponent and amplitude.
@@ -18,7 +20,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -28,8 +30,9 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.simulate import run_attrs, simulate, state_at
 from analysis.io import save_dataset
-from analysis.model import load_model
-from analysis.signal.poincare import poincare_section
+from analysis.model import BallCounts, load_model
+from analysis.signal import displacement_names
+from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
 from analysis.sweeps.store import PointStore
 
@@ -38,45 +41,67 @@ NATURE_CODES = {"periodic-1": 1, "periodic-2": 2, "periodic-n": 3, "quasi-period
 """Integer codes of the chart classes (periodic-n: n >= 3)."""
 
 
+STRUCTURE_AXIS = "n_balls"
+"""An axis over the number of balls: ``n_balls`` (the model's only bearing) or
+``n_balls[<bearing>]``."""
+
+
+def axis_bearing(name: str) -> str | None:
+    """The bearing a structure axis names: ``""`` for ``n_balls``, ``"left"`` for
+    ``n_balls[left]``, None for a parameter axis."""
+    if name == STRUCTURE_AXIS:
+        return ""
+    if name.startswith(STRUCTURE_AXIS + "[") and name.endswith("]") and len(name) > 9:
+        return name[len(STRUCTURE_AXIS) + 1:-1]
+    return None
+
+
 @dataclass(frozen=True)
 class Axis:
-    """A grid axis: ``name`` (a runtime parameter, or ``n_balls``) and its values."""
+    """A grid axis: ``name`` (a runtime parameter, ``n_balls`` or ``n_balls[bearing]``) and
+    its values."""
 
     name: str
     values: tuple[float, ...]
 
     @classmethod
     def parse(cls, text: str) -> Axis:
-        """``speed_rpm:1000:10000:200`` (start:stop:count) or ``n_balls:5:12`` (integers)."""
+        """``speed_rpm:1000:10000:200`` (start:stop:count), or ``n_balls:5:12`` /
+        ``n_balls[left]:5:12`` (every whole number from low to high)."""
         parts = text.split(":")
         try:
-            if parts[0] == "n_balls" and len(parts) == 3:
+            if axis_bearing(parts[0]) is not None and len(parts) == 3:
                 low, high = int(parts[1]), int(parts[2])
-                return cls("n_balls", tuple(float(n) for n in range(low, high + 1)))
+                if high < low:
+                    raise ValueError
+                return cls(parts[0], tuple(float(n) for n in range(low, high + 1)))
             name, start, stop, num = parts[0], float(parts[1]), float(parts[2]), int(parts[3])
+            if len(parts) != 4 or not name:
+                raise ValueError
         except (ValueError, IndexError):
-            raise InputError(f"axis: expected name:start:stop:count (or n_balls:low:high), "
-                             f"got {text!r}") from None
+            raise InputError(f"axis: expected name:start:stop:count (or n_balls:low:high, "
+                             f"n_balls[bearing]:low:high), got {text!r}") from None
         return cls.linear(name, start, stop, num)
 
     @classmethod
     def linear(cls, name: str, start: float, stop: float, num: int) -> Axis:
         """``num`` equally spaced values from ``start`` to ``stop`` (whole, distinct numbers
-        for ``n_balls``)."""
+        for ``n_balls`` and ``n_balls[bearing]``)."""
         if num < 1:
             raise InputError(f"axis {name}: count must be >= 1, got {num}")
         values = np.linspace(start, stop, num)
-        if name == "n_balls":
+        if axis_bearing(name) is not None:
             values = np.unique(np.round(values))
         return cls(name, tuple(values.tolist()))
 
 
 @dataclass(frozen=True)
 class Setting:
-    """What every point shares: model, base parameters, times (s), section."""
+    """What every point shares: model (name, spec path or generated folder), balls per
+    bearing, base parameters, times (s), section (see ``analysis.signal.poincare``)."""
 
     model: str
-    n_balls: int | None
+    n_balls: BallCounts
     values: dict[str, float]
     transient: float
     samples: int
@@ -84,40 +109,74 @@ class Setting:
     dt: float = 1e-5
     lyapunov: bool = True
 
-    def at(self, **coords: float) -> tuple[int | None, dict[str, float]]:
+    def at(self, **coords: float) -> tuple[BallCounts, dict[str, float]]:
         """(n_balls, parameter values) at a grid point."""
         n_balls, values = self.n_balls, dict(self.values)
         for name, value in coords.items():
-            if name == "n_balls":
+            bearing = axis_bearing(name)
+            if bearing == "":
                 n_balls = round(value)
+            elif bearing is not None:  # merged into the base counts given by name
+                base = dict(n_balls) if isinstance(n_balls, Mapping) else {}
+                n_balls = {**base, bearing: round(value)}
             else:
                 values[name] = value
         return n_balls, values
 
 
-def _record(setting: Setting, n_balls: int | None, values: dict[str, float],
+def check_grid(setting: Setting, *axes: Axis) -> None:
+    """Raise ``InputError`` before anything runs when an axis or the base setting does not
+    fit the model (an unknown parameter or bearing, balls out of range, a bad section)."""
+    model = load_model(setting.model)
+    model.parameters(setting.values)
+    model.structure(setting.n_balls)
+    for axis in axes:
+        bearing = axis_bearing(axis.name)
+        if bearing == "" and len(model.bearings) > 1:
+            raise InputError(f"axis {axis.name}: model '{model.name}' has bearings "
+                             f"{', '.join(model.bearing_names)}; name one, e.g. "
+                             f"n_balls[{model.bearing_names[0]}]")
+        if bearing and bearing not in model.bearing_names:
+            raise InputError(f"axis {axis.name}: model '{model.name}' has no bearing "
+                             f"'{bearing}'; bearings: {', '.join(model.bearing_names) or 'none'}")
+        for value in (axis.values[0], axis.values[-1]):
+            n_balls, values = setting.at(**{axis.name: value})
+            structure = model.structure(n_balls)
+            period_of({**model.parameters(values),
+                       **model.frequencies(structure, model.parameters(values)).as_dict()},
+                      setting.section)
+
+
+def _record(setting: Setting, n_balls: BallCounts, values: dict[str, float],
             initial_state=None) -> xr.Dataset:
     """Simulate transient + ``samples`` section periods."""
     model = load_model(setting.model)
-    freqs = model.frequencies(model.check_n_balls(n_balls), model.parameters(values))
-    section_hz = {"shaft": freqs.shaft_hz, "cage": freqs.cage_hz, "vc": freqs.vc_hz}[
-        setting.section]
-    if not section_hz > 0:
-        raise InputError(f"section: the {setting.section} frequency is zero here")
-    duration = setting.transient + (setting.samples + 0.5) / section_hz
+    full = model.parameters(values)
+    freqs = model.frequencies(model.structure(n_balls), full)
+    try:
+        period = period_of({**full, **freqs.as_dict()}, setting.section)
+    except InputError as exc:
+        raise InputError(f"section {setting.section}: no period here ({exc})") from None
+    duration = setting.transient + (setting.samples + 0.5) * period
     return simulate(model, n_balls, duration=duration, transient=setting.transient,
                     dt=setting.dt, initial_state=initial_state, **values)
 
 
+def _amplitudes(ds: xr.Dataset) -> dict[str, float]:
+    """Half peak-to-peak of the first body's displacements: ``amplitude_x``, … (unit of
+    the variable)."""
+    return {f"amplitude_{v}": float(np.ptp(ds[v].values)) / 2 for v in displacement_names(ds)}
+
+
 def diagram_point(setting: Setting, n_balls, values, initial_state=None) -> dict:
-    """Poincaré samples (x, y, vx, vy), end state and amplitudes at one grid value."""
+    """Poincaré samples of every state variable, end state and amplitudes at one grid
+    value."""
     ds = _record(setting, n_balls, values, initial_state)
     pts = poincare_section(ds, setting.section)
     k = setting.samples
-    out = {v: pts[v].values[:k] for v in ("x", "y", "vx", "vy")}
+    out = {v: pts[v].values[:k] for v in ds.attrs["state_names"].split()}
     out["final"] = state_at(ds, -1)
-    out["amplitude_x"] = float(np.ptp(ds.x.values)) / 2
-    out["amplitude_y"] = float(np.ptp(ds.y.values)) / 2
+    out.update(_amplitudes(ds))
     return out
 
 
@@ -141,8 +200,7 @@ def chart_point(setting: Setting, n_balls, values) -> dict:
     ci = float(exponents.ci95[0]) if exponents is not None else np.nan
     return {"nature": nature, "nature_code": code, "period": result.period or 0,
             "lyapunov": lam, "ci95": ci, "graph_ratio": result.graph_ratio or np.nan,
-            "amplitude_x": float(np.ptp(ds.x.values)) / 2,
-            "amplitude_y": float(np.ptp(ds.y.values)) / 2}
+            **_amplitudes(ds)}
 
 
 # --- bifurcation diagrams -----------------------------------------------------------------
@@ -195,8 +253,10 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
     if direction not in ("up", "down", "both"):
         raise InputError(f"direction: must be up, down or both, got {direction!r}")
     directions = ["up", "down"] if direction == "both" else [direction]
+    check_grid(setting, axis)
     definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
-                  "directions": directions, "follow": follow}
+                  "structure": _structure(setting), "directions": directions,
+                  "follow": follow}
     store = PointStore(output, definition)
     chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
     total = len(chains) * len(axis.values)
@@ -214,11 +274,27 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
     return ds
 
 
+def _structure(setting: Setting) -> list[int]:
+    """The base balls per bearing of a sweep (part of its stored definition)."""
+    return list(load_model(setting.model).structure(setting.n_balls))
+
+
+def _axis_coord(axis: Axis) -> tuple[str, list[float], dict[str, str]]:
+    bearing = axis_bearing(axis.name)
+    attrs = {"long_name": f"balls in bearing {bearing}" if bearing else
+             "balls" if bearing == "" else axis.name}
+    return (axis.name, list(axis.values), attrs)
+
+
 def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
     n = len(axis.values)
+    model = load_model(setting.model)
+    units = model.state_units
+    first = store.load(f"{directions[0]}-{0:05d}")
     arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
-              for v in ("x", "y", "vx", "vy")}
-    amp = {v: np.full((len(directions), n), np.nan) for v in ("amplitude_x", "amplitude_y")}
+              for v in model.state_names}
+    amp = {v: np.full((len(directions), n), np.nan) for v in first
+           if v.startswith("amplitude_")}
     for d, direction in enumerate(directions):
         for i in range(n):
             point = store.load(f"{direction}-{i:05d}")
@@ -226,14 +302,14 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
                 arrays[v][d, i, :len(point[v])] = point[v]
             for v in amp:
                 amp[v][d, i] = point[v]
-    units = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
     data = {v: (("direction", axis.name, "k"), arrays[v],
                 {"units": units[v], "long_name": f"{v} on the {setting.section} section"})
             for v in arrays}
-    data.update({v: (("direction", axis.name), amp[v], {"units": "m"}) for v in amp})
+    data.update({v: (("direction", axis.name), amp[v],
+                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amp})
     attrs = _attrs(setting, "diagram")
     attrs.update(param=axis.name, follow=int(follow))
-    return xr.Dataset(data, coords={"direction": directions, axis.name: list(axis.values),
+    return xr.Dataset(data, coords={"direction": directions, axis.name: _axis_coord(axis),
                                     "k": np.arange(setting.samples)}, attrs=attrs)
 
 
@@ -249,7 +325,9 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                     executor: Executor | None = None,
                     progress: Callable[[int, int], None] | None = None) -> xr.Dataset:
     """Classify every point of the grid y × x; writes and returns the netCDF Dataset."""
-    definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y)}
+    check_grid(setting, x, y)
+    definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
+                  "structure": _structure(setting)}
     store = PointStore(output, definition)
     done = store.done()
     tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
@@ -266,8 +344,9 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
 
 def _assemble_chart(store, setting, x: Axis, y: Axis) -> xr.Dataset:
     shape = (len(y.values), len(x.values))
-    fields = ("nature_code", "period", "lyapunov", "ci95", "amplitude_x", "amplitude_y",
-              "graph_ratio")
+    first = store.load(f"{0:04d}-{0:04d}")
+    fields = ("nature_code", "period", "lyapunov", "ci95",
+              *(f for f in first if f.startswith("amplitude_")), "graph_ratio")
     arrays = {f: np.full(shape, np.nan) for f in fields}
     nature = np.empty(shape, dtype=object)
     for iy in range(shape[0]):
@@ -277,7 +356,10 @@ def _assemble_chart(store, setting, x: Axis, y: Axis) -> xr.Dataset:
                 arrays[f][iy, ix] = point[f]
             nature[iy, ix] = str(point["nature"])
     dims = (y.name, x.name)
-    units = {"lyapunov": "1/s", "ci95": "1/s", "amplitude_x": "m", "amplitude_y": "m"}
+    state_units = load_model(setting.model).state_units
+    units = {"lyapunov": "1/s", "ci95": "1/s",
+             **{f: state_units.get(f[len("amplitude_"):], "m") for f in fields
+                if f.startswith("amplitude_")}}
     data = {f: (dims, arrays[f], {"units": units[f]} if f in units else {}) for f in fields}
     data["nature_code"] = (dims, arrays["nature_code"].astype(int),
                            {"legend": ", ".join(f"{v}: {k}" for k, v in NATURE_CODES.items())})
@@ -285,13 +367,13 @@ def _assemble_chart(store, setting, x: Axis, y: Axis) -> xr.Dataset:
     data["nature"] = (dims, nature)
     attrs = _attrs(setting, "chart")
     attrs.update(x=x.name, y=y.name)
-    return xr.Dataset(data, coords={y.name: list(y.values), x.name: list(x.values)},
+    return xr.Dataset(data, coords={y.name: _axis_coord(y), x.name: _axis_coord(x)},
                       attrs=attrs)
 
 
 def _attrs(setting: Setting, kind: str) -> dict:
     model = load_model(setting.model)
-    n = model.check_n_balls(setting.n_balls)
+    n = model.structure(setting.n_balls)
     attrs = run_attrs(model, n, model.parameters(setting.values))
     attrs.update(kind=kind, transient=setting.transient, samples=setting.samples,
                  section=setting.section, dt=setting.dt, lyapunov=int(setting.lyapunov))
@@ -323,16 +405,34 @@ def _run_with_progress(executor: Executor, fn, tasks, store: PointStore, total: 
         progress(len(store.done()), total)
 
 
+def _axis_heading(ds: xr.Dataset, name: str) -> str:
+    bearing = axis_bearing(name)
+    return f"{name} (balls in bearing {bearing})" if bearing else name
+
+
 def chart_table(ds: xr.Dataset) -> str:
-    """Markdown table of a chart with one column value: the shape of the paper's Table 2."""
+    """Markdown table of a chart: the shape of the paper's Table 2 (a structure axis says
+    its bearing: ``n_balls[left] (balls in bearing left)``; amplitudes of the first body's
+    displacements in µm, or in their own unit when not metres)."""
     xname, yname = ds.attrs["x"], ds.attrs["y"]
-    lines = [f"| {yname} | {xname} | nature | largest Lyapunov exponent (1/s) | "
-             "amplitude x (µm) | amplitude y (µm) |", "|---|---|---|---|---|---|"]
+    amplitudes = [v for v in ds.data_vars if str(v).startswith("amplitude_")]
+
+    def heading(v: str) -> str:
+        unit = ds[v].attrs.get("units", "m")
+        return f"amplitude {v[len('amplitude_'):]} ({'µm' if unit == 'm' else unit})"
+
+    def value(p, v: str) -> str:
+        scale = 1e6 if ds[v].attrs.get("units", "m") == "m" else 1.0
+        return f"{float(p[v]) * scale:.3g}"
+
+    lines = [f"| {_axis_heading(ds, yname)} | {_axis_heading(ds, xname)} | nature | "
+             "largest Lyapunov exponent (1/s) | " + " | ".join(map(heading, amplitudes)) + " |",
+             "|---|---|---|---|" + "---|" * len(amplitudes)]
     for yv in ds[yname].values:
         for xv in ds[xname].values:
             p = ds.sel({yname: yv, xname: xv})
             lam = float(p.lyapunov)
             lam_text = "–" if math.isnan(lam) else f"{lam:.3g} ± {float(p.ci95):.2g}"
             lines.append(f"| {yv:g} | {xv:g} | {p.nature.item()} | {lam_text} | "
-                         f"{float(p.amplitude_x) * 1e6:.3g} | {float(p.amplitude_y) * 1e6:.3g} |")
+                         + " | ".join(value(p, v) for v in amplitudes) + " |")
     return "\n".join(lines) + "\n"
