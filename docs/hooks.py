@@ -19,6 +19,15 @@
   repository (``../tests/test_x.py``): right on GitHub, but not part of the site. Such a link
   is shown as the file's path in code instead (``tests/test_x.py``); a link to a file that
   exists nowhere stays a link, and ``--strict`` fails on it.
+- **Spec reference.** ``<!-- bearingdyn:spec-reference -->`` (in ``docs/spec-reference.md``)
+  becomes the reference of every section and field of a spec, walked from the pydantic
+  schema ``modelgen.spec.Spec`` (field types, defaults, allowed values and ranges, the
+  fields' docstrings), every term class of ``modelgen.terms.TERM_CLASSES`` (where it
+  attaches, the parameters it needs) and the built-in quantities of
+  ``modelgen.quantities.QUANTITIES``: a new field or term is in the site without editing a
+  page, and ``tests/test_spec_guide.py`` fails on a field that has no docstring.
+- **Included files.** ``<!-- bearingdyn:include PATH -->`` (PATH relative to ``docs/``)
+  becomes the file in a code block, so a page shows the example spec as it is.
 - ``javascripts/mathjax.js``: MathJax's configuration for ``pymdownx.arithmatex`` (with
   ``textmacros``, so that the model cards' ``\\text{speed\\_rpm}`` shows an underscore).
 
@@ -32,8 +41,7 @@ import logging
 import re
 import sys
 from pathlib import Path
-
-from mkdocs.structure.files import File
+from typing import Any, Literal, Union, get_args, get_origin
 
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # document this tree, not another installed copy
@@ -46,6 +54,8 @@ MODELS_SECTION = "Model cards"
 OPTIONS_MARKER = re.compile(r"^<!-- bearingdyn:options (\S+) -->[ \t]*$", re.M)
 COMMANDS_MARKER = re.compile(r"^<!-- bearingdyn:commands -->[ \t]*$", re.M)
 SUBMODULES_MARKER = re.compile(r"^<!-- bearingdyn:submodules ([\w.]+) -->[ \t]*$", re.M)
+SPEC_REFERENCE_MARKER = re.compile(r"^<!-- bearingdyn:spec-reference -->[ \t]*$", re.M)
+INCLUDE_MARKER = re.compile(r"^<!-- bearingdyn:include (\S+) -->[ \t]*$", re.M)
 
 MATHJAX_CONFIG = """\
 window.MathJax = {
@@ -155,6 +165,423 @@ def submodules_markdown(package: str) -> str:
     names.sort(key=lambda n: n != "base")
     return "\n".join(f"::: {package}.{name}\n    options:\n      heading_level: 2\n"
                      for name in names)
+
+
+# --------------------------------------------------------------------------- spec reference
+
+FIELD_NOTES: dict[str, str] = {
+    # The fields whose class gives them no docstring (tests/test_spec_guide.py checks that each
+    # key is a field without one: a docstring added in the code replaces the note here).
+    "Spec.model": "What the model is called and where it comes from.",
+    "Spec.bodies": "The rigid bodies and their coordinates (left out: one planar body "
+                   "`rotor` with mass `rotor_mass`).",
+    "Spec.bearings": "The ball bearings between bodies, or between a body and `ground`.",
+    "Spec.simulation": "Default times and initial state of a run (`--duration`, `--dt` … "
+                       "override them).",
+    "Spec.parameters": "Every runtime parameter by name: a built-in quantity (fixed unit "
+                       "and range), a built-in quantity of one bearing or body "
+                       "(`<quantity>_<name>`), or a parameter the spec declares (with "
+                       "`low` and `high`).",
+    "Spec.terms": "The force terms, summed into the equations of motion; each attaches to "
+                  "a body or a bearing.",
+    "ModelInfo.name": "The model's name (lower case, digits, '-'); must equal the spec "
+                      "file's name without `.toml`. The generated module is the name "
+                      "with '-' as '_'.",
+    "ModelInfo.title": "One line for the model card, the generated headers and "
+                       "`bearingdyn models`.",
+    "ModelInfo.reference": "Where the equations come from (paper, book, section).",
+    "ModelInfo.description": "Free text for the model card.",
+    "Body.name": "Name of the body; with several bodies its coordinates are named "
+                 "`<coordinate>_<name>` (`x_rotor`, `vx_housing`).",
+    "Body.support": "A linear spring and damper from the body's centre to ground: "
+                    "`support = { stiffness = \"…\", damping = \"…\" }`.",
+    "Bearing.name": "Name of the bearing: terms name it (`bearing = \"left\"`), its "
+                    "parameters may be given as `<quantity>_<name>`, its number of balls "
+                    "as `--n-balls <name>=N`.",
+    "Bearing.inner": "The body that carries the inner race (a `planar` or `planar_tilt` "
+                     "body).",
+    "Bearing.outer": "The body that holds the outer race, or `ground` (fixed).",
+    "SimulationDefaults.dt": "RK4 step and output spacing, s.",
+    "SimulationDefaults.duration": "Simulated time, s.",
+    "SimulationDefaults.transient": "Initial time left out of the result, s (shorter than "
+                                    "`duration`).",
+    "SimulationDefaults.x0": "Initial x, m (a model with a state `x`; else use `initial`).",
+    "SimulationDefaults.y0": "Initial y, m (a model with a state `y`; else use `initial`).",
+    "SimulationDefaults.vx0": "Initial vx, m/s (a model with a state `vx`).",
+    "SimulationDefaults.vy0": "Initial vy, m/s (a model with a state `vy`).",
+    "Parameter.value": "Default value, in its unit (SI; speeds in rpm).",
+    "Parameter.unit": "The unit: a built-in quantity's own unit (see the table of "
+                      "quantities), or any unit of a declared parameter ('N/m^3').",
+    "Parameter.source": "Where the value comes from ('paper Table 1', 'assumption: …'): "
+                        "shown in the model card.",
+    "Parameter.note": "What a declared parameter means (the model card's text for it).",
+    "Term.kind": "Which term this is.",
+    "Centrifugal.variant": "`paper_eq9`: paper Eq. 9 as printed, on every ball (cancels "
+                           "for equally spaced balls); `loaded_zone`: Harris' ½ m_b D_m "
+                           "ω_cage², relieving the balls in contact only.",
+    "HertzContact.cage": "Cage speed: `race_diameters` ω·D_i/(D_i + D_o) (paper Eq. 1) or "
+                         "`pitch_diameter` ω/2·(1 − D_b/D_m) (rolling without slip).",
+    "HertzContact.stiffness": "`given`: the parameter `contact_stiffness`; `geometry`: k "
+                              "from the ball, groove conformities and material (Hertz).",
+    "HertzContact.clearance": "`radial`: γ_0 = `radial_clearance`; `diametral`: γ_0 = "
+                              "`diametral_clearance`/2.",
+    "HertzContact.damping": "Per-ball contact damping: `none` or `hunt_crossley` "
+                            "(`hunt_crossley_damping`).",
+}
+"""Descriptions of the schema fields that have no docstring in the code."""
+
+CLASS_NOTES: dict[str, str] = {
+    "ModelInfo": "`[model]`: the model's name, title and provenance.",
+    "SimulationDefaults": "`[simulation]`: default times and initial state of a run.",
+    "Parameter": "`[parameters]`: one entry per parameter, "
+                 "`name = { value = …, unit = \"…\", source = \"…\" }`. A parameter that is "
+                 "not a built-in quantity is declared with its allowed range `low`, `high`.",
+}
+"""Descriptions of the schema classes that have no docstring in the code."""
+
+TERM_ATTACH_NOTES: dict[str, str] = {
+    "expression": "`fx`, `fy`: a body; `ball`: a bearing",
+    "viscous_damping": "a body (its velocity), or a bearing (the relative velocity of its "
+                       "races)",
+}
+"""Where a term acts, when its ``attaches`` alone does not say it."""
+
+
+def _docstring_of(obj: Any) -> str:
+    """The object's own docstring (not inherited), cleaned, or ''."""
+    import inspect
+
+    doc = obj.__dict__.get("__doc__") if isinstance(obj, type) else obj.__doc__
+    return inspect.cleandoc(doc) if doc else ""
+
+
+@functools.cache
+def attribute_docs(cls: type) -> dict[str, str]:
+    """The docstrings written under the fields of ``cls`` and its bases (child first)."""
+    import ast
+    import inspect
+    import itertools
+    import textwrap
+
+    found: dict[str, str] = {}
+    for klass in cls.__mro__:
+        if klass.__module__.startswith(("pydantic", "builtins")):
+            continue
+        try:
+            tree = ast.parse(textwrap.dedent(inspect.getsource(klass)))
+        except (OSError, TypeError):
+            continue
+        body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
+        for node, after in itertools.pairwise(body):
+            if (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name)
+                    and isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant)
+                    and isinstance(after.value.value, str)):
+                found.setdefault(node.target.id, inspect.cleandoc(after.value.value))
+    return found
+
+
+def field_description(cls: type, name: str) -> str:
+    """A field's description: pydantic's, its docstring in the code, or ``FIELD_NOTES``."""
+    info = cls.model_fields[name]
+    text = info.description or attribute_docs(cls).get(name)
+    if not text:
+        for klass in cls.__mro__:
+            text = FIELD_NOTES.get(f"{klass.__name__}.{name}")
+            if text:
+                break
+    return text or ""
+
+
+def _plain(text: str) -> str:
+    """Docstring text as one Markdown table cell: ``code`` as `code`, one line, no pipes."""
+    text = re.sub(r"``([^`]+)``", r"`\1`", " ".join(text.split()))
+    return _escape_html_outside_code(text).replace("|", "\\|")
+
+
+def _unwrap(annotation: Any) -> tuple[str | None, list[type]]:
+    """('table' | 'list' | 'dict' | None, the pydantic classes) of a field's annotation."""
+    import types
+    from typing import Annotated
+
+    from pydantic import BaseModel
+
+    origin, args = get_origin(annotation), get_args(annotation)
+    if origin is Annotated:
+        return _unwrap(args[0])
+    if origin in (Union, types.UnionType):
+        container, classes = None, []
+        for arg in args:
+            if arg is not type(None):
+                kind, found = _unwrap(arg)
+                container, classes = container or kind, [*classes, *found]
+        return container, classes
+    if origin is list:
+        return ("list", _unwrap(args[0])[1]) if _unwrap(args[0])[1] else (None, [])
+    if origin is dict:
+        return ("dict", _unwrap(args[1])[1]) if _unwrap(args[1])[1] else (None, [])
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return "table", [annotation]
+    return None, []
+
+
+def schema_sections() -> list[tuple[str, type]]:
+    """(where it is written in TOML, class) of every pydantic class of a spec, walked from
+    ``modelgen.spec.Spec`` in the order of its fields."""
+    from modelgen.spec import Spec
+
+    sections: list[tuple[str, type]] = [("top level", Spec)]
+    seen: set[type] = {Spec}
+
+    def walk(cls: type, where: str | None) -> None:
+        for name, info in cls.model_fields.items():
+            container, classes = _unwrap(info.annotation)
+            for sub in classes:
+                if sub in seen:
+                    continue
+                seen.add(sub)
+                if len(classes) > 1 and "kind" in sub.model_fields:
+                    here = f'[[{name}]] kind = "{sub.model_fields["kind"].default}"'
+                elif where is None:
+                    here = {"table": f"[{name}]", "list": f"[[{name}]]",
+                            "dict": f"[{name}] <name> = {{ … }}"}[container]
+                else:
+                    here = f"{where} {name} = {{ … }}"
+                sections.append((here, sub))
+                walk(sub, here)
+
+    walk(Spec, None)
+    return sections
+
+
+def _toml_type(annotation: Any) -> str:
+    import types
+
+    from pydantic import BaseModel
+
+    origin, args = get_origin(annotation), get_args(annotation)
+    if origin in (Union, types.UnionType):
+        return " or ".join(_toml_type(a) for a in args if a is not type(None))
+    if origin is Literal:
+        return "text"
+    if origin is list:
+        return "list of tables" if _unwrap(annotation)[1] else f"list of {_toml_type(args[0])}"
+    if origin is dict:
+        return f"table of {_toml_type(args[1])}s".replace("tables", "tables")
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return "table"
+    return {str: "text", int: "integer", float: "number", bool: "true or false"}.get(
+        annotation, getattr(annotation, "__name__", str(annotation)))
+
+
+def _literal_choices(annotation: Any) -> tuple[Any, ...]:
+    import types
+
+    origin = get_origin(annotation)
+    if origin is Literal:
+        return get_args(annotation)
+    if origin in (Union, types.UnionType):
+        return tuple(c for a in get_args(annotation) for c in _literal_choices(a))
+    return ()
+
+
+def _allowed_text(info: Any) -> str:
+    """Choices, bounds, pattern and lengths of a field, as Markdown."""
+    parts = []
+    choices = _literal_choices(info.annotation)
+    if choices:
+        parts.append(", ".join(f'`"{c}"`' for c in choices))
+    low = high = None
+    left, right = "(", ")"
+    for rule in info.metadata:
+        for attr, bracket in (("gt", "("), ("ge", "[")):
+            if getattr(rule, attr, None) is not None:
+                low, left = getattr(rule, attr), bracket
+        for attr, bracket in (("lt", ")"), ("le", "]")):
+            if getattr(rule, attr, None) is not None:
+                high, right = getattr(rule, attr), bracket
+        if getattr(rule, "pattern", None):
+            parts.append(f"`{rule.pattern}`")
+        if getattr(rule, "min_length", None) is not None:
+            what = "character" if info.annotation is str else "entry"
+            parts.append(f"at least {rule.min_length} {what}")
+        if getattr(rule, "max_length", None) is not None:
+            parts.append(f"at most {rule.max_length} characters")
+    if low is not None or high is not None:
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        parts.append(f"{left}{lo}, {hi}{right}")
+    return "; ".join(parts)
+
+
+def _default_text(info: Any) -> str:
+    from pydantic import BaseModel
+
+    if info.is_required():
+        return "**required**"
+    value = info.get_default(call_default_factory=True)
+    if value is None:
+        return "not set"
+    if isinstance(value, BaseModel):
+        return "its defaults"
+    if isinstance(value, str):
+        return f'`"{value}"`'
+    if isinstance(value, dict) and not value:
+        return "`{}`"
+    if isinstance(value, float):
+        return f"`{value:g}`"
+    return f"`{value!r}`"
+
+
+def fields_table(cls: type) -> str:
+    rows = ["| field | type | default | allowed | description |", "|---|---|---|---|---|"]
+    for name, info in sorted(cls.model_fields.items(), key=lambda item: item[0] != "kind"):
+        rows.append(f"| `{name}` | {_toml_type(info.annotation)} | {_default_text(info)} | "
+                    f"{_plain(_allowed_text(info))} | {_plain(field_description(cls, name))} |")
+    return "\n".join(rows)
+
+
+def _term_instance(cls: type, **values: Any) -> Any:
+    """A term with its defaults (the first choice of a required option), or None."""
+    for name, info in cls.model_fields.items():
+        choices = _literal_choices(info.annotation)
+        if info.is_required() and choices and name not in values:
+            values[name] = choices[0]
+    try:
+        return cls(**values)
+    except Exception:  # a term that cannot be built from options alone (expression)
+        return None
+
+
+def term_parameters(cls: type) -> list[str]:
+    """Markdown lines: the parameters the term needs with its default options, and what
+    each other option adds or drops."""
+    base = _term_instance(cls)
+    if base is None:
+        return ["- **Parameters:** the names its expressions use (built-in quantities, or "
+                "parameters the spec declares)"]
+    needed = list(base.required_parameters())
+    lines = [f"- **Parameters:** {', '.join(f'`{n}`' for n in needed) or 'none'}"
+             + (" (default options)" if _options(cls) else "")]
+    for name, choices in _options(cls).items():
+        current = getattr(base, name)
+        for choice in choices:
+            if choice == current:
+                continue
+            other = _term_instance(cls, **{name: choice})
+            if other is None:
+                continue
+            got = list(other.required_parameters())
+            added = [n for n in got if n not in needed]
+            dropped = [n for n in needed if n not in got]
+            change = [*(f"+ `{n}`" for n in added), *(f"− `{n}`" for n in dropped)]
+            if change:
+                lines.append(f'    - with `{name} = "{choice}"`: {", ".join(change)}')
+    return lines
+
+
+def _options(cls: type) -> dict[str, tuple[Any, ...]]:
+    return {name: choices for name, info in cls.model_fields.items()
+            if name != "kind" and len(choices := _literal_choices(info.annotation)) > 1}
+
+
+def _term_section(where: str, cls: type) -> list[str]:
+    kind = cls.model_fields["kind"].default
+    attaches = TERM_ATTACH_NOTES.get(kind) or " or ".join(f"a {o}" for o in cls.attaches)
+    doc = _docstring_of(cls)
+    summary = cls.summary
+    lines = [f"### `{where}`", "", f"`{cls.__module__}.{cls.__name__}`: {_plain(summary)}", ""]
+    if doc:
+        lines += [_plain(doc.split("\n\n")[0]), ""]
+    lines += [f"- **Acts on:** {attaches}", *term_parameters(cls), "", fields_table(cls), ""]
+    return lines
+
+
+def quantities_table() -> str:
+    from modelgen.quantities import QUANTITIES
+
+    rows = ["| name | unit | allowed | symbol | meaning |", "|---|---|---|---|---|"]
+    for q in QUANTITIES.values():
+        allowed = q.range_text().removesuffix(f" {q.unit}")
+        rows.append(f"| `{q.name}` | `{q.unit}` | {allowed} | ${q.latex}$ | {_plain(q.meaning)} |")
+    return "\n".join(rows)
+
+
+def expression_symbols() -> list[str]:
+    from modelgen.expressions import CONSTANTS, FUNCTIONS
+    from modelgen.terms.expression import BALL_SYMBOLS, TIME_SYMBOLS
+
+    def names(items) -> str:
+        return ", ".join(f"`{n}`" for n in items)
+
+    return [
+        f"- every expression: the model's state names, {names(TIME_SYMBOLS)} (time, s; shaft "
+        f"speed, rad/s), {names(CONSTANTS)}, the parameters, and the functions "
+        f"{names(FUNCTIONS)};",
+        f"- `ball` only: {names(BALL_SYMBOLS)}.",
+    ]
+
+
+def motions_table() -> str:
+    from modelgen.spec import COORDINATE_UNITS, MOTIONS
+
+    rows = ["| motion | coordinates | units | velocities |", "|---|---|---|---|"]
+    for motion, coords in MOTIONS.items():
+        units = ", ".join(COORDINATE_UNITS[c][0] for c in coords)
+        rows.append(f"| `{motion}` | {', '.join(f'`{c}`' for c in coords)} | {units} | "
+                    f"{', '.join(f'`v{c}`' for c in coords)} |")
+    return "\n".join(rows)
+
+
+def spec_reference_markdown() -> str:
+    """The reference of every section and field of a spec, from the schema."""
+    from modelgen.spec import GROUND, N_BALLS_RANGE
+    from modelgen.terms import TERM_CLASSES
+
+    sections = schema_sections()
+    terms = [(w, c) for w, c in sections if c in TERM_CLASSES]
+    tables = [(w, c) for w, c in sections if c not in TERM_CLASSES]
+    out = ["## Sections", "", "| where | class | what it is |", "|---|---|---|"]
+    for where, cls in sections:
+        what = _docstring_of(cls).split("\n\n")[0] or CLASS_NOTES.get(cls.__name__, "")
+        if cls in TERM_CLASSES:
+            what = cls.summary
+        shown = where if where == "top level" else f"`{where}`"
+        out.append(f"| {shown} | `{cls.__name__}` | {_plain(what)} |")
+    out += ["", "## Tables", ""]
+    for where, cls in tables:
+        doc = _docstring_of(cls) or CLASS_NOTES.get(cls.__name__, "")
+        title = "The top level" if where == "top level" else f"`{where}`"
+        out += [f"### {title}", "", f"`{cls.__module__}.{cls.__name__}`", ""]
+        if doc:
+            out += [_plain(doc.split("\n\n")[0]), ""]
+        out += [fields_table(cls), ""]
+    out += ["## Terms", "",
+            "Every `[[terms]]` entry has `kind`, and `body = \"…\"` or `bearing = \"…\"` where "
+            "it acts (optional when the model has one body or one bearing).", ""]
+    for where, cls in terms:
+        out += _term_section(where, cls)
+    out += ["## Motions", "", motions_table(), "",
+            f"A bearing's `outer` may be `{GROUND}`, the fixed frame. `n_balls` is in "
+            f"[{N_BALLS_RANGE[0]}, {N_BALLS_RANGE[1]}] and at most the number of balls that fit "
+            "on the pitch circle, floor(π / asin(D_b / D_m)).", "",
+            "## Names in expressions", "", *expression_symbols(), "",
+            "## Built-in quantities", "",
+            "A parameter with one of these names has this unit and range (a spec that gives "
+            "another unit, or `low`/`high`, is rejected). `<quantity>_<bearing>` (or "
+            "`_<body>`) is the same quantity for one bearing or body, with the same unit and "
+            "range.", "", quantities_table(), ""]
+    return "\n".join(out)
+
+
+def include_markdown(path: str, docs_dir: Path) -> str:
+    """A file of ``docs/`` in a code block (the language from its suffix)."""
+    target = (docs_dir / path).resolve()
+    if not target.is_file() or not target.is_relative_to(docs_dir.resolve()):
+        log.warning("bearingdyn:include %s: no such file in docs/", path)
+        return ""
+    language = {".toml": "toml", ".py": "python"}.get(target.suffix, "text")
+    text = target.read_text(encoding="utf-8").rstrip("\n")
+    return f'```{language} title="{target.name}"\n{text}\n```\n'
 
 
 # --------------------------------------------------------------------------- model cards
@@ -285,6 +712,8 @@ def on_config(config):
 
 
 def on_files(files, config):
+    from mkdocs.structure.files import File  # here: the reference above imports without MkDocs
+
     commands = cli_commands()
     guide_dir = Path(config.docs_dir) / "guide"
     for name, cmd in commands.items():
@@ -317,6 +746,9 @@ def on_page_markdown(markdown, page, config, files):
 
     markdown = repository_links(markdown, page.file.src_uri, Path(config.docs_dir))
     markdown = SUBMODULES_MARKER.sub(lambda m: submodules_markdown(m.group(1)), markdown)
+    markdown = SPEC_REFERENCE_MARKER.sub(lambda _m: spec_reference_markdown(), markdown)
+    markdown = INCLUDE_MARKER.sub(
+        lambda m: include_markdown(m.group(1), Path(config.docs_dir)), markdown)
     markdown = OPTIONS_MARKER.sub(options, markdown)
     return COMMANDS_MARKER.sub(lambda _m: commands_markdown(), markdown)
 
