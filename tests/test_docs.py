@@ -86,7 +86,8 @@ def test_site_has_a_guide_page_with_options_for_every_command(site):
 
 
 def test_site_shows_every_model_card(site):
-    assert MODEL_CARDS
+    assert {"mathieu", "rotor_housing", "two_bearing_rotor", "vakharia2015"} <= {
+        card.parent.name for card in MODEL_CARDS}
     for card in MODEL_CARDS:
         page = site / "models" / card.parent.name / "index.html"
         assert page.exists(), f"no page for {_rel(card)}"
@@ -100,7 +101,8 @@ def test_site_has_the_api_reference_from_docstrings(site):
                "analysis.stability.periodic", "analysis.stability.continuation",
                "analysis.stability.classify", "analysis.sweeps.sweep",
                "analysis.sweeps.executors", "analysis.model", "analysis.io", "modelgen.spec",
-               "modelgen.assemble", "modelgen.codegen", "modelgen.terms"]
+               "modelgen.assemble", "modelgen.codegen", "modelgen.terms",
+               "modelgen.locations"]
     for module in modules:
         page = site / "api" / Path(*module.split(".")) / "index.html"
         assert page.exists(), f"no API page for {module}"
@@ -109,6 +111,25 @@ def test_site_has_the_api_reference_from_docstrings(site):
     simulate = (site / "api" / "analysis" / "integrate" / "simulate" / "index.html"
                 ).read_text("utf-8")
     assert "Integrate" in simulate and "initial_state" in simulate
+    model = (site / "api" / "analysis" / "model" / "index.html").read_text("utf-8")
+    for name in ("System", "Model", "GeneratedModel", "load_model"):
+        assert f'id="analysis.model.{name}"' in model, f"analysis.model.{name} not shown"
+
+
+def test_site_has_the_spec_guide_and_the_reference_from_the_schema(site):
+    from modelgen.quantities import QUANTITIES
+    from modelgen.terms import TERMS
+
+    reference = (site / "spec-reference" / "index.html").read_text("utf-8")
+    assert "bearingdyn:spec-reference" not in reference
+    for name in [*TERMS, *QUANTITIES, "n_balls", "planar_tilt", "station", "initial"]:
+        assert name in reference, f"spec reference: {name} not shown"
+    guide = (site / "spec-guide" / "index.html").read_text("utf-8")
+    assert "bearingdyn:include" not in guide
+    assert "pedestal_cubic_stiffness" in guide  # the user model's spec, included
+    assert (site / "examples" / "user-model" / "pedestal-rotor.toml").is_file()
+    index = (site / "index.html").read_text("utf-8")
+    assert 'href="spec-guide/"' in index and 'href="spec-reference/"' in index
 
 
 def test_site_math_is_left_to_mathjax(site):
