@@ -11,11 +11,15 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from analysis.errors import InputError
+from analysis.signal import displacement_names, is_velocity, run_state_names, vc_frequencies
 from analysis.signal.poincare import poincare_section, section_period
-from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks
+from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
 
 MICRO = 1e6
 AXIS_NAMES = {"x": ("x", "vx", "X direction"), "y": ("y", "vy", "Y direction")}
+_SCALES = {"m": (1e6, "µm"), "m/s": (1e3, "mm/s"), "rad": (1e6, "µrad"),
+           "rad/s": (1e3, "mrad/s")}
 
 
 def display_label(label: str) -> str:
@@ -23,73 +27,153 @@ def display_label(label: str) -> str:
     return label.replace("-", "\u2212")
 
 
+def scale_of(ds: xr.Dataset, var: str) -> tuple[float, str]:
+    """(factor, unit) to draw ``ds[var]`` in: µm for m, mm/s for m/s, µrad for rad, else the
+    variable's own unit (from its attrs)."""
+    unit = str(ds[var].attrs.get("units", "m" if var in ("x", "y") else
+                                 "m/s" if var in ("vx", "vy") else ""))
+    return _SCALES.get(unit, (1.0, unit))
+
+
+def _axis_label(ds: xr.Dataset, var: str) -> str:
+    unit = scale_of(ds, var)[1]
+    return var + (f" ({unit})" if unit else "")
+
+
+def structure_text(attrs) -> str:
+    """``$N_b$ = 8``, ``$N_b$[left] = 8, $N_b$[right] = 10`` or '' (no balls)."""
+    several = {k[len("n_balls_"):]: v for k, v in attrs.items() if str(k).startswith("n_balls_")}
+    if several:
+        return ", ".join(f"$N_b$[{b}] = {n}" for b, n in several.items())
+    n = attrs.get("n_balls")
+    return "" if n in (None, 0) else f"$N_b$ = {n}"
+
+
 def _title(ds: xr.Dataset) -> str:
-    return (f"{ds.attrs.get('model', '?')}, $N_b$ = {ds.attrs.get('n_balls', '?')}, "
-            f"{ds.attrs.get('speed_rpm', float('nan')):g} rpm "
-            f"(X = {ds.attrs.get('shaft_hz', float('nan')):.2f} Hz, "
-            f"VC = {ds.attrs.get('vc_hz', float('nan')):.2f} Hz)")
+    parts = [str(ds.attrs.get("model", "?"))]
+    structure = structure_text(ds.attrs)
+    if structure:
+        parts.append(structure)
+    if "speed_rpm" in ds.attrs:
+        parts.append(f"{float(ds.attrs['speed_rpm']):g} rpm")
+    freqs = []
+    if float(ds.attrs.get("shaft_hz", 0.0)) > 0:
+        freqs.append(f"X = {float(ds.attrs['shaft_hz']):.2f} Hz")
+    for bearing, vc in vc_frequencies(ds.attrs).items():
+        freqs.append(f"VC{f'[{bearing}]' if bearing else ''} = {vc:.2f} Hz")
+    if not freqs and float(ds.attrs.get("forcing_period", 0.0)) > 0:
+        freqs.append(f"F = 1/forcing_period = {1 / float(ds.attrs['forcing_period']):.4g} Hz")
+    return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
+
+
+def _f_max(ds: xr.Dataset) -> float | None:
+    """Upper frequency of a spectrum plot: 2.5 (largest VC + X), or 10 base frequencies
+    without bearings (None: the whole spectrum)."""
+    try:
+        base, vcs, _ = label_frequencies(ds.attrs)
+    except InputError:  # no frequencies at all: draw everything
+        return None
+    top = max(vcs.values(), default=0.0)
+    if top > 0:
+        return 2.5 * (top + base)
+    return 10.0 * base if base > 0 else None
 
 
 def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
                   f_max: float | None = None) -> None:
-    """Amplitude spectrum of ``var`` (µm) on a log scale, labelled peaks marked."""
+    """Amplitude spectrum of ``var`` (µm for metres, else scaled by ``scale_of``) on a log
+    scale, labelled peaks marked."""
     spec = amplitude_spectrum(ds, var)
     peaks = find_peaks(ds, var) if peaks is None else peaks
-    f_max = f_max or 2.5 * (ds.attrs["vc_hz"] + ds.attrs["shaft_hz"])
+    f_max = f_max or _f_max(ds) or float(spec.frequency[-1])
+    factor, unit = scale_of(ds, var)
     sel = spec.sel(frequency=slice(0, f_max))
-    ax.semilogy(sel.frequency, sel * MICRO, lw=0.8, color="C0")
+    ax.semilogy(sel.frequency, sel * factor, lw=0.8, color="C0")
     for peak in peaks:
         if peak.frequency_hz > f_max:
             continue
         if not peak.label:  # broadband or unnamed: marked, not labelled
-            ax.plot(peak.frequency_hz, peak.amplitude * MICRO, "v", color="0.5", ms=3)
+            ax.plot(peak.frequency_hz, peak.amplitude * factor, "v", color="0.5", ms=3)
             continue
-        ax.plot(peak.frequency_hz, peak.amplitude * MICRO, "v", color="C3", ms=4)
-        ax.annotate(display_label(peak.label), (peak.frequency_hz, peak.amplitude * MICRO),
+        ax.plot(peak.frequency_hz, peak.amplitude * factor, "v", color="C3", ms=4)
+        ax.annotate(display_label(peak.label), (peak.frequency_hz, peak.amplitude * factor),
                     xytext=(0, 4), textcoords="offset points", ha="center", fontsize=7)
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel(f"amplitude of {var} (µm)")
+    ax.set_ylabel(f"amplitude of {var}" + (f" ({unit})" if unit else ""))
     ax.set_xlim(0, f_max)
     ax.grid(True, which="both", alpha=0.3)
 
 
-def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft") -> None:
-    """Stroboscopic Poincaré map: displacement (µm) against velocity (mm/s)."""
+def default_partner(ds: xr.Dataset, var: str) -> str:
+    """The variable drawn against ``var`` in a Poincaré map: its velocity (``vx`` for
+    ``x``), else the next state variable."""
+    names = run_state_names(ds)
+    if f"v{var}" in names:
+        return f"v{var}"
+    if is_velocity(var, names):
+        return var[1:]
+    others = [n for n in names if n != var]
+    return others[0] if others else var
+
+
+def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft",
+                  against: str | None = None) -> None:
+    """Stroboscopic Poincaré map: ``var`` (horizontal) against ``against`` (default: its
+    velocity), any two state variables, in the units of ``scale_of``."""
     pts = poincare_section(ds, section)
-    pos, vel, _ = AXIS_NAMES[var]
-    ax.plot(pts[pos] * MICRO, pts[vel] * 1e3, ".", ms=2.5, color="C2")
+    against = against or default_partner(ds, var)
+    for name in (var, against):
+        if name not in pts:
+            raise InputError(f"{name}: not a state variable of this run; variables: "
+                             f"{', '.join(run_state_names(ds))}")
+    fx, _ = scale_of(ds, var)
+    fy, _ = scale_of(ds, against)
+    ax.plot(pts[var] * fx, pts[against] * fy, ".", ms=2.5, color="C2")
     period = section_period(ds, section)
-    ax.set_xlabel(f"{pos} (µm)")
-    ax.set_ylabel(f"{vel} (mm/s)")
-    ax.set_title(f"Poincaré map, {section} section (every {period * 1e3:.3f} ms), "
+    ax.set_xlabel(_axis_label(ds, var))
+    ax.set_ylabel(_axis_label(ds, against))
+    ax.set_title(f"Poincaré map, {section} section (every {period * 1e3:.4g} ms), "
                  f"{pts.sizes['k']} points", fontsize=8)
     ax.grid(True, alpha=0.3)
 
 
 def paper_figure(ds: xr.Dataset, section: str = "shaft") -> Figure:
-    """The paper's Figs. 2-6: spectrum and Poincaré map, X direction (a) and Y (b)."""
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), layout="constrained")
-    for row, var in enumerate(("x", "y")):
+    """The paper's Figs. 2-6: spectrum and Poincaré map per displacement of the first body,
+    X direction (a) and Y (b)."""
+    variables = displacement_names(ds)
+    fig, axes = plt.subplots(len(variables), 2, figsize=(11, 3.75 * len(variables) + 0.3),
+                             layout="constrained", squeeze=False)
+    for row, var in enumerate(variables):
         plot_spectrum(axes[row, 0], ds, var)
-        axes[row, 0].set_title(f"({'ab'[row]}) {AXIS_NAMES[var][2]}: FFT", fontsize=9)
+        name = AXIS_NAMES[var][2] if var in AXIS_NAMES else var
+        axes[row, 0].set_title(f"({'abcdefgh'[row % 8]}) {name}: FFT", fontsize=9)
         plot_poincare(axes[row, 1], ds, var, section)
     fig.suptitle(_title(ds), fontsize=10)
     return fig
 
 
-def spectrum_figure(ds: xr.Dataset) -> Figure:
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), layout="constrained")
-    for ax, var in zip(axes, ("x", "y"), strict=True):
+def spectrum_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None
+                    ) -> Figure:
+    """Spectra of ``variables`` (default: the first body's displacements)."""
+    variables = tuple(variables or displacement_names(ds))
+    fig, axes = plt.subplots(len(variables), 1, figsize=(8, 3.25 * len(variables)),
+                             layout="constrained", squeeze=False)
+    for ax, var in zip(axes[:, 0], variables, strict=True):
         plot_spectrum(ax, ds, var)
-        ax.set_title(AXIS_NAMES[var][2], fontsize=9)
+        ax.set_title(AXIS_NAMES[var][2] if var in AXIS_NAMES else var, fontsize=9)
     fig.suptitle(_title(ds), fontsize=10)
     return fig
 
 
-def poincare_figure(ds: xr.Dataset, section: str = "shaft") -> Figure:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), layout="constrained")
-    for ax, var in zip(axes, ("x", "y"), strict=True):
-        plot_poincare(ax, ds, var, section)
+def poincare_figure(ds: xr.Dataset, section: str = "shaft",
+                    pairs: list[tuple[str, str | None]] | None = None) -> Figure:
+    """Poincaré maps of ``pairs`` (horizontal, vertical) of state variables (default: each
+    displacement of the first body against its velocity)."""
+    pairs = pairs or [(v, None) for v in displacement_names(ds)]
+    fig, axes = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5),
+                             layout="constrained", squeeze=False)
+    for ax, (var, against) in zip(axes[0], pairs, strict=True):
+        plot_poincare(ax, ds, var, section, against)
     fig.suptitle(_title(ds), fontsize=10)
     return fig
 
@@ -107,24 +191,49 @@ NATURE_NAMES = {1: "periodic-1", 2: "periodic-2", 3: "periodic-n (n ≥ 3)",
                 4: "quasi-periodic", 5: "chaotic"}
 
 
-def diagram_figure(ds: xr.Dataset) -> Figure:
-    """Orbit diagram: grid parameter against the Poincaré samples of x and y (µm); the up-
-    and down-sweeps in different colours (hysteresis)."""
+def _grid_label(ds: xr.Dataset, name: str) -> str:
+    """A sweep axis for a figure: ``speed_rpm (rpm)``, ``n_balls[left] (balls in bearing
+    left)``."""
+    if name == "speed_rpm":
+        return "speed_rpm (rpm)"
+    long_name = ds[name].attrs.get("long_name", "")
+    if name.startswith("n_balls[") and long_name:
+        return f"{name} ({long_name})"
+    unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", ""))
+    return name + (f" ({unit})" if unit else "")
+
+
+def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None
+                   ) -> Figure:
+    """Orbit diagram: grid parameter against the Poincaré samples of ``variables`` (any
+    state variables; default: the first body's displacements, x and y, in µm); the up- and
+    down-sweeps in different colours (hysteresis)."""
     param = ds.attrs["param"]
-    fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True, layout="constrained")
-    for ax, var in zip(axes, ("x", "y"), strict=True):
+    variables = tuple(variables or displacement_names(ds))
+    missing = [v for v in variables if v not in ds.data_vars or "k" not in ds[v].dims]
+    if missing:
+        raise InputError(f"{missing[0]}: not a state variable of this diagram; variables: "
+                         f"{', '.join(run_state_names(ds))}")
+    fig, axes = plt.subplots(len(variables), 1, figsize=(9, 1 + 3 * len(variables)),
+                             sharex=True, layout="constrained", squeeze=False)
+    axes = axes[:, 0]
+    for ax, var in zip(axes, variables, strict=True):
+        factor, unit = scale_of(ds, var)
         for d, direction in enumerate(ds.direction.values):
             values = ds[var].isel(direction=d)
             grid = np.repeat(ds[param].values, values.sizes["k"])
-            ax.plot(grid, values.values.ravel() * MICRO, ".", ms=2, color=f"C{d}", alpha=0.6)
+            ax.plot(grid, values.values.ravel() * factor, ".", ms=2, color=f"C{d}",
+                    alpha=0.6)
             ax.plot([], [], "o", ms=3, color=f"C{d}", label=f"sweep {direction}")
-        ax.set_ylabel(f"{var} on the {ds.attrs['section']} section (µm)")
+        ax.set_ylabel(f"{var} on the {ds.attrs['section']} section"
+                      + (f" ({unit})" if unit else ""))
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
-    unit = "rpm" if param == "speed_rpm" else ds.attrs.get(f"{param}_unit", "")
-    axes[1].set_xlabel(f"{param}" + (f" ({unit})" if unit else ""))
-    fig.suptitle(f"{ds.attrs['model']}, $N_b$ = {ds.attrs['n_balls']}: bifurcation diagram "
-                 f"({ds.sizes['k']} section points per value)", fontsize=10)
+    axes[-1].set_xlabel(_grid_label(ds, param))
+    structure = structure_text(ds.attrs)
+    fig.suptitle(f"{ds.attrs['model']}" + (f", {structure}" if structure else "")
+                 + f": bifurcation diagram ({ds.sizes['k']} section points per value)",
+                 fontsize=10)
     return fig
 
 
@@ -153,24 +262,41 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     from matplotlib.ticker import MaxNLocator
 
     for ax in axes:
-        ax.set_xlabel(xname + (" (rpm)" if xname == "speed_rpm" else ""))
-        ax.set_ylabel(yname)
-        if yname == "n_balls":
+        ax.set_xlabel(_grid_label(ds, xname))
+        ax.set_ylabel(_grid_label(ds, yname))
+        if yname.startswith("n_balls"):
             ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+        if xname.startswith("n_balls"):
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
     return fig
 
 
-def any_figure(ds: xr.Dataset) -> Figure:
-    """The natural figure of any bearingdyn result file."""
+def any_figure(ds: xr.Dataset, variables: list[str] | None = None) -> Figure:
+    """The natural figure of any bearingdyn result file (``variables``: the state variables
+    of a diagram or of a run's spectra and maps; default: the first body's
+    displacements)."""
     kind = ds.attrs.get("kind")
     if kind == "diagram":
-        return diagram_figure(ds)
+        return diagram_figure(ds, variables)
     if kind == "chart":
         return chart_figure(ds)
     if "special" in ds and "param" in ds.attrs:
         return branch_figure([ds])
-    return paper_figure(ds)
+    if variables:
+        fig = spectrum_figure(ds, variables)
+        return fig
+    return paper_figure(ds, _default_section(ds))
+
+
+def _default_section(ds: xr.Dataset) -> str:
+    """The shaft section, or ``param:forcing_period`` for a model forced at a parameter's
+    period without a shaft (the Mathieu equation)."""
+    if float(ds.attrs.get("shaft_hz", 0.0)) > 0:
+        return "shaft"
+    if float(ds.attrs.get("forcing_period", 0.0)) > 0:
+        return "param:forcing_period"
+    return "shaft"
 
 
 SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}
@@ -235,5 +361,6 @@ __all__ = [
     "plot_spectrum",
     "poincare_figure",
     "save_figure",
+    "scale_of",
     "spectrum_figure",
 ]
