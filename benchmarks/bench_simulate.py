@@ -233,7 +233,7 @@ def run_benchmark(repeat: int = 5, duration: float = 1.0, memory_duration: float
     """Time the paths (median of ``repeat``), compare them, measure peak memory."""
     model = load_model(MODEL)
     n_steps = round(duration / DT)
-    z0 = np.array([model.simulation_defaults[k] for k in ("x0", "y0", "vx0", "vy0")])
+    z0 = model.initial_state
     values, calm_values = model.defaults, model.parameters(CALM)
     for v in (values, calm_values):
         check_reference(model, v, N_BALLS)

@@ -31,7 +31,7 @@ class ModelFunctions:
         steps in one call, keeping every save_every-th state (n x n_out) and its time.
 
     ``structure`` holds the number of balls of each bearing, in the order of the model's
-    BEARINGS. The ball angles use angle addition, θ_i = φ_i + ψ with φ_i = 2π (i−1)/N_b fixed
+    BEARINGS (one number for a model with one bearing). The ball angles use angle addition, θ_i = φ_i + ψ with φ_i = 2π (i−1)/N_b fixed
     and ψ = ω_cage t of the bearing, so one sin/cos pair of ψ serves every ball. rk4_step also
     reaches the cage angle of its later stages by angle addition, ψ(t + h/2) = ψ(t) +
     ω_cage h/2 and ψ(t + h) = ψ(t) + ω_cage h: the rotations depend on parameters only
@@ -41,6 +41,8 @@ class ModelFunctions:
 
     def __init__(self, model, structure):
         self.model = model
+        if isinstance(structure, int):  # one number: the model's one bearing
+            structure = (structure,)
         self.structure = tuple(int(n) for n in structure)
         self.bearings = [(row[0], n, getattr(model, f"ball_load_{row[0]}"),
                           getattr(model, f"cage_speed_{row[0]}"),

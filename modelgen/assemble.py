@@ -279,6 +279,7 @@ def assemble(spec: Spec, display: bool = False) -> Equations:
         scoped = ctx.scoped(bearing.name)
         eq.cage[bearing.name] = (sp.Symbol("omega_cage", real=True) if display
                                  else contacts[bearing.name].cage_speed(scoped))
+    ctx.omega_cage = eq.cage_speed  # the first bearing's, for one-bearing callers of eq.ctx
     return eq
 
 

@@ -432,8 +432,8 @@ def generate(names: list[str | Path], root: Path | None = None,
     else to their folder in the user cache (``modelgen.locations.cached_model_root``): a
     spec from outside never writes into the package. Every file is written atomically, and
     only after every spec has been read and validated. Returns the paths that differ from
-    what is on disk (with ``check``) or that were written: relative to the package root
-    for the package, absolute otherwise.
+    what is on disk (with ``check``) or that were written: relative to the package root or
+    ``root``, absolute in the cache.
     """
     rendered: dict[Path, dict[str, str]] = {}
     for name in names:
@@ -445,6 +445,6 @@ def generate(names: list[str | Path], root: Path | None = None,
     changed = []
     for target, files in rendered.items():
         rels = _write_tree(target, files, check)
-        inside = target == default_root()
-        changed += rels if inside else [str(target / r) for r in rels]
+        named = target in (default_root(), root)
+        changed += rels if named else [str(target / r) for r in rels]
     return changed

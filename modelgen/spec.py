@@ -58,6 +58,11 @@ class _Strict(BaseModel):
     """Strict: a number in quotes is text, not a number (TOML integers still count as
     numbers)."""
 
+    @model_serializer(mode="wrap")
+    def _omit_unset(self, handler):
+        """Leave out what is not given, so a dump is valid TOML (no None)."""
+        return {k: v for k, v in handler(self).items() if v is not None}
+
 
 class ModelInfo(_Strict):
     name: str = Field(pattern=r"^[a-z][a-z0-9-]{0,62}$")
@@ -168,11 +173,6 @@ class SimulationDefaults(_Strict):
     """Initial value of any state by name (m, m/s, rad, rad/s); the others start at 0, and
     in a model with state x, y, vx, vy, x and y start at 1e-6 m unless given."""
 
-    @model_serializer(mode="wrap")
-    def _omit_unset(self, handler):
-        """Leave out what is not given, so a dump is valid TOML (no None)."""
-        return {k: v for k, v in handler(self).items() if v is not None and v != {}}
-
     def times(self) -> dict[str, float]:
         return {"dt": self.dt, "duration": self.duration, "transient": self.transient}
 
@@ -186,11 +186,6 @@ class Parameter(_Strict):
     """Smallest allowed value (inclusive) of a user-declared parameter."""
     high: float | None = None
     """Largest allowed value (inclusive) of a user-declared parameter."""
-
-    @model_serializer(mode="wrap")
-    def _omit_unset(self, handler):
-        """Leave out the range of built-in parameters, so a dump is valid TOML (no None)."""
-        return {k: v for k, v in handler(self).items() if v is not None}
 
 
 TermEntry = Annotated[functools.reduce(operator.or_, TERM_CLASSES), Field(discriminator="kind")]

@@ -43,10 +43,10 @@ def test_ball_load_matches_hand_computation(damped):
     for _ in range(200):
         values = {**model.defaults, "speed_rpm": rng.uniform(0, 20000)}
         p = model.parameter_vector(values)
-        cage = float(model.module.cage_speed(p))
+        cage = float(model.cage_speed("bearing", p))
         theta, t = rng.uniform(0, 2 * np.pi), rng.uniform(0, 1)
         z = np.concatenate([rng.uniform(-20e-6, 20e-6, 2), rng.uniform(-0.3, 0.3, 2)])
-        got = float(model.module.ball_load(np.cos(theta), np.sin(theta), *z, t, p))
+        got = float(model.module.ball_load_bearing(np.cos(theta), np.sin(theta), 1, 6, z, t, p))
         assert got == pytest.approx(hand_load(values, cage, theta, z), rel=1e-12, abs=1e-12)
 
 
@@ -55,7 +55,7 @@ def test_a_ball_never_pulls(damped):
     model, _ = damped
     p = model.parameter_vector(model.defaults)
     z = np.array([20e-6, 0.0, -10.0, 0.0])  # compressed 10 µm, leaving at 10 m/s
-    assert float(model.module.ball_load(1.0, 0.0, *z, 0.0, p)) == 0.0
+    assert float(model.module.ball_load_bearing(1.0, 0.0, 1, 6, z, 0.0, p)) == 0.0
 
 
 def test_restitution_of_a_single_ball_impact(damped):

@@ -125,7 +125,7 @@ def test_centrifugal_effect_grows_as_speed_squared():
 
     def inner(speed: float) -> float:
         p = model.parameter_vector({**base, "speed_rpm": speed})
-        return float(model.module.ball_load(1.0, 0.0, x, 0.0, 0.0, 0.0, 0.0, p))
+        return float(model.module.ball_load_bearing(1.0, 0.0, 1, 6, [x, 0.0, 0.0, 0.0], 0.0, p))
 
     def centrifugal(speed: float) -> float:
         cage = speed * np.pi / 30 * base["inner_race_diameter"] / (
@@ -159,7 +159,7 @@ def test_jacobian_is_finite_at_the_switch():
         k_o = race_contact(base["ball_diameter"], base["pitch_diameter"],
                            base["groove_conformity_outer"], base["youngs_modulus"],
                            base["poisson_ratio"], "outer").stiffness
-        cage = float(model.module.cage_speed(p))
+        cage = float(model.cage_speed("bearing", p))
         f_c = (0.5 * base["ball_density"] * np.pi * base["ball_diameter"] ** 3 / 6
                * base["pitch_diameter"] * cage**2)
         x = base["radial_clearance"] + (f_c / k_o) ** (2 / 3)

@@ -52,6 +52,7 @@ def probe_states(model: Model, structure: tuple[int, ...],
     centre and, with a Hertz contact, the first body displaced into the balls (see the
     module)."""
     states = [np.zeros(model.n_state)]
+    structure = model.structure(structure)
     n_balls = structure[0] if structure else 1
     (ix, iy), *_ = model.centre_indices()
     k = values.get("contact_stiffness")
@@ -76,7 +77,7 @@ def stable_step(model: Model, n_balls: tuple[int, ...],
                 values: dict[str, float]) -> tuple[float, float]:
     """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states; memoised
     per model, number of balls and parameter values (sweeps ask again and again)."""
-    return _stable_step(model, n_balls, tuple(sorted(values.items())))
+    return _stable_step(model, model.structure(n_balls), tuple(sorted(values.items())))
 
 
 @functools.lru_cache(maxsize=4096)

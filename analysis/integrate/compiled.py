@@ -195,16 +195,16 @@ def vm_library(funcs: Any) -> Library:
     return Library("casadi-vm", rk4_blocks(funcs), funcs.rhs, funcs.jac, funcs.rk4_step)
 
 
-def library(model: Any, structure: tuple[int, ...], compiled: bool = True) -> Library:
+def library(model: Any, structure: Any, compiled: bool = True) -> Library:
     """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``structure`` balls per
-    bearing.
+    bearing (one number for a one-bearing model, a mapping or a tuple).
 
     ``compiled``: load the shared library from the cache, or build it there once; when no
     compiler works, warn once and use the VM. ``compiled=False``: the VM. Memoised per
     process.
     """
     command = compiler_command() if compiled else []
-    structure = tuple(structure)
+    structure = model.structure(structure)  # one number, a mapping or a tuple
     memo = (model.name, model.spec_sha256, structure, tuple(command), str(cache_dir()))
     if memo not in _REGISTRY.libraries:
         funcs = model.functions(structure)

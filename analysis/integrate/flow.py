@@ -104,6 +104,7 @@ class Period:
     def seconds(self, model: Model, structure: tuple[int, ...], p):
         """The period in s, as a CasADi expression of ``p`` (or a float for numeric p)."""
         self.check(model)
+        structure = model.structure(structure)
         if self.kind == "param":
             return p[model.parameter_names.index(self.name)] * self.count / self.divisor
         omega = model.module.shaft_speed(p)

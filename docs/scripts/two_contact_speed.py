@@ -60,7 +60,7 @@ def state(model, values: dict[str, float]) -> dict[str, float]:
     p = model.parameter_vector(values)
     jac = np.asarray(model.functions(N_BALLS).jac(0.0, [x, 0.0, 0.0, 0.0], p))
     theta = 2 * np.pi * np.arange(N_BALLS) / N_BALLS
-    loads = [float(model.module.ball_load(np.cos(a), np.sin(a), x, 0, 0, 0, 0, p))
+    loads = [float(model.module.ball_load_bearing(np.cos(a), np.sin(a), 1, 6, [x, 0, 0, 0], 0, p))
              for a in theta]
     return {"approach": x - values["radial_clearance"],
             "stiffness": -jac[2, 0] * values["rotor_mass"],

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import ClassVar, Literal
 
 import sympy as sp
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
 from modelgen.symbols import Context
 
@@ -42,6 +42,11 @@ class Term(BaseModel):
     """Whether the ball load acts only while the ball is in contact."""
     summary: ClassVar[str] = ""
     """One line for the model card."""
+
+    @model_serializer(mode="wrap")
+    def _omit_unset(self, handler):
+        """Leave out what is not given, so a dump is valid TOML (no None)."""
+        return {k: v for k, v in handler(self).items() if v is not None}
 
     def owners(self) -> tuple[Owner, ...]:
         """Where this term, as configured, acts (a body, a bearing, or both)."""

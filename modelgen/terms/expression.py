@@ -26,7 +26,7 @@ from __future__ import annotations
 from typing import ClassVar, Literal
 
 import sympy as sp
-from pydantic import ValidationInfo, field_validator, model_serializer, model_validator
+from pydantic import ValidationInfo, field_validator, model_validator
 
 from modelgen.expressions import check_expression, parse_expression
 from modelgen.symbols import STATE_NAMES, Context
@@ -73,11 +73,6 @@ class ExpressionTerm(Term):
         if self.fx is None and self.fy is None and self.ball is None:
             raise ValueError("an expression term needs at least one of fx, fy, ball")
         return self
-
-    @model_serializer(mode="wrap")
-    def _omit_unset(self, handler):
-        """Leave out the expressions not given, so a dump is valid TOML (no None)."""
-        return {k: v for k, v in handler(self).items() if v is not None}
 
     def owners(self) -> tuple[Owner, ...]:
         return ((("body",) if self.fx is not None or self.fy is not None else ())
