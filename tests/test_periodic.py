@@ -20,11 +20,11 @@ def rotor_orbit():
     return shoot("balanced-rotor", 8, "vc", radial_load=50.0)
 
 
-def _liouville_error(model, n_balls, period, orbit, n_steps) -> float:
+def _liouville_error(model, period, orbit, n_steps) -> float:
     values = orbit.values
     p = model.parameter_vector(values)
-    _, mono, _ = evaluate(flow_map(model, n_balls, Period.parse(period), n_steps), orbit.z0,
-                          orbit.t0, p)
+    _, mono, _ = evaluate(flow_map(model, orbit.structure, Period.parse(period), n_steps),
+                          orbit.z0, orbit.t0, p)
     exact = np.exp(-2 * values["damping"] * orbit.period_s / values["rotor_mass"])
     return abs(np.linalg.det(mono) / exact - 1)
 
@@ -36,8 +36,8 @@ def test_liouville_balanced_rotor(load):
     model = load_model("balanced-rotor")
     orbit = shoot(model, 8, "vc", radial_load=load)  # any state works; an orbit is natural
     assert orbit.n_steps == 377  # T/Δt with Δt <= 1e-5 s
-    assert _liouville_error(model, 8, "vc", orbit, 377) < 1e-6
-    e1, e2 = (_liouville_error(model, 8, "vc", orbit, n) for n in (754, 1508))
+    assert _liouville_error(model, "vc", orbit, 377) < 1e-6
+    e1, e2 = (_liouville_error(model, "vc", orbit, n) for n in (754, 1508))
     assert e1 / e2 > 12  # 16 for exact fourth order
 
 
@@ -45,7 +45,7 @@ def test_liouville_duffing():
     model = load_model("duffing")
     orbit = shoot(model, None, "shaft", dt=0.01, settle=200.0, **DUFFING)
     assert orbit.converged and orbit.stability == "stable"
-    errors = [_liouville_error(model, 0, "shaft", orbit, n) for n in (200, 400, 800)]
+    errors = [_liouville_error(model, "shaft", orbit, n) for n in (200, 400, 800)]
     assert errors[0] < 1e-6
     assert errors[0] / errors[1] > 12 and errors[1] / errors[2] > 12
 
@@ -68,7 +68,7 @@ def test_multipliers_match_finite_differences(rotor_orbit):
     """AD monodromy vs central differences of the same RK4 flow map."""
     orbit = rotor_orbit
     model = load_model("balanced-rotor")
-    flow = flow_map(model, 8, Period.parse("vc"), orbit.n_steps)
+    flow = flow_map(model, (8,), Period.parse("vc"), orbit.n_steps)
     p = model.parameter_vector(orbit.values)
     fd = np.zeros((4, 4))
     for j in range(4):

@@ -1,19 +1,26 @@
 """Classify a steady response: periodic-n, quasi-periodic or chaotic.
 
-One function, ``classify``, used by every study. It reads the stroboscopic Poincaré points
-of a run and, when the points alone cannot decide, the largest Lyapunov exponent:
+One function, ``classify``, used by every study, for a run of any model (any number of
+states). It reads the stroboscopic Poincaré points of all state variables and, when the
+points alone cannot decide, the largest Lyapunov exponent:
 
 1. **periodic-n**: the section repeats after n samples, P_{k+n} = P_k within ``rel_tol``
    of the orbit size (n = 1 … ``max_period``).
-2. **quasi-periodic, two-frequency torus**: with unbalance the forcing has two frequencies,
-   X and VC, in general incommensurate, so even the simplest response is a closed curve on
-   the shaft section. Such a response is locked to both forcings: its state at each shaft
-   section is a smooth function of the ball-set phase φ_k = frac(VC·t_k) — the double
-   section (shaft period and cage phase) reduces it to points. Test: sorted by φ, successive
-   points are much closer than random pairs.
+2. **quasi-periodic, two-frequency torus** (models with one bearing and unbalance only):
+   the forcing has two frequencies, X and VC, in general incommensurate, so even the
+   simplest response is a closed curve on the shaft section. Such a response is locked to
+   both forcings: its state at each shaft section is a smooth function of the ball-set
+   phase φ_k = frac(VC·t_k) — the double section (shaft period and cage phase) reduces it
+   to points. Test: sorted by φ, successive points are much closer than random pairs.
+   With several bearings the forcing has a VC frequency per bearing (three or more
+   frequencies), one phase does not reduce it, and this test is skipped.
 3. Otherwise **chaotic** if the largest Lyapunov exponent is positive beyond its 95 %
    confidence interval and above ``chaos_floor`` × the section's angular frequency, and
    **quasi-periodic** (a frequency of its own, largest exponent ≈ 0) if not.
+
+Sections: ``shaft``, ``cage``, ``vc`` (from the run's ``shaft_hz``, ``cage_hz``, ``vc_hz``
+attrs), ``cage[<bearing>]``/``vc[<bearing>]`` (a model with several bearings) or
+``param:NAME`` (the period in s held by parameter NAME, e.g. ``param:forcing_period``).
 """
 
 from __future__ import annotations
@@ -23,6 +30,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
+from analysis.errors import InputError
+from analysis.integrate.simulate import state_at, state_names
 from analysis.signal.poincare import poincare_section
 
 GRAPH_RATIO = 0.2
@@ -47,18 +56,84 @@ class Classification:
 
 
 def default_section(ds: xr.Dataset) -> str:
-    """'vc' for a balanced bearing (single forcing frequency VC), else 'shaft'."""
+    """'vc' for a balanced rotor in one bearing (single forcing frequency VC);
+    'param:forcing_period' for a model without bearings that has that parameter (e.g.
+    ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g. ``duffing``)."""
     balanced = ds.attrs.get("unbalance_force", 0.0) == 0.0
-    return "vc" if balanced and ds.attrs.get("vc_hz", 0.0) > 0 else "shaft"
+    if balanced and ds.attrs.get("vc_hz", 0.0) > 0:
+        return "vc"
+    no_bearings = "n_balls" in ds.attrs and int(ds.attrs["n_balls"]) == 0
+    if no_bearings and "forcing_period" in ds.attrs:
+        return "param:forcing_period"
+    return "shaft"
+
+
+def _pairs(names: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(position, velocity) names: each state q with its velocity vq."""
+    pairs = [(q, f"v{q}") for q in names if f"v{q}" in names]
+    if 2 * len(pairs) != len(names):
+        raise InputError(f"dataset: state variables {', '.join(names)} are not positions "
+                         "with their velocities (v<name>)")
+    return pairs
+
+
+def state_section(ds: xr.Dataset, section: str) -> xr.Dataset:
+    """The stroboscopic section of every state variable of a run (see the module doc for
+    ``section``), interpolated as ``poincare_section`` does: each position with its
+    velocity as derivative (the x, y, vx, vy of a one-body run are exactly its values).
+    Variables in the run's units over ``k``, coordinate ``t`` (s); attrs with ``section``
+    and ``section_period_s``."""
+    head, _, arg = section.partition(":")
+    kind, _, bracket = head.partition("[")
+    attrs = dict(ds.attrs)
+    if kind == "param":
+        if arg not in attrs:
+            raise InputError(f"section: param:{arg}: no parameter '{arg}' in the run")
+        attrs["shaft_hz"], base = 1.0 / float(attrs[arg]), "shaft"
+    elif bracket and kind in ("vc", "cage") and bracket.endswith("]") and not arg:
+        key = f"{kind}_hz_{bracket[:-1]}"
+        if key not in attrs:
+            raise InputError(f"section: {section}: no attribute {key} in the run")
+        attrs[f"{kind}_hz"], base = attrs[key], kind
+    elif not bracket and not arg:
+        base = kind
+    else:
+        raise InputError(f"section: must be shaft, cage, vc, cage[bearing], vc[bearing] or "
+                         f"param:NAME, got {section!r}")
+    pairs = _pairs(state_names(ds))
+    data, first = {}, None
+    for i in range(0, len(pairs), 2):
+        (q1, v1), (q2, v2) = pairs[i], pairs[min(i + 1, len(pairs) - 1)]
+        part = xr.Dataset({"x": ds[q1], "vx": ds[v1], "y": ds[q2], "vy": ds[v2]},
+                          coords={"t": ds.t}, attrs=attrs)
+        pts = poincare_section(part, base)
+        first = first if first is not None else pts
+        for name, var in ((q1, "x"), (v1, "vx"), (q2, "y"), (v2, "vy")):
+            data[name] = ("k", pts[var].values, {"units": ds[name].attrs.get("units", "")})
+    out_attrs = dict(ds.attrs)
+    out_attrs.update(section=section, section_period_s=first.attrs["section_period_s"],
+                     phase=first.attrs["phase"])
+    return xr.Dataset({name: data[name] for name in state_names(ds)},
+                      coords={"k": first.k, "t": first.t}, attrs=out_attrs)
 
 
 def _normalised_points(ds: xr.Dataset, pts: xr.Dataset) -> tuple[np.ndarray, float]:
-    """Section points with velocities divided by the section's angular frequency (m), and
-    the orbit size (largest peak-to-peak of x or y over the run, m)."""
+    """Section points of every state variable, with velocities divided by the section's
+    angular frequency, and the orbit size: the largest peak-to-peak of the positions over
+    the run (in the first position's unit; positions of another unit, e.g. tilts in rad,
+    are rescaled to the same size)."""
     omega = 2 * np.pi / pts.attrs["section_period_s"]
-    p = np.stack([pts.x.values, pts.y.values, pts.vx.values / omega, pts.vy.values / omega],
-                 axis=1)
-    size = max(float(np.ptp(ds.x.values)), float(np.ptp(ds.y.values)), 1e-300)
+    pairs = _pairs(state_names(ds))
+    units = [str(ds[q].attrs.get("units", "")) for q, _ in pairs]
+    ptp = {u: max(float(np.ptp(ds[q].values)) for (q, _), uq in zip(pairs, units, strict=True)
+                  if uq == u) for u in units}
+    size = max(ptp[units[0]], 1e-300)
+    columns = {}
+    for (q, v), u in zip(pairs, units, strict=True):
+        factor = size / max(ptp[u], 1e-300) if u != units[0] else 1.0
+        columns[q] = pts[q].values * factor
+        columns[v] = pts[v].values / omega * factor
+    p = np.stack([columns[name] for name in state_names(ds)], axis=1)
     return p, size
 
 
@@ -93,14 +168,15 @@ def classify(
     chaos_floor: float = 0.01,
     lyapunov_duration: float | None = None,
 ) -> Classification:
-    """Classify the motion in ``ds`` (a run from ``simulate``, transient dropped).
+    """Classify the motion in ``ds`` (a run from ``simulate`` of any model, transient
+    dropped) on ``section`` (default: ``default_section``).
 
     ``exponents`` (from ``analysis.stability.lyapunov.lyapunov``) is computed from the run's
     own model, parameters and final state when needed and not given (``lyapunov_duration``
     seconds, default: the run's length).
     """
     section = section or default_section(ds)
-    pts = poincare_section(ds, section)
+    pts = state_section(ds, section)
     points, size = _normalised_points(ds, pts)
     n = repeat_period(points, size, rel_tol, max_period)
     if n is not None:
@@ -128,13 +204,10 @@ def classify(
 
 
 def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
-    from analysis.integrate.simulate import state_at
-    from analysis.model import load_model
     from analysis.stability.lyapunov import lyapunov
+    from analysis.stability.periodic import system_of_attrs
 
-    model = load_model(ds.attrs["model"])
-    values = {name: float(ds.attrs[name]) for name in model.parameter_names}
-    state = tuple(state_at(ds, -1))
+    system = system_of_attrs(ds.attrs, state_at(ds, -1))
     length = float(ds.t[-1] - ds.t[0])
-    return lyapunov(model, int(ds.attrs["n_balls"]) or None, duration=duration or length,
-                    transient=0.0, dt=float(ds.attrs["dt"]), initial_state=state, **values)
+    return lyapunov(system, duration=duration or length, transient=0.0,
+                    dt=float(ds.attrs["dt"]))

@@ -1,7 +1,8 @@
 """Pseudo-arclength continuation of periodic orbits, with bifurcation detection.
 
-Unknowns w = (z0 / s_z, λ / s_λ): the orbit's state at the section (scaled per component by
-``periodic.state_scale``) and the continuation parameter (scaled by the requested range).
+Unknowns w = (z0 / s_z, λ / s_λ), n + 1 of them for a model of n states: the orbit's state at
+the section (scaled per component by ``periodic.state_scale``) and the continuation
+parameter (scaled by the requested range).
 Equations: G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 (shooting, ``analysis.integrate.flow``) plus the
 arclength condition τ·(w − w_pred) = 0 of Keller's method; the bordered Newton matrix is built
 from the monodromy matrix and ∂Φ/∂λ, both by AD (the period's own dependence on λ, e.g. on the
@@ -26,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -40,8 +42,14 @@ from analysis.integrate.flow import (
     steps_per_period,
 )
 from analysis.integrate.simulate import run_attrs
-from analysis.model import Model, load_model
-from analysis.stability.periodic import PeriodicOrbit, shoot, state_scale
+from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.stability.periodic import (
+    PeriodicOrbit,
+    as_period,
+    shoot,
+    state_scale,
+    system_of_attrs,
+)
 
 
 @dataclass
@@ -69,7 +77,7 @@ class BranchPoint:
 @dataclass
 class _Problem:
     model: Model
-    n_balls: int
+    structure: Structure
     period: Period
     param_index: int
     values: dict[str, float]
@@ -80,8 +88,8 @@ class _Problem:
     flow: object = field(default=None)
 
     def __post_init__(self):
-        self.flow = flow_map(self.model, self.n_balls, self.period, self.n_steps)
-        self.orbit = orbit_states(self.model, self.n_balls, self.period, self.n_steps)
+        self.flow = flow_map(self.model, self.structure, self.period, self.n_steps)
+        self.orbit = orbit_states(self.model, self.structure, self.period, self.n_steps)
 
     @property
     def param_name(self) -> str:
@@ -92,35 +100,42 @@ class _Problem:
         p[self.param_index] = lam
         return p
 
+    @property
+    def n(self) -> int:
+        return self.model.n_state
+
     def residual(self, w: np.ndarray):
-        """G(w) (4), its Jacobian (4 × 5) and the monodromy matrix."""
-        z, lam = w[:4] * self.s_z, w[4] * self.s_lam
+        """G(w) (n), its Jacobian (n × (n + 1)) and the monodromy matrix."""
+        n = self.n
+        z, lam = w[:n] * self.s_z, w[n] * self.s_lam
         z_end, mono, dp = evaluate(self.flow, z, self.t0, self.p(lam))
         g = (z_end - z) / self.s_z
-        jz = (mono - np.eye(4)) * self.s_z[None, :] / self.s_z[:, None]
+        jz = (mono - np.eye(n)) * self.s_z[None, :] / self.s_z[:, None]
         jl = dp[:, self.param_index] * self.s_lam / self.s_z
         return g, np.column_stack([jz, jl]), mono
 
     def amplitude(self, w: np.ndarray) -> float:
-        """Half the peak-to-peak x displacement over one period (m)."""
-        states = np.asarray(self.orbit(w[:4] * self.s_z, self.t0, self.p(w[4] * self.s_lam)))
+        """Half the peak-to-peak of the first state variable (x, x_rotor …; m) over one
+        period."""
+        n = self.n
+        states = np.asarray(self.orbit(w[:n] * self.s_z, self.t0, self.p(w[n] * self.s_lam)))
         return float(np.ptp(states[0])) / 2
 
 
 def orbit_scale(prob: _Problem, z0: np.ndarray) -> np.ndarray:
-    """Scales of (x, y, vx, vy) from the largest |x|, |y| and |v| over one period of the orbit
-    through z0 (velocities at least size·2π/T)."""
+    """Per-component scales (``periodic.state_scale``) from the largest |z_i| over one period
+    of the orbit through z0 (velocities at least size·2π/T)."""
     states = np.asarray(prob.orbit(z0, prob.t0, prob.p(prob.values[prob.param_name])))
-    return state_scale(np.array([np.abs(states[:2]).max(), 0.0, np.abs(states[2:]).max(),
-                                 0.0]), period_seconds(prob.model, prob.n_balls, prob.period,
-                                                       prob.values))
+    return state_scale(np.abs(states).max(axis=1),
+                       period_seconds(prob.model, prob.structure, prob.period, prob.values),
+                       prob.model.module.STATE_UNITS)
 
 
 def _tangent(jac: np.ndarray, previous: np.ndarray | None, direction: float) -> np.ndarray:
-    """Unit null vector of the 4 × 5 Jacobian, oriented along ``previous`` (or by the sign
-    of ``direction`` in λ at the start)."""
+    """Unit null vector of the n × (n + 1) Jacobian, oriented along ``previous`` (or by the
+    sign of ``direction`` in λ at the start)."""
     tau = np.linalg.svd(jac)[2][-1]
-    ref = np.dot(tau, previous) if previous is not None else tau[4] * direction
+    ref = np.dot(tau, previous) if previous is not None else tau[-1] * direction
     return -tau if ref < 0 else tau
 
 
@@ -146,7 +161,7 @@ def _correct(prob: _Problem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
 
 def _point(prob: _Problem, w: np.ndarray, jac: np.ndarray, mono: np.ndarray,
            previous: np.ndarray | None, direction: float, iterations: int) -> BranchPoint:
-    return BranchPoint(lam=w[4] * prob.s_lam, z0=w[:4] * prob.s_z,
+    return BranchPoint(lam=w[-1] * prob.s_lam, z0=w[:-1] * prob.s_z,
                        multipliers=np.linalg.eigvals(mono), monodromy=mono,
                        tangent=_tangent(jac, previous, direction),
                        amplitude=prob.amplitude(w), newton_iterations=iterations)
@@ -158,7 +173,7 @@ def _w(prob: _Problem, point: BranchPoint) -> np.ndarray:
 
 def _lp_test(point: BranchPoint) -> float:
     """Parameter component of the tangent: changes sign at a fold (LP)."""
-    return float(point.tangent[4])
+    return float(point.tangent[-1])
 
 
 def _bp_test(point: BranchPoint) -> float:
@@ -205,62 +220,72 @@ def _complex_outside(point: BranchPoint) -> int:
 
 
 def continue_orbits(
-    model: Model | str,
-    n_balls: int | None = None,
+    system: System | Model | str | Path,
+    n_balls: BallCounts = None,
     *,
     param: str,
     start: float,
     stop: float,
-    period: str | Period = "vc",
+    period: str | Period | None = None,
     guess: np.ndarray | None = None,
     t0: float | None = None,
     ds: float = 0.01,
     ds_min: float = 1e-6,
     ds_max: float = 0.05,
     max_points: int = 200,
-    dt: float = 1e-5,
+    dt: float | None = None,
     tol: float = 1e-9,
     settle: float = 0.5,
     progress: Callable[[str], None] | None = None,
     **parameters: float,
 ) -> xr.Dataset:
-    """Continue a branch of periodic orbits in ``param`` from ``start`` towards ``stop``.
+    """Continue a branch of periodic orbits in ``param`` from ``start`` towards ``stop``
+    (the parameter's unit).
 
-    The first orbit is found by ``periodic.shoot`` at ``param = start`` (from ``guess`` or
-    a simulation of ``settle`` s). ``ds``, ``ds_min``, ``ds_max`` are arclength steps in the
-    scaled variables (λ scaled by |stop − start|). Returns the branch as a Dataset (see
-    ``branch_dataset``).
+    ``system``: a ``System`` or a model (name, spec path, ``Model``) completed by
+    ``n_balls`` and ``**parameters``. ``period``: as in ``periodic.shoot`` (text for
+    ``Period.parse``; None: ``periodic.default_period``). The first orbit is found by
+    ``periodic.shoot`` at ``param = start`` (from ``guess``, the state at ``t0`` s, or a
+    simulation of ``settle`` s). ``ds``, ``ds_min``, ``ds_max`` are arclength steps in the
+    scaled variables (λ scaled by |stop − start|). ``dt``: the largest RK4 step (s; default
+    the spec's). Returns the branch as a Dataset (see ``branch_dataset``).
     """
-    mdl = load_model(model) if isinstance(model, str) else model
+    system = as_system(system, n_balls, **parameters)
+    mdl = system.model
     if param not in mdl.parameter_names:
         raise InputError(f"param: '{param}' is not a parameter of '{mdl.name}'; "
                          f"choose one of {', '.join(mdl.parameter_names)}")
     if start == stop:
         raise InputError("stop: must differ from start")
-    values = mdl.parameters({**parameters, param: start})
+    system = system.replace(**{param: start})
     mdl.parameters({param: stop})  # range check of the end value
-    first = shoot(mdl, n_balls, period, guess, t0, dt=dt, settle=settle, **values)
+    first = shoot(system, None, period, guess, t0, dt=dt, settle=settle)
     if not first.converged:
         raise InputError(f"start: no periodic orbit found at {param} = {start:g} "
                          f"({first.message})")
-    return _continue_from(mdl, first, param, start, stop, ds, ds_min, ds_max, max_points,
+    return _continue_from(first, param, start, stop, ds, ds_min, ds_max, max_points,
                           dt, tol, progress)
 
 
-def _continue_from(model: Model, first: PeriodicOrbit, param: str, start: float, stop: float,
-                   ds: float, ds_min: float, ds_max: float, max_points: int, dt: float,
-                   tol: float, progress, label: str = "") -> xr.Dataset:
-    per = Period.parse(first.period) if isinstance(first.period, str) else first.period
+def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
+                   ds: float, ds_min: float, ds_max: float, max_points: int,
+                   dt: float | None, tol: float, progress, label: str = "") -> xr.Dataset:
+    if first.system is None:
+        raise InputError("orbit: no System attached (continue from an orbit of shoot)")
+    model = first.system.model
+    per = as_period(model, first.period)
     values = dict(first.values)
+    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
     # the step must stay below dt along the whole range (the period depends on λ)
-    n_steps = max(steps_per_period(model, first.n_balls, per, {**values, param: end}, dt)
+    n_steps = max(steps_per_period(model, first.structure, per, {**values, param: end}, dt)
                   for end in (start, stop))
-    prob = _Problem(model, first.n_balls, per, model.parameter_names.index(param), values,
-                    first.t0, n_steps, np.ones(4), abs(stop - start))
+    n = model.n_state
+    prob = _Problem(model, first.structure, per, model.parameter_names.index(param), values,
+                    first.t0, n_steps, np.ones(n), abs(stop - start))
     prob.s_z = orbit_scale(prob, first.z0)
     direction = math.copysign(1.0, stop - start)
     w = np.concatenate([first.z0 / prob.s_z, [start / prob.s_lam]])
-    out = _correct(prob, w, np.eye(5)[4], tol)  # re-solve at fixed λ with this step count
+    out = _correct(prob, w, np.eye(n + 1)[n], tol)  # re-solve at fixed λ with this step count
     if out is None:
         raise InputError(f"start: the orbit at {param} = {start:g} does not converge with "
                          f"{n_steps} steps per period")
@@ -313,10 +338,12 @@ def _special_points(prob, a: BranchPoint, b: BranchPoint, tol,
 
 def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], param: str,
                    status: str, label: str = "") -> xr.Dataset:
-    """The branch as a Dataset: ``param`` value, amplitude (m), z0, multipliers (real and
-    imaginary parts), stability and special-point labels along dimension ``point``."""
+    """The branch as a Dataset: ``param`` value, amplitude (of the first state variable),
+    z0 (dims ``point`` × ``state``, the model's state names), the n multipliers (real and
+    imaginary parts, dim ``k``), stability and special-point labels along ``point``; attrs
+    from ``run_attrs`` (model, spec, balls per bearing, parameters, state names)."""
     mult = np.array([p.multipliers for p in branch])
-    attrs = run_attrs(model, prob.n_balls, prob.values)
+    attrs = run_attrs(model, prob.structure, prob.values)
     attrs.update(param=param, period=str(prob.period), steps_per_period=prob.n_steps,
                  t0=prob.t0, status=status, branch=label or f"period {prob.period}")
     attrs.pop(param, None)
@@ -324,7 +351,9 @@ def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], para
         {param: ("point", np.array([p.lam for p in branch]),
                  {"units": model.units[param]}),
          "amplitude": ("point", np.array([p.amplitude for p in branch]),
-                       {"units": "m", "long_name": "half peak-to-peak x over one period"}),
+                       {"units": model.state_units[model.state_names[0]],
+                        "long_name": f"half peak-to-peak {model.state_names[0]} over one "
+                                     "period"}),
          "z0": (("point", "state"), np.array([p.z0 for p in branch])),
          "multiplier_real": (("point", "k"), mult.real),
          "multiplier_imag": (("point", "k"), mult.imag),
@@ -332,8 +361,8 @@ def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], para
          "stable": ("point", np.array([int(p.stable) for p in branch])),
          "special": ("point", np.array([p.special for p in branch], dtype=object)),
          "newton_iterations": ("point", np.array([p.newton_iterations for p in branch]))},
-        coords={"point": np.arange(len(branch)), "state": ["x", "y", "vx", "vy"],
-                "k": np.arange(1, 5)},
+        coords={"point": np.arange(len(branch)), "state": list(model.state_names),
+                "k": np.arange(1, model.n_state + 1)},
         attrs=attrs)
 
 
@@ -350,8 +379,9 @@ def switch_period_doubling(branch: xr.Dataset, point: int, *, offset: float = 0.
         raise InputError(f"point: {point} is not a period-doubling point (label "
                          f"'{branch.special.values[point]}')")
     attrs = branch.attrs
-    model = load_model(attrs["model"])
     param = attrs["param"]
+    base = system_of_attrs({**attrs, param: float(branch[param][point])})
+    model = base.model
     lam = float(branch[param][point])
     unstable_side = [i for i in (point + 1, point - 1)
                      if 0 <= i < branch.sizes["point"] and not branch.stable.values[i]]
@@ -359,26 +389,23 @@ def switch_period_doubling(branch: xr.Dataset, point: int, *, offset: float = 0.
         raise InputError(f"point: no unstable period-1 orbit next to point {point}")
     step = float(branch[param][unstable_side[0]]) - lam
     lam += math.copysign(offset * _range(branch, param), step)
-    values = {n: float(attrs[n]) for n in model.parameter_names if n != param}
-    values[param] = lam
+    system = base.replace(**{param: lam})
     period = Period.parse(attrs["period"])
-    dt = dt or period_seconds(model, int(attrs["n_balls"]), period, values) / int(
+    dt = dt or period_seconds(model, system.structure, period, dict(system.parameters)) / int(
         attrs["steps_per_period"])
-    n_balls = int(attrs["n_balls"]) or None
-    one = shoot(model, n_balls, period, branch.z0.values[point], float(attrs["t0"]), dt=dt,
-                **values)
+    one = shoot(system, None, period, branch.z0.values[point], float(attrs["t0"]), dt=dt)
     mu, vectors = np.linalg.eig(one.monodromy)
     k = int(np.argmin(mu.real))
     if not (one.converged and mu[k].real < -1):
         raise InputError(f"point: no period-1 orbit with a multiplier below −1 at {param} = "
                          f"{lam:g} ({one.message}; multipliers {np.round(mu, 4)})")
     v = np.real(vectors[:, k])
-    size = state_scale(one.z0, one.period_s)
+    size = state_scale(one.z0, one.period_s, model.module.STATE_UNITS)
     guess = one.z0 + kick * size * v / np.max(np.abs(v / size))
-    two = shoot(model, n_balls, period.doubled(), guess, one.t0, dt=dt, **values)
+    two = shoot(one.system, None, period.doubled(), guess, one.t0, dt=dt)
     if two.converged:
-        half = evaluate(flow_map(model, one.n_balls, period, one.n_steps), two.z0, two.t0,
-                        model.parameter_vector(two.values))[0]
+        half = evaluate(flow_map(model, one.structure, period, one.n_steps), two.z0, two.t0,
+                        one.system.p)[0]
         if np.max(np.abs((half - two.z0) / size)) < 1e-6:
             two.converged = False
             two.message = "Newton fell back onto the period-1 orbit; try a larger kick"
@@ -392,10 +419,11 @@ def _range(branch: xr.Dataset, param: str) -> float:
 
 def continue_from_orbit(orbit: PeriodicOrbit, *, param: str, stop: float, ds: float = 0.01,
                         ds_min: float = 1e-6, ds_max: float = 0.05, max_points: int = 200,
-                        dt: float = 1e-5, tol: float = 1e-9, progress=None,
+                        dt: float | None = None, tol: float = 1e-9,
+                        progress: Callable[[str], None] | None = None,
                         label: str = "") -> xr.Dataset:
-    """Continue a branch from an already solved orbit (e.g. after branch switching)."""
-    model = load_model(orbit.model)
+    """Continue a branch from an already solved orbit of ``periodic.shoot`` (e.g. after
+    branch switching) in ``param`` towards ``stop``; ``dt`` (s) defaults to the spec's."""
     start = orbit.values[param]
-    return _continue_from(model, orbit, param, start, stop, ds, ds_min, ds_max, max_points,
+    return _continue_from(orbit, param, start, stop, ds, ds_min, ds_max, max_points,
                           dt, tol, progress, label)

@@ -18,15 +18,25 @@ ball): a non-converged solve is reported as such in the result, never as an exce
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
 from analysis.errors import InputError
-from analysis.integrate.flow import Period, evaluate, flow_map, period_seconds, steps_per_period
+from analysis.integrate.flow import (
+    Period,
+    evaluate,
+    flow_map,
+    orbit_states,
+    period_seconds,
+    steps_per_period,
+)
 from analysis.integrate.simulate import simulate, state_at
-from analysis.model import Model, load_model
+from analysis.model import BallCounts, Model, Structure, System, as_system, load_model
 
 STABILITY_MARGIN = 1e-6
 """|μ| below 1 − margin counts as stable; within the margin the verdict is 'marginal'."""
@@ -34,10 +44,12 @@ STABILITY_MARGIN = 1e-6
 
 @dataclass
 class PeriodicOrbit:
-    """Result of a shooting solve. States in m and m/s, times in s."""
+    """Result of a shooting solve. States in the model's units (m, m/s, rad, rad/s) and in
+    the order of ``state_names``; times in s."""
 
     model: str
-    n_balls: int
+    structure: Structure
+    """Balls per bearing, in the order of the model's bearings (() without bearings)."""
     period: str
     period_s: float
     t0: float
@@ -51,6 +63,25 @@ class PeriodicOrbit:
     message: str
     values: dict[str, float] = field(default_factory=dict)
     n_steps: int = 0
+    state_names: tuple[str, ...] = ()
+    system: System | None = field(default=None, repr=False, compare=False)
+    """The System solved (parameters as used: with ``ratio:p/q`` the adjusted ones)."""
+
+    @property
+    def n_balls(self) -> int | dict[str, int]:
+        """Balls of the only bearing (0 without bearings), or bearing -> balls."""
+        if len(self.structure) <= 1:
+            return self.structure[0] if self.structure else 0
+        names = self.system.model.bearing_names if self.system else \
+            [str(i) for i in range(len(self.structure))]
+        return dict(zip(names, self.structure, strict=True))
+
+    @property
+    def structure_label(self) -> str:
+        """``N_b = 8``, ``N_b[left] = 8, N_b[right] = 10`` or ``no balls``."""
+        if self.system is not None:
+            return self.system.model.structure_label(self.structure)
+        return f"N_b = {self.n_balls}"
 
     @property
     def spectral_radius(self) -> float:
@@ -66,8 +97,9 @@ class PeriodicOrbit:
 
     def as_dict(self) -> dict:
         return {
-            "model": self.model, "n_balls": self.n_balls, "period": self.period,
-            "period_s": self.period_s, "t0": self.t0, "z0": self.z0.tolist(),
+            "model": self.model, "n_balls": self.n_balls, "structure": list(self.structure),
+            "period": self.period, "period_s": self.period_s, "t0": self.t0,
+            "state_names": list(self.state_names), "z0": self.z0.tolist(),
             "converged": self.converged, "iterations": self.iterations,
             "residual": self.residual, "message": self.message,
             "multipliers_real": self.multipliers.real.tolist(),
@@ -77,24 +109,91 @@ class PeriodicOrbit:
         }
 
 
-def state_scale(z: np.ndarray, period_s: float) -> np.ndarray:
-    """Per-component scale for residuals: displacement size, and size·2π/T for velocities."""
-    pos = max(float(np.max(np.abs(z[:2]))), 1e-300)
-    vel = max(float(np.max(np.abs(z[2:]))), pos * 2 * math.pi / period_s)
-    return np.array([pos, pos, vel, vel])
+def state_scale(z: np.ndarray, period_s: float,
+                units: Sequence[str] | None = None) -> np.ndarray:
+    """Per-component scale for residuals (the state's units).
+
+    The state is positions then their velocities (every generated model's order). Each
+    position gets the largest |z| of the positions of the same unit (m or rad), each
+    velocity the largest |z| of the velocities of its unit, at least its position group's
+    size·2π/T. Without ``units`` all positions share one unit (the one-body rotor:
+    max(|x|, |y|) and max(|vx|, |vy|, size·2π/T)).
+    """
+    z = np.abs(np.asarray(z, dtype=float))
+    n = z.size
+    half = n // 2
+    units = list(units) if units is not None else ["q"] * half + ["v"] * (n - half)
+    scale = np.empty(n)
+    pos_units = units[:half]
+    for unit in set(pos_units):
+        group = [i for i in range(half) if pos_units[i] == unit]
+        size = max(float(np.max(z[group])), 1e-300)
+        vel = [i + half for i in group]
+        scale[group] = size
+        scale[vel] = max(float(np.max(z[vel])), size * 2 * math.pi / period_s)
+    return scale
 
 
-def commensurate(model: Model, n_balls: int, values: dict[str, float],
+def structure_of_attrs(model: Model, attrs: Mapping) -> Structure:
+    """Balls per bearing from a result's attributes (``n_balls`` or ``n_balls_<bearing>``)."""
+    if not model.bearing_names:
+        return ()
+    if "n_balls" in attrs:
+        return model.structure(int(attrs["n_balls"]))
+    return model.structure({b: int(attrs[f"n_balls_{b}"]) for b in model.bearing_names})
+
+
+def system_of_attrs(attrs: Mapping, state: np.ndarray | None = None) -> System:
+    """The System a result was computed for, from its attributes (``model``, ``spec_file``,
+    balls per bearing and every parameter); ``state`` (default: the spec's initial state)."""
+    spec = str(attrs.get("spec_file", ""))
+    model = load_model(spec) if spec and Path(spec).is_absolute() and Path(spec).exists() \
+        else load_model(str(attrs["model"]))
+    values = {name: float(attrs[name]) for name in model.parameter_names if name in attrs}
+    return System.make(model, structure_of_attrs(model, attrs), state, **values)
+
+
+def default_period(model: Model) -> Period:
+    """The period an analysis uses when none is given.
+
+    One bearing: ``vc`` (the balanced rotor's forcing; give ``shaft`` or ``ratio:p/q``
+    with unbalance). No bearings: ``param:forcing_period`` when the model has that
+    parameter (e.g. ``mathieu``), else ``shaft`` (e.g. ``duffing``). Several bearings:
+    ``shaft`` (their VC frequencies differ; name one as ``vc[<bearing>]`` or use
+    ``ratio:p/q`` … explicitly when that is the forcing).
+    """
+    if len(model.bearing_names) == 1:
+        return Period.parse("vc")
+    if not model.bearing_names and "forcing_period" in model.parameter_names:
+        return Period.parse("param:forcing_period")
+    return Period.parse("shaft")
+
+
+def as_period(model: Model, period: str | Period | None) -> Period:
+    """``period`` parsed (``Period.parse``) and checked against ``model``; None: the
+    ``default_period``."""
+    per = default_period(model) if period is None else \
+        period if isinstance(period, Period) else Period.parse(period)
+    per.check(model)
+    return per
+
+
+def commensurate(model: Model, n_balls: BallCounts, values: dict[str, float],
                  ratio: Fraction) -> dict[str, float]:
     """Parameters with the outer race diameter adjusted so that VC/X equals ``ratio`` exactly.
 
     With unbalance the forcing has the frequencies X and VC = N_b·ρ·X (ρ = D_i/(D_i + D_o),
     paper Eq. 1), in general incommensurate; a periodic orbit exists only for a rational
     ρ·N_b = p/q. The returned values differ from ``values`` in ``outer_race_diameter`` only.
+    Models with one bearing only.
     """
+    structure = model.structure(n_balls)
+    if len(structure) != 1:
+        raise InputError(f"period: ratio:p/q needs a model with one bearing; model "
+                         f"'{model.name}' has {len(structure)}")
     if "outer_race_diameter" not in values or "inner_race_diameter" not in values:
         raise InputError("period: ratio:p/q needs a model with race-diameter cage kinematics")
-    rho = float(ratio) / n_balls
+    rho = float(ratio) / structure[0]
     if not 0 < rho < 1:
         raise InputError(f"period: ratio {ratio} gives a cage/shaft ratio {rho:g} outside (0, 1)")
     adjusted = dict(values)
@@ -102,65 +201,73 @@ def commensurate(model: Model, n_balls: int, values: dict[str, float],
     return adjusted
 
 
-def _prepare(model: Model | str, n_balls: int | None, period: str | Period,
-             values: dict[str, float]) -> tuple[Model, int, Period, dict[str, float]]:
-    model = load_model(model) if isinstance(model, str) else model
-    n = model.check_n_balls(n_balls)
-    per = period if isinstance(period, Period) else Period.parse(period)
+def _prepare(system: System, period: str | Period | None) -> tuple[System, Period]:
+    per = as_period(system.model, period)
     if per.kind == "ratio":
-        values = commensurate(model, n, values, per.ratio)
-    return model, n, per, values
+        values = commensurate(system.model, system.structure, dict(system.parameters),
+                              per.ratio)
+        system = system.replace(**values)
+    return system, per
 
 
-def default_guess(model: Model, n_balls: int, per: Period, values: dict[str, float],
-                  settle: float, dt: float) -> tuple[np.ndarray, float]:
-    """The state after simulating about ``settle`` seconds, taken at a whole number n of
-    periods, and the section time 0: the system is T-periodic, so the state at t = nT is a
-    state at forcing phase 0 (keeping t0 = nT would make the section phase depend on T)."""
-    period_s = period_seconds(model, n_balls, per, values)
+def default_guess(system: System, per: Period, settle: float,
+                  dt: float) -> tuple[np.ndarray, float]:
+    """The state after simulating about ``settle`` seconds from the system's state, taken
+    at a whole number n of periods, and the section time 0: the system is T-periodic, so the
+    state at t = nT is a state at forcing phase 0 (keeping t0 = nT would make the section
+    phase depend on T)."""
+    model, values = system.model, dict(system.parameters)
+    period_s = period_seconds(model, system.structure, per, values)
     n_periods = max(1, round(settle / period_s))
     t_end = n_periods * period_s
-    steps = steps_per_period(model, n_balls, per, values, dt) * n_periods
-    ds = simulate(model, n_balls, duration=t_end, transient=0.0, dt=t_end / steps,
-                  save_every=steps, **values)
+    steps = steps_per_period(model, system.structure, per, values, dt) * n_periods
+    ds = simulate(system, duration=t_end, transient=0.0, dt=t_end / steps, save_every=steps)
     return state_at(ds, -1), 0.0
 
 
 def shoot(
-    model: Model | str,
-    n_balls: int | None = None,
-    period: str | Period = "vc",
+    system: System | Model | str | Path,
+    n_balls: BallCounts = None,
+    period: str | Period | None = None,
     guess: np.ndarray | None = None,
     t0: float | None = None,
     *,
     segments: int = 1,
-    dt: float = 1e-5,
+    dt: float | None = None,
     settle: float = 0.5,
     tol: float = 1e-10,
     max_iter: int = 40,
     **parameters: float,
 ) -> PeriodicOrbit:
-    """Find a periodic orbit by Newton shooting and its Floquet multipliers.
+    """Find a periodic orbit by Newton shooting and its n Floquet multipliers.
 
-    ``guess`` (x, y, vx, vy at time ``t0``) defaults to the end of a simulation of about
-    ``settle`` seconds. ``segments`` > 1 selects multiple shooting. The RK4 step is at most
-    ``dt`` (s), adjusted so a whole number of steps fits the period. ``tol`` bounds the scaled
-    residual |Φ_T(z0) − z0| / scale.
+    ``system``: a ``System`` or a model (name, spec path, ``Model``) completed by
+    ``n_balls`` and ``**parameters`` (SI units, speed in rpm). ``period``: text for
+    ``Period.parse`` (``vc``, ``shaft:2``, ``ratio:16/5``, ``vc[left]``,
+    ``param:forcing_period`` …) or a ``Period``; None: ``default_period``. ``guess`` (the
+    state at time ``t0`` s, the model's state order) defaults to the end of a simulation of
+    about ``settle`` s from the system's state. ``segments`` > 1 selects multiple shooting.
+    The RK4 step is at most ``dt`` (s; default: the spec's), adjusted so a whole number of
+    steps fits the period. ``tol`` bounds the scaled residual |Φ_T(z0) − z0| / scale.
     """
     if not (isinstance(segments, int) and 1 <= segments <= 64):
         raise InputError(f"segments: must be an integer in [1, 64], got {segments!r}")
-    mdl = load_model(model) if isinstance(model, str) else model
-    model, n, per, values = _prepare(mdl, n_balls, period, mdl.parameters(parameters))
+    system, per = _prepare(as_system(system, n_balls, **parameters), period)
+    model, s, values = system.model, system.structure, dict(system.parameters)
+    n = model.n_state
+    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
     if guess is None:
-        guess, t0 = default_guess(model, n, per, values, settle, dt)
+        guess, t0 = default_guess(system, per, settle, dt)
     t0 = 0.0 if t0 is None else float(t0)
-    z = np.asarray(guess, dtype=float).copy()
-    period_s = period_seconds(model, n, per, values)
-    steps = steps_per_period(model, n, per, values, dt)
+    z = model.check_state(guess, "guess").copy()
+    period_s = period_seconds(model, s, per, values)
+    steps = steps_per_period(model, s, per, values, dt)
     steps += (-steps) % segments
-    p = model.parameter_vector(values)
-    flow = flow_map(model, n, per.segment(segments), steps // segments)
-    scale = state_scale(z, period_s)
+    p = system.p
+    flow = flow_map(model, s, per.segment(segments), steps // segments)
+    scale = state_scale(z, period_s, model.module.STATE_UNITS)
 
     def segment_map(zj: np.ndarray, j: int) -> tuple[np.ndarray, np.ndarray]:
         z_end, mono, _ = evaluate(flow, zj, t0 + j * period_s / segments, p)
@@ -173,18 +280,156 @@ def shoot(
             z, mono, iters, res, ok, msg = _newton_multiple(segment_map, z, segments, scale,
                                                             tol, max_iter)
     except np.linalg.LinAlgError as exc:  # non-finite states from a diverging guess
-        z, mono, iters, res, ok = z, np.full((4, 4), np.nan), 0, np.inf, False
+        z, mono, iters, res, ok = z, np.full((n, n), np.nan), 0, np.inf, False
         msg = f"the flow from the guess is not finite ({exc}); try another guess or settle"
+    common = dict(model=model.name, structure=s, period=str(per), period_s=period_s, t0=t0,
+                  z0=z, monodromy=mono, iterations=iters, values=values, n_steps=steps,
+                  state_names=model.state_names, system=system)
     if not np.all(np.isfinite(mono)):
-        return PeriodicOrbit(model=model.name, n_balls=n, period=str(per), period_s=period_s,
-                             t0=t0, z0=z, monodromy=mono, multipliers=np.full(4, np.nan),
-                             converged=False, iterations=iters, residual=float(res),
+        return PeriodicOrbit(multipliers=np.full(n, np.nan), converged=False,
+                             residual=float(res),
                              message=msg if not ok else "non-finite monodromy matrix",
-                             values=values, n_steps=steps)
-    return PeriodicOrbit(model=model.name, n_balls=n, period=str(per), period_s=period_s,
-                         t0=t0, z0=z, monodromy=mono, multipliers=np.linalg.eigvals(mono),
-                         converged=ok, iterations=iters, residual=res, message=msg,
-                         values=values, n_steps=steps)
+                             **common)
+    return PeriodicOrbit(multipliers=np.linalg.eigvals(mono), converged=ok,
+                         residual=float(res), message=msg, **common)
+
+
+def divergence_integral(system: System, period: str | Period | None, z0: np.ndarray,
+                        t0: float, n_steps: int) -> float:
+    """∫ tr ∂f/∂z dt over one period (dimensionless) along the RK4 orbit from (z0, t0) with
+    ``n_steps`` steps: composite Simpson's rule on the n_steps + 1 states (trapezoid on the
+    last interval when n_steps is odd). By Liouville's formula det M = exp(this) for the
+    flow; the RK4 map meets it to O(h⁴)."""
+    model = system.model
+    per = as_period(model, period)
+    period_s = period_seconds(model, system.structure, per, dict(system.parameters))
+    p = system.p
+    z0 = model.check_state(z0, "z0")
+    states = np.column_stack([z0, np.asarray(
+        orbit_states(model, system.structure, per, n_steps)(z0, t0, p))])
+    h = period_s / n_steps
+    jac = system.functions.jac
+    traces = np.array([np.trace(np.asarray(jac(t0 + k * h, states[:, k], p)))
+                       for k in range(n_steps + 1)])
+    from scipy.integrate import simpson
+
+    return float(simpson(traces, dx=h))
+
+
+def liouville_error(orbit: PeriodicOrbit) -> float:
+    """|det M / exp(∫ tr J dt) − 1| for a solved orbit (``divergence_integral`` on the
+    orbit's own RK4 steps): 0 for the exact flow, O(h⁴) for the RK4 map."""
+    if orbit.system is None:
+        raise InputError("orbit: no System attached (an orbit from shoot has one)")
+    integral = divergence_integral(orbit.system, orbit.period, orbit.z0, orbit.t0,
+                                   orbit.n_steps)
+    return abs(float(np.linalg.det(orbit.monodromy)) / math.exp(integral) - 1)
+
+
+BoundaryTest = Literal["radius", "PD", "LP"]
+
+
+@dataclass(frozen=True)
+class StabilityBoundary:
+    """A parameter value where the periodic orbit changes stability (``param``'s unit)."""
+
+    param: str
+    value: float
+    bracket: tuple[float, float]
+    """Final bisection interval (the test changes sign inside it)."""
+    test: str
+    multipliers: np.ndarray
+    """Floquet multipliers at ``value``."""
+    evaluations: int
+    orbit: PeriodicOrbit = field(repr=False)
+
+    def as_dict(self) -> dict:
+        return {"param": self.param, "value": self.value, "bracket": list(self.bracket),
+                "test": self.test, "evaluations": self.evaluations,
+                "multipliers_real": self.multipliers.real.tolist(),
+                "multipliers_imag": self.multipliers.imag.tolist()}
+
+
+def _boundary_test(test: str, orbit: PeriodicOrbit) -> float:
+    mu = orbit.multipliers
+    if test == "radius":
+        return orbit.spectral_radius - (1 + STABILITY_MARGIN)
+    if test == "PD":
+        return float(np.real(np.prod(mu + 1)))
+    return float(np.real(np.prod(mu - 1)))
+
+
+def stability_boundary(
+    system: System | Model | str | Path,
+    param: str,
+    low: float,
+    high: float,
+    *,
+    n_balls: BallCounts = None,
+    period: str | Period | None = None,
+    test: BoundaryTest = "radius",
+    dt: float | None = None,
+    xtol: float | None = None,
+    max_iter: int = 60,
+    settle: float = 0.5,
+    guess: np.ndarray | None = None,
+    **parameters: float,
+) -> StabilityBoundary:
+    """Bisect ``param`` in [``low``, ``high``] (its unit) for a stability boundary of the
+    periodic orbit, solved by ``shoot`` at each value.
+
+    ``test``: ``"radius"`` (the largest |μ| crosses 1 + ``STABILITY_MARGIN``: any loss of
+    stability), ``"PD"`` (det(M + I) changes sign: a real multiplier crosses −1, the
+    boundary of a period-doubling tongue) or ``"LP"`` (det(M − I): a multiplier crosses +1).
+    The test must differ in sign at ``low`` and ``high``. ``xtol``: width of the final
+    bracket (default 1e-10·|high − low|). ``period``, ``dt`` (s), ``settle`` (s) as in
+    ``shoot``. Every solve starts from the same guess (``guess`` at time 0, else the state
+    after ``settle`` s at ``low``), so the result does not depend on the bisection's path.
+    """
+    system = as_system(system, n_balls, **parameters)
+    if param not in system.model.parameter_names:
+        raise InputError(f"param: '{param}' is not a parameter of '{system.model.name}'; "
+                         f"choose one of {', '.join(system.model.parameter_names)}")
+    if test not in ("radius", "PD", "LP"):
+        raise InputError(f"test: must be 'radius', 'PD' or 'LP', got {test!r}")
+    if not (math.isfinite(low) and math.isfinite(high) and low != high):
+        raise InputError(f"high: must differ from low, both finite; got {low!r}, {high!r}")
+    xtol = 1e-10 * abs(high - low) if xtol is None else float(xtol)
+    per = as_period(system.model, period)
+    step = float(system.model.simulation_defaults["dt"] if dt is None else dt)
+    t0 = 0.0
+    if guess is None:
+        guess, t0 = default_guess(system.replace(**{param: low}), per, settle, step)
+    count = 0
+
+    def solve(value: float) -> PeriodicOrbit:
+        nonlocal count
+        orbit = shoot(system.replace(**{param: value}), None, per, guess, t0, dt=step)
+        count += 1
+        if not orbit.converged:
+            raise InputError(f"{param} = {value:g}: no periodic orbit ({orbit.message})")
+        return orbit
+
+    a, b = solve(low), solve(high)
+    fa, fb = _boundary_test(test, a), _boundary_test(test, b)
+    if np.sign(fa) == np.sign(fb):
+        raise InputError(f"low, high: the {test} test has the same sign at {param} = {low:g} "
+                         f"and {high:g} (no boundary between them, or two)")
+    lo, hi, best = float(low), float(high), a
+    for _ in range(max_iter):
+        if abs(hi - lo) <= xtol:
+            break
+        mid = (lo + hi) / 2
+        best = solve(mid)
+        if np.sign(_boundary_test(test, best)) == np.sign(fa):
+            lo = mid
+        else:
+            hi = mid
+    value = (lo + hi) / 2
+    best = solve(value)
+    return StabilityBoundary(param=param, value=value, bracket=(lo, hi), test=test,
+                             multipliers=best.multipliers, evaluations=count,
+                             orbit=best)
 
 
 def _backtrack(residual, x, step, res):
@@ -211,7 +456,7 @@ def _newton_single(segment_map, z, scale, tol, max_iter):
         if res < tol:
             return z, mono, it, res, True, f"converged in {it} Newton iterations"
         try:
-            step = np.linalg.solve(mono - np.eye(4), -r)
+            step = np.linalg.solve(mono - np.eye(len(z)), -r)
         except np.linalg.LinAlgError:
             return z, mono, it, res, False, "singular Newton matrix (a multiplier at +1)"
         found = _backtrack(residual, z, step, res)
@@ -228,10 +473,11 @@ def _newton_multiple(segment_map, z0, m, scale, tol, max_iter):
     for j in range(m - 1):
         zs.append(segment_map(zs[-1], j)[0])
     x = np.concatenate(zs)
+    n = len(z0)
     big_scale = np.tile(scale, m)
 
     def residual(xx):
-        parts = xx.reshape(m, 4)
+        parts = xx.reshape(m, n)
         ends, blocks = zip(*(segment_map(parts[j], j) for j in range(m)), strict=True)
         r = np.concatenate([ends[j] - parts[(j + 1) % m] for j in range(m)])
         return np.linalg.norm(r / big_scale), r, blocks
@@ -239,29 +485,29 @@ def _newton_multiple(segment_map, z0, m, scale, tol, max_iter):
     res, r, blocks = residual(x)
     for it in range(max_iter):
         if res < tol:
-            return x[:4], _product(blocks), it, res, True, (
+            return x[:n], _product(blocks), it, res, True, (
                 f"converged in {it} Newton iterations ({m} segments)")
-        jac = np.zeros((4 * m, 4 * m))
+        jac = np.zeros((n * m, n * m))
         for j in range(m):
-            jac[4 * j:4 * j + 4, 4 * j:4 * j + 4] = blocks[j]
+            jac[n * j:n * j + n, n * j:n * j + n] = blocks[j]
             k = (j + 1) % m
-            jac[4 * j:4 * j + 4, 4 * k:4 * k + 4] -= np.eye(4)
+            jac[n * j:n * j + n, n * k:n * k + n] -= np.eye(n)
         try:
             step = np.linalg.solve(jac, -r)
         except np.linalg.LinAlgError:
-            return x[:4], _product(blocks), it, res, False, "singular Newton matrix"
+            return x[:n], _product(blocks), it, res, False, "singular Newton matrix"
         found = _backtrack(residual, x, step, res)
         if found is None:
-            return x[:4], _product(blocks), it, res, False, _stalled(res)
+            return x[:n], _product(blocks), it, res, False, _stalled(res)
         x, (res, r, blocks) = found
     ok = res < tol
-    return (x[:4], _product(blocks), max_iter, res, ok,
+    return (x[:n], _product(blocks), max_iter, res, ok,
             "converged" if ok else _no_convergence(max_iter, res))
 
 
 def _product(blocks) -> np.ndarray:
     """Monodromy matrix A_{m−1} ⋯ A_1 A_0 of the segment Jacobians."""
-    mono = np.eye(4)
+    mono = np.eye(len(blocks[0]))
     for block in blocks:
         mono = block @ mono
     return mono
