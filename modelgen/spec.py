@@ -213,12 +213,13 @@ class Spec(_Strict):
     @model_validator(mode="after")
     def _check_physics(self) -> Spec:
         problems = _layout_problems(self)
-        if not problems:
-            problems = [*_parameter_problems(self), *_attachment_problems(self)]
-        if not problems:
-            problems = [*_structure_problems(self), *_term_problems(self),
-                        *_contact_problems(self), *_geometry_problems(self),
+        if not problems:  # the rest needs known bodies and bearings
+            attached = _attachment_problems(self)
+            problems = [*_parameter_problems(self), *attached, *_geometry_problems(self),
                         *_initial_problems(self)]
+            if not attached:  # and these, every term on a known body or bearing
+                problems += [*_structure_problems(self), *_term_problems(self),
+                             *_contact_problems(self)]
         if self.simulation.transient >= self.simulation.duration:
             problems.append("simulation.transient: must be shorter than simulation.duration "
                             f"({self.simulation.duration:g} s)")

@@ -139,8 +139,8 @@ SPEC_CASES = [
               "(allowed range (0, 1e+13] N/m^1.5)",)),
     SpecCase("missing-structure", "missing field", "balls not given with a contact term",
              (("structure", DROP),),
-             ("structure: missing; a model with a 'hertz_contact' term needs [structure] "
-              "n_balls in [3, 64]",)),
+             ("terms[0] (hertz_contact): acts on the balls and needs a bearing ([structure] "
+              "n_balls in a one-body spec, else [[bearings]]) with a 'hertz_contact' term",)),
     SpecCase("missing-kind", "missing field", "a term without its kind",
              (("terms.1", {"variant": "paper_eq9"}),),
              ("terms.1.kind: missing; allowed: hertz_contact, centrifugal",)),
@@ -235,13 +235,68 @@ SPEC_CASES = [
              ("terms: 'radial_load' appears 2 times; at most once",)),
     SpecCase("centrifugal-without-contact", "units and ranges", "a ball term without a "
              "contact", (("terms.0", {"kind": "centrifugal", "variant": "paper_eq9"}),),
-             ("terms[0] (centrifugal): acts on the balls and needs a 'hertz_contact' term",
-              "structure: a model without a 'hertz_contact' term has no balls; remove "
-              "[structure]")),
+             ("structure: bearing 'bearing' has no contact term; add [[terms]] kind = "
+              "'hertz_contact' (or 'two_contact') for it, or remove the bearing",)),
     SpecCase("ball-term-without-balls", "units and ranges", "a ball load without a contact",
              (expression(ball="1e9*c"),), base="duffing",
-             expect=("terms[3] (expression): acts on the balls and needs a 'hertz_contact' "
-                     "term",)),
+             expect=("terms[3] (expression): acts on the balls and needs a bearing "
+                     "([structure] n_balls in a one-body spec, else [[bearings]])",)),
+    # bodies and bearings
+    SpecCase("bearing-unknown-body", "bodies and bearings", "a bearing on a body that does not "
+             "exist", (("bearings.0.outer", "housnig"),), base="rotor-housing",
+             expect=("bearings[0].outer: unknown body 'housnig' (did you mean 'housing'?); "
+                     "bodies: rotor, housing, ground",)),
+    SpecCase("bearing-same-body", "bodies and bearings", "a bearing from a body to itself",
+             (("bearings.0.outer", "rotor"),), base="rotor-housing",
+             expect=("bearings[0].outer: must differ from the inner body",)),
+    SpecCase("body-name-twice", "bodies and bearings", "two bodies of one name",
+             (("bodies.1.name", "rotor"),), base="rotor-housing",
+             expect=("bodies/bearings: the name 'rotor' is used 2 times",)),
+    SpecCase("body-motion-unknown", "bodies and bearings", "an unknown motion",
+             (("bodies.0.motion", "spinning"),), base="rotor-housing",
+             expect=("bodies.0.motion: must be 'planar', 'linear' or 'planar_tilt', got "
+                     "'spinning'",)),
+    SpecCase("bearing-on-linear-body", "bodies and bearings", "a bearing on a body that moves "
+             "along x only", (("bodies.1.motion", "linear"),), base="rotor-housing",
+             expect=("bearings[0].outer: body 'housing' moves along x only; a bearing needs "
+                     "planar bodies",)),
+    SpecCase("term-unknown-bearing", "bodies and bearings", "a term on a bearing that does "
+             "not exist", (("terms.0.bearing", "left"),), base="rotor-housing",
+             expect=("terms[0] (hertz_contact).bearing: unknown bearing 'left'; bearings: "
+                     "bearing",)),
+    SpecCase("term-owner-missing", "bodies and bearings", "a term that does not say which of "
+             "two bearings it belongs to", (("terms.0.bearing", DROP),),
+             base="two-bearing-rotor",
+             expect=("terms[0] (hertz_contact).bearing: missing; name the bearing it acts on, "
+                     "one of: left, right",)),
+    SpecCase("load-on-a-bearing", "bodies and bearings", "a load attached to a bearing",
+             (("terms.2.bearing", "bearing"),), base="rotor-housing",
+             expect=("terms[2] (radial_load).bearing: this term acts on a body",)),
+    SpecCase("bearing-balls-do-not-fit", "bodies and bearings", "more balls than fit one "
+             "bearing", (("bearings.1.n_balls", 20),), base="two-bearing-rotor",
+             expect=("bearings[1].n_balls: must be in [3, 15]: at most 15 balls of 0.004762 m "
+                     "fit on the pitch circle (0.0235 m), got 20",)),
+    SpecCase("structure-and-bearings", "bodies and bearings", "[structure] beside [[bearings]]",
+             (("structure", {"n_balls": 8}),), base="rotor-housing",
+             expect=("structure: only in a spec without [[bodies]] and [[bearings]]",)),
+    SpecCase("initial-unknown-state", "bodies and bearings", "an initial value of a state the "
+             "model does not have", (("simulation.initial.x", 1e-6),), base="rotor-housing",
+             expect=("simulation.initial.x: unknown state; state: x_rotor, y_rotor, x_housing, "
+                     "y_housing, vx_rotor, vy_rotor, vx_housing, vy_housing",)),
+    SpecCase("legacy-initial-on-bodies", "bodies and bearings", "x0 in a model of two bodies",
+             (("simulation.x0", 1e-6),), base="rotor-housing",
+             expect=("simulation.x0: the model has no state 'x' (state: x_rotor, y_rotor, "
+                     "x_housing, y_housing, vx_rotor, vy_rotor, vx_housing, vy_housing); use "
+                     "simulation.initial",)),
+    SpecCase("body-mass-undeclared", "bodies and bearings", "a body whose mass parameter is "
+             "not declared", (("bodies.1.mass", "pedestal_mass"),), base="rotor-housing",
+             expect=("parameters.pedestal_mass: missing; body 'housing' needs it (declare it "
+                     "with value, unit, source, low and high)",)),
+    SpecCase("bearing-parameter-unit", "bodies and bearings", "a per-bearing parameter with "
+             "the wrong unit", ((f"{P}.radial_clearance_left",
+                                 {"value": 1e-5, "unit": "mm", "source": "x"}),),
+             base="two-bearing-rotor",
+             expect=("parameters.radial_clearance_left.unit: must be 'm', got 'mm'",)),
     # user-declared parameters
     SpecCase("user-parameter-without-range", "user parameters", "a new parameter without a "
              "range", ((f"{P}.k3", {"value": 1.0, "unit": "N/m^3", "source": "x"}),),
@@ -413,9 +468,11 @@ def _hostile_spec(folder: Path) -> None:
 
 CLI_CASES = [
     CliCase("balls-too-few", "command line", "fewer than 3 balls", (*SIM, "--n-balls", "2"),
-            ("n_balls: must be an integer in [3, 64], got 2",)),
+            ("n_balls: must be an integer in [3, 17] (at most 17 balls fit the geometry), "
+             "got 2",)),
     CliCase("balls-absurd", "command line", "an absurd number of balls",
-            (*SIM, "--n-balls", "1000"), ("n_balls: must be an integer in [3, 64], got 1000",)),
+            (*SIM, "--n-balls", "1000"), ("n_balls: must be an integer in [3, 17] (at most 17 "
+                                          "balls fit the geometry), got 1000",)),
     CliCase("balls-not-integer", "command line", "an option of the wrong type (checked by the "
             "command-line parser, before the command runs)", (*SIM, "--n-balls", "six"),
             ("Invalid value for '--n-balls'",), one_line=False),
@@ -449,7 +506,7 @@ CLI_CASES = [
             (*SIM, *SHORT, "--method", "euler"),
             ("method: must be 'rk4' or 'cvodes', got 'euler'",)),
     CliCase("model-unknown", "command line", "an unknown model", ("simulate", "vakharia", "-o",
-            "r.nc"), ("model: no generated model named 'vakharia' (did you mean 'vakharia2015'?)"
+            "r.nc"), ("model: no model named 'vakharia' (did you mean 'vakharia2015'?)"
                       "; available:",)),
     CliCase("spec-unknown-term", "command line", "a bad spec given to `generate`",
             ("generate", "vakharia2015.toml", "--out", "gen"),
