@@ -2,9 +2,11 @@
 
 Typical use::
 
-    from analysis import load_model, simulate, find_peaks, poincare_section
+    from analysis import as_system, load_model, simulate, find_peaks, poincare_section
     ds = simulate("vakharia2015", n_balls=6, speed_rpm=5000)
     find_peaks(ds, "x")
+    system = as_system("two-bearing-rotor", n_balls={"left": 7, "right": 11})
+    simulate(system, duration=1.0)
 
 Names are imported on first use (PEP 562), so ``import analysis`` and the CLI start fast.
 
@@ -25,7 +27,7 @@ _API = {
     "SimulationError": "analysis.errors", "StaleModelError": "analysis.errors",
     "load_dataset": "analysis.io", "save_dataset": "analysis.io",
     "Model": "analysis.model", "available_models": "analysis.model",
-    "load_model": "analysis.model",
+    "load_model": "analysis.model", "System": "analysis.model", "as_system": "analysis.model",
     "poincare_section": "analysis.signal.poincare",
     "run_paper_case": "analysis.reports.report",
     "amplitude_spectrum": "analysis.signal.spectrum", "find_peaks": "analysis.signal.spectrum",
