@@ -18,9 +18,8 @@ points alone cannot decide, the largest Lyapunov exponent:
    confidence interval and above ``chaos_floor`` × the section's angular frequency, and
    **quasi-periodic** (a frequency of its own, largest exponent ≈ 0) if not.
 
-Sections: ``shaft``, ``cage``, ``vc`` (from the run's ``shaft_hz``, ``cage_hz``, ``vc_hz``
-attrs), ``cage[<bearing>]``/``vc[<bearing>]`` (a model with several bearings) or
-``param:NAME`` (the period in s held by parameter NAME, e.g. ``param:forcing_period``).
+Sections: those of ``analysis.signal.poincare`` (``shaft``, ``cage``, ``vc``,
+``vc[<bearing>]``, ``param:NAME`` …), which keep every state variable.
 """
 
 from __future__ import annotations
@@ -75,46 +74,6 @@ def _pairs(names: tuple[str, ...]) -> list[tuple[str, str]]:
         raise InputError(f"dataset: state variables {', '.join(names)} are not positions "
                          "with their velocities (v<name>)")
     return pairs
-
-
-def state_section(ds: xr.Dataset, section: str) -> xr.Dataset:
-    """The stroboscopic section of every state variable of a run (see the module doc for
-    ``section``), interpolated as ``poincare_section`` does: each position with its
-    velocity as derivative (the x, y, vx, vy of a one-body run are exactly its values).
-    Variables in the run's units over ``k``, coordinate ``t`` (s); attrs with ``section``
-    and ``section_period_s``."""
-    head, _, arg = section.partition(":")
-    kind, _, bracket = head.partition("[")
-    attrs = dict(ds.attrs)
-    if kind == "param":
-        if arg not in attrs:
-            raise InputError(f"section: param:{arg}: no parameter '{arg}' in the run")
-        attrs["shaft_hz"], base = 1.0 / float(attrs[arg]), "shaft"
-    elif bracket and kind in ("vc", "cage") and bracket.endswith("]") and not arg:
-        key = f"{kind}_hz_{bracket[:-1]}"
-        if key not in attrs:
-            raise InputError(f"section: {section}: no attribute {key} in the run")
-        attrs[f"{kind}_hz"], base = attrs[key], kind
-    elif not bracket and not arg:
-        base = kind
-    else:
-        raise InputError(f"section: must be shaft, cage, vc, cage[bearing], vc[bearing] or "
-                         f"param:NAME, got {section!r}")
-    pairs = _pairs(state_names(ds))
-    data, first = {}, None
-    for i in range(0, len(pairs), 2):
-        (q1, v1), (q2, v2) = pairs[i], pairs[min(i + 1, len(pairs) - 1)]
-        part = xr.Dataset({"x": ds[q1], "vx": ds[v1], "y": ds[q2], "vy": ds[v2]},
-                          coords={"t": ds.t}, attrs=attrs)
-        pts = poincare_section(part, base)
-        first = first if first is not None else pts
-        for name, var in ((q1, "x"), (v1, "vx"), (q2, "y"), (v2, "vy")):
-            data[name] = ("k", pts[var].values, {"units": ds[name].attrs.get("units", "")})
-    out_attrs = dict(ds.attrs)
-    out_attrs.update(section=section, section_period_s=first.attrs["section_period_s"],
-                     phase=first.attrs["phase"])
-    return xr.Dataset({name: data[name] for name in state_names(ds)},
-                      coords={"k": first.k, "t": first.t}, attrs=out_attrs)
 
 
 def _normalised_points(ds: xr.Dataset, pts: xr.Dataset) -> tuple[np.ndarray, float]:
@@ -176,7 +135,7 @@ def classify(
     seconds, default: the run's length).
     """
     section = section or default_section(ds)
-    pts = state_section(ds, section)
+    pts = poincare_section(ds, section)
     points, size = _normalised_points(ds, pts)
     n = repeat_period(points, size, rel_tol, max_period)
     if n is not None:

@@ -158,15 +158,20 @@ def default_period(model: Model) -> Period:
 
     One bearing: ``vc`` (the balanced rotor's forcing; give ``shaft`` or ``ratio:p/q``
     with unbalance). No bearings: ``param:forcing_period`` when the model has that
-    parameter (e.g. ``mathieu``), else ``shaft`` (e.g. ``duffing``). Several bearings:
-    ``shaft`` (their VC frequencies differ; name one as ``vc[<bearing>]`` or use
-    ``ratio:p/q`` … explicitly when that is the forcing).
+    parameter (e.g. ``mathieu``), else ``shaft`` (e.g. ``duffing``). Several bearings: no
+    default (``InputError``): their VC frequencies differ and neither ``shaft`` nor one
+    bearing's ``vc`` is in general a period of the forcing; name it, e.g. ``vc[left]:4``
+    (= ``vc[right]:5`` for 8 and 10 balls on one cage speed).
     """
-    if len(model.bearing_names) == 1:
+    bearings = model.bearing_names
+    if len(bearings) == 1:
         return Period.parse("vc")
-    if not model.bearing_names and "forcing_period" in model.parameter_names:
-        return Period.parse("param:forcing_period")
-    return Period.parse("shaft")
+    if not bearings:
+        return Period.parse("param:forcing_period" if "forcing_period" in
+                            model.parameter_names else "shaft")
+    raise InputError(f"period: model '{model.name}' has bearings {', '.join(bearings)}, "
+                     f"each with its own VC frequency; give the period (e.g. "
+                     f"vc[{bearings[0]}]:k, shaft:k or param:NAME)")
 
 
 def as_period(model: Model, period: str | Period | None) -> Period:
