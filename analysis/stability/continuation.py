@@ -215,8 +215,10 @@ def _locate(prob: _Problem, a: BranchPoint, b: BranchPoint, kind: str,
 
 
 def _complex_outside(point: BranchPoint) -> int:
+    """Complex multipliers outside the unit circle (beyond 1 + 1e-9, as ``n_unstable``:
+    a conservative system's multipliers on the circle are not a Neimark–Sacker point)."""
     mu = point.multipliers
-    return int(np.sum((np.abs(mu.imag) > 1e-9) & (np.abs(mu) > 1)))
+    return int(np.sum((np.abs(mu.imag) > 1e-9) & (np.abs(mu) > 1 + 1e-9)))
 
 
 def continue_orbits(
