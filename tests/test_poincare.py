@@ -153,3 +153,38 @@ def test_bad_phase():
     for phase in (-0.1, 1.0):
         with pytest.raises(ValueError, match="phase"):
             poincare_section(ds, phase=phase)
+
+
+def test_sections_of_several_bearings_and_of_a_parameter():
+    """vc[b], cage[b] read the bearing's own attrs; vc and cage mean the first bearing;
+    param:NAME the parameter's value in s."""
+    attrs = {"shaft_hz": X, "cage_hz_left": CAGE, "vc_hz_left": 7 * CAGE,
+             "cage_hz_right": 0.9 * CAGE, "vc_hz_right": 11 * 0.9 * CAGE,
+             "n_balls_left": 7, "n_balls_right": 11, "forcing_period": 0.02}
+    ds = _dataset([(1e-6, X, 0.0)], duration=0.01, attrs=attrs)
+    assert section_period(ds, "vc[right]") == pytest.approx(1 / (11 * 0.9 * CAGE), rel=1e-15)
+    assert section_period(ds, "cage[right]") == pytest.approx(1 / (0.9 * CAGE), rel=1e-15)
+    assert section_period(ds, "vc") == section_period(ds, "vc[left]")
+    assert section_period(ds, "param:forcing_period") == 0.02
+    for bad in ("vc[middle]", "shaft[left]", "param:nothing", "vc[left"):
+        with pytest.raises(ValueError):
+            section_period(ds, bad)
+
+
+def test_any_state_variables_are_kept_and_interpolated():
+    """A state x, tx, vx, vtx (a tilt with its rate) on the section: tx with its rate as
+    derivative, exactly as x with vx; order and attrs of the run kept."""
+    t = 1.0 + DT * np.arange(20001)
+    w = 2 * np.pi * X
+    data = {"x": np.cos(w * t), "tx": 2 * np.sin(w * t),
+            "vx": -w * np.sin(w * t), "vtx": 2 * w * np.cos(w * t)}
+    ds = xr.Dataset({k: ("t", v, {"units": "rad" if "t" in k[1:] or k == "tx" else "m"})
+                     for k, v in data.items()}, coords={"t": t},
+                    attrs={**ATTRS, "state_names": "x tx vx vtx"})
+    section = poincare_section(ds, "vc", phase=0.37)
+    assert list(section.data_vars) == ["x", "tx", "vx", "vtx"]
+    tk = section.t.values
+    np.testing.assert_allclose(section.tx.values, 2 * np.sin(w * tk), atol=1e-9)
+    np.testing.assert_allclose(section.vtx.values, 2 * w * np.cos(w * tk), rtol=0,
+                               atol=1e-6 * 2 * w)
+    assert section.tx.attrs["units"] == "rad"

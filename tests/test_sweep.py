@@ -132,3 +132,14 @@ def test_tiny_chart_has_the_classes_floquet_analysis_predicts(tmp_path):
 @pytest.fixture(autouse=True)
 def _in_root(monkeypatch):
     monkeypatch.chdir(ROOT)
+
+
+def test_structure_axis_names_its_bearing():
+    axis = Axis.parse("n_balls[left]:5:7")
+    assert (axis.name, axis.values) == ("n_balls[left]", (5.0, 6.0, 7.0))
+    assert Axis.linear("n_balls[right]", 6, 8.4, 5).values == (6.0, 7.0, 8.0)
+    setting = Setting("two-bearing-rotor", {"right": 9}, {}, transient=0.1, samples=2)
+    assert setting.at(**{"n_balls[left]": 6.0, "damping": 50.0}) == (
+        {"right": 9, "left": 6}, {"damping": 50.0})
+    with pytest.raises(ValueError, match="axis"):
+        Axis.parse("n_balls[left]:7")
