@@ -309,8 +309,12 @@ def poincare(
     period); every state variable is sampled."""
     from analysis.io import load_dataset
     from analysis.signal import displacement_names, run_state_names
-    from analysis.signal.poincare import SECTION_SYNTAX, poincare_section
+    from analysis.signal.poincare import SECTION_SYNTAX, parse_section, poincare_section
 
+    try:
+        parse_section(section)  # the syntax, before the file is read
+    except InputError:
+        raise InputError(f"--section: must be {SECTION_SYNTAX}, got {section!r}") from None
     ds = load_dataset(run_file)
     names = run_state_names(ds)
     for option, name in (("--x", x), ("--y", y)):

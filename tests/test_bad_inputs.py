@@ -534,7 +534,8 @@ CLI_CASES = [
             setup=_foreign_result),
     CliCase("section-unknown", "command line", "an unknown Poincaré section",
             ("poincare", "r.nc", "--section", "moon"),
-            ("--section: must be one of shaft, cage, vc, got 'moon'",)),
+            ("--section: must be shaft, cage, vc, cage[bearing], vc[bearing] or param:NAME, "
+             "got 'moon'",)),
     CliCase("blow-up", "numerical failures", "a motion that blows up (softening spring)",
             ("simulate", "duffing", "-o", "r.nc", "--set", "cubic_stiffness=-1", "--duration",
              "20", "--transient", "0", "--no-compile"),
@@ -670,7 +671,8 @@ def test_crash_mid_write_leaves_nothing(tmp_path):
 # ---------------------------------------------------------------- the docs table
 
 GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "user parameters",
-          "custom expressions", "command line", "files", "numerical failures"]
+          "custom expressions", "bodies and bearings", "command line", "files",
+          "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:

@@ -37,14 +37,30 @@ _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
 _SNAP_FRACTION = 1e-9
 
 
-def _section_frequency(attrs: Mapping, section: str) -> tuple[str, float]:
-    """(attr that holds it, frequency Hz) of ``section``; raises InputError for a section
-    that is not valid syntax or that the run does not have."""
+def parse_section(section: str) -> tuple[str, str | None]:
+    """(kind, bearing or parameter name) of a section's text; ``InputError`` when it is not
+    valid syntax (checked before any file is read)."""
     text = str(section).strip()
     if text.startswith("param:"):
         name = text[len("param:"):]
         if not name.isidentifier():
             raise InputError(f"section: param:NAME needs a parameter name, got {section!r}")
+        return "param", name
+    kind, bracket, rest = text.partition("[")
+    bearing = rest.removesuffix("]") if bracket else None
+    if kind not in SECTIONS or (bracket and (kind == "shaft" or not rest.endswith("]")
+                                             or not bearing)):
+        raise InputError(f"section: must be {SECTION_SYNTAX}, got {section!r}")
+    return kind, bearing
+
+
+def _section_frequency(attrs: Mapping, section: str) -> tuple[str, float]:
+    """(attr that holds it, frequency Hz) of ``section``; raises InputError for a section
+    that is not valid syntax or that the run does not have."""
+    text = str(section).strip()
+    kind, bearing = parse_section(text)
+    if kind == "param":
+        name = bearing
         if name not in attrs:
             raise InputError(f"{name}: not a parameter of this run (needed by the "
                              f"'{text}' section)")
@@ -53,11 +69,6 @@ def _section_frequency(attrs: Mapping, section: str) -> tuple[str, float]:
             raise InputError(f"{name}: must be a positive period in s for the '{text}' "
                              f"section, got {attrs[name]!r}")
         return name, 1.0 / value
-    kind, bracket, rest = text.partition("[")
-    bearing = rest.removesuffix("]") if bracket else None
-    if kind not in SECTIONS or (bracket and (kind == "shaft" or not rest.endswith("]")
-                                             or not bearing)):
-        raise InputError(f"section: must be {SECTION_SYNTAX}, got {section!r}")
     if kind == "shaft":
         key = "shaft_hz"
         if key not in attrs:
