@@ -108,15 +108,6 @@ NBallsOption = Annotated[list[str] | None, typer.Option(
     callback=_check_n_balls)]
 
 
-def structure_words(attrs) -> str:
-    """``N_b = 8``, ``N_b[left] = 7, N_b[right] = 11`` or ``no balls`` from result attrs."""
-    several = {k[len("n_balls_"):]: v for k, v in attrs.items() if str(k).startswith("n_balls_")}
-    if several:
-        return ", ".join(f"N_b[{b}] = {n}" for b, n in several.items())
-    n = attrs.get("n_balls")
-    return "no balls" if n in (None, 0) else f"N_b = {n}"
-
-
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""
@@ -231,6 +222,7 @@ def simulate(
     """Integrate a model and write its motion (every state variable over t) to netCDF."""
     from analysis.integrate.simulate import simulate as run
     from analysis.io import save_dataset
+    from analysis.model import balls_text
 
     params = parse_sets(sets)
     if speed_rpm is not None:
@@ -241,7 +233,7 @@ def simulate(
     wall = time.perf_counter() - start
     save_dataset(ds, output)
     speed = f"{ds.attrs['speed_rpm']:g} rpm, " if "speed_rpm" in ds.attrs else ""
-    typer.echo(f"wrote {output}: {ds.attrs['model']}, {structure_words(ds.attrs)}, {speed}"
+    typer.echo(f"wrote {output}: {ds.attrs['model']}, {balls_text(ds.attrs)}, {speed}"
                f"t = {float(ds.t[0]):g}…{float(ds.t[-1]):g} s ({ds.sizes['t']} samples), "
                f"{method} dt = {ds.attrs['dt']:g} s, wall {wall:.2f} s; variables "
                f"{', '.join(ds.attrs['state_names'].split())}")

@@ -327,6 +327,16 @@ class Model:
         return z
 
 
+def balls_text(attrs: Mapping[str, Any], symbol: str = "N_b", none: str = "no balls") -> str:
+    """``N_b = 8``, ``N_b[left] = 7, N_b[right] = 11`` or ``none`` from a result's attrs
+    (the inverse of ``Model.structure_attrs``)."""
+    several = {k[len("n_balls_"):]: v for k, v in attrs.items() if str(k).startswith("n_balls_")}
+    if several:
+        return ", ".join(f"{symbol}[{b}] = {n}" for b, n in several.items())
+    n = attrs.get("n_balls")
+    return none if n in (None, 0) else f"{symbol} = {n}"
+
+
 @dataclass(frozen=True, eq=False)
 class System:
     """A model with its structure (balls per bearing), parameter values (SI, speed in rpm)

@@ -12,6 +12,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
+from analysis.model import balls_text
 from analysis.signal import displacement_names, is_velocity, run_state_names, vc_frequencies
 from analysis.signal.poincare import poincare_section, section_period
 from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
@@ -40,18 +41,9 @@ def _axis_label(ds: xr.Dataset, var: str) -> str:
     return var + (f" ({unit})" if unit else "")
 
 
-def structure_text(attrs) -> str:
-    """``$N_b$ = 8``, ``$N_b$[left] = 8, $N_b$[right] = 10`` or '' (no balls)."""
-    several = {k[len("n_balls_"):]: v for k, v in attrs.items() if str(k).startswith("n_balls_")}
-    if several:
-        return ", ".join(f"$N_b$[{b}] = {n}" for b, n in several.items())
-    n = attrs.get("n_balls")
-    return "" if n in (None, 0) else f"$N_b$ = {n}"
-
-
 def _title(ds: xr.Dataset) -> str:
     parts = [str(ds.attrs.get("model", "?"))]
-    structure = structure_text(ds.attrs)
+    structure = balls_text(ds.attrs, "$N_b$", "")
     if structure:
         parts.append(structure)
     if "speed_rpm" in ds.attrs:
@@ -230,7 +222,7 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel(_grid_label(ds, param))
-    structure = structure_text(ds.attrs)
+    structure = balls_text(ds.attrs, "$N_b$", "")
     fig.suptitle(f"{ds.attrs['model']}" + (f", {structure}" if structure else "")
                  + f": bifurcation diagram ({ds.sizes['k']} section points per value)",
                  fontsize=10)
