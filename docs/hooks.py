@@ -172,61 +172,7 @@ def submodules_markdown(package: str) -> str:
 FIELD_NOTES: dict[str, str] = {
     # The fields whose class gives them no docstring (tests/test_spec_guide.py checks that each
     # key is a field without one: a docstring added in the code replaces the note here).
-    "Spec.model": "What the model is called and where it comes from.",
-    "Spec.bodies": "The rigid bodies and their coordinates (left out: one planar body "
-                   "`rotor` with mass `rotor_mass`).",
-    "Spec.bearings": "The ball bearings between bodies, or between a body and `ground`.",
-    "Spec.simulation": "Default times and initial state of a run (`--duration`, `--dt` … "
-                       "override them).",
-    "Spec.parameters": "Every runtime parameter by name: a built-in quantity (fixed unit "
-                       "and range), a built-in quantity of one bearing or body "
-                       "(`<quantity>_<name>`), or a parameter the spec declares (with "
-                       "`low` and `high`).",
-    "Spec.terms": "The force terms, summed into the equations of motion; each attaches to "
-                  "a body or a bearing.",
-    "ModelInfo.name": "The model's name (lower case, digits, '-'); must equal the spec "
-                      "file's name without `.toml`. The generated module is the name "
-                      "with '-' as '_'.",
-    "ModelInfo.title": "One line for the model card, the generated headers and "
-                       "`bearingdyn models`.",
-    "ModelInfo.reference": "Where the equations come from (paper, book, section).",
-    "ModelInfo.description": "Free text for the model card.",
-    "Body.name": "Name of the body; with several bodies its coordinates are named "
-                 "`<coordinate>_<name>` (`x_rotor`, `vx_housing`).",
-    "Body.support": "A linear spring and damper from the body's centre to ground: "
-                    "`support = { stiffness = \"…\", damping = \"…\" }`.",
-    "Bearing.name": "Name of the bearing: terms name it (`bearing = \"left\"`), its "
-                    "parameters may be given as `<quantity>_<name>`, its number of balls "
-                    "as `--n-balls <name>=N`.",
-    "Bearing.inner": "The body that carries the inner race (a `planar` or `planar_tilt` "
-                     "body).",
-    "Bearing.outer": "The body that holds the outer race, or `ground` (fixed).",
-    "SimulationDefaults.dt": "RK4 step and output spacing, s.",
-    "SimulationDefaults.duration": "Simulated time, s.",
-    "SimulationDefaults.transient": "Initial time left out of the result, s (shorter than "
-                                    "`duration`).",
-    "SimulationDefaults.x0": "Initial x, m (a model with a state `x`; else use `initial`).",
-    "SimulationDefaults.y0": "Initial y, m (a model with a state `y`; else use `initial`).",
-    "SimulationDefaults.vx0": "Initial vx, m/s (a model with a state `vx`).",
-    "SimulationDefaults.vy0": "Initial vy, m/s (a model with a state `vy`).",
-    "Parameter.value": "Default value, in its unit (SI; speeds in rpm).",
-    "Parameter.unit": "The unit: a built-in quantity's own unit (see the table of "
-                      "quantities), or any unit of a declared parameter ('N/m^3').",
-    "Parameter.source": "Where the value comes from ('paper Table 1', 'assumption: …'): "
-                        "shown in the model card.",
-    "Parameter.note": "What a declared parameter means (the model card's text for it).",
     "Term.kind": "Which term this is.",
-    "Centrifugal.variant": "`paper_eq9`: paper Eq. 9 as printed, on every ball (cancels "
-                           "for equally spaced balls); `loaded_zone`: Harris' ½ m_b D_m "
-                           "ω_cage², relieving the balls in contact only.",
-    "HertzContact.cage": "Cage speed: `race_diameters` ω·D_i/(D_i + D_o) (paper Eq. 1) or "
-                         "`pitch_diameter` ω/2·(1 − D_b/D_m) (rolling without slip).",
-    "HertzContact.stiffness": "`given`: the parameter `contact_stiffness`; `geometry`: k "
-                              "from the ball, groove conformities and material (Hertz).",
-    "HertzContact.clearance": "`radial`: γ_0 = `radial_clearance`; `diametral`: γ_0 = "
-                              "`diametral_clearance`/2.",
-    "HertzContact.damping": "Per-ball contact damping: `none` or `hunt_crossley` "
-                            "(`hunt_crossley_damping`).",
 }
 """Descriptions of the schema fields that have no docstring in the code."""
 

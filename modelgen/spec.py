@@ -66,9 +66,14 @@ class _Strict(BaseModel):
 
 class ModelInfo(_Strict):
     name: str = Field(pattern=r"^[a-z][a-z0-9-]{0,62}$")
+    """The model's name (lower case, digits, '-'); must equal the spec file's name without
+    ``.toml``. The generated module is the name with '-' as '_'."""
     title: str = Field(min_length=1, max_length=200)
+    """One line for the model card, the generated headers and ``bearingdyn models``."""
     reference: str = ""
+    """Where the equations come from (paper, book, section)."""
     description: str = ""
+    """Free text for the model card."""
 
     @field_validator("title")
     @classmethod
@@ -119,6 +124,8 @@ class Body(_Strict):
     """``[[bodies]]``: a rigid body, its coordinates and its mass."""
 
     name: str = Field(pattern=OWNER_NAME)
+    """Name of the body; with several bodies its coordinates are named ``<coordinate>_<name>``
+    (``x_rotor``, ``vx_housing``)."""
     motion: Literal["planar", "linear", "planar_tilt"] = "planar"
     """``planar``: x, y; ``linear``: x only; ``planar_tilt``: x, y and tilts tx, ty."""
     mass: str | None = None
@@ -127,6 +134,8 @@ class Body(_Strict):
     """Parameter name of the transverse moment of inertia about the centre, kg·m²
     (``planar_tilt`` only; default ``<name>_inertia``)."""
     support: Support | None = None
+    """A linear spring and damper from the body's centre to ground: ``support = { stiffness = "…",
+    damping = "…" }``."""
 
     @property
     def mass_parameter(self) -> str:
@@ -154,8 +163,12 @@ class Bearing(_Strict):
     inner body."""
 
     name: str = Field(pattern=OWNER_NAME)
+    """Name of the bearing: terms name it (``bearing = "left"``), its parameters may be given as
+    ``<quantity>_<name>``, its number of balls as ``--n-balls <name>=N``."""
     inner: str = Field(pattern=OWNER_NAME)
+    """The body that carries the inner race (a ``planar`` or ``planar_tilt`` body)."""
     outer: str = Field(GROUND, pattern=OWNER_NAME)
+    """The body that holds the outer race, or ``ground`` (fixed)."""
     n_balls: int = Field(ge=N_BALLS_RANGE[0], le=N_BALLS_RANGE[1])
     """Default number of rolling elements (structural: any number in range is built at run
     time without SymPy)."""
@@ -163,12 +176,19 @@ class Bearing(_Strict):
 
 class SimulationDefaults(_Strict):
     dt: float = Field(1e-5, gt=0, le=10.0)
+    """RK4 step and output spacing, s."""
     duration: float = Field(1.0, gt=0, le=1e5)
+    """Simulated time, s."""
     transient: float = Field(0.0, ge=0, le=1e5)
+    """Initial time left out of the result, s (shorter than ``duration``)."""
     x0: float | None = None
+    """Initial x, m (a model with a state ``x``; else use ``initial``)."""
     y0: float | None = None
+    """Initial y, m (a model with a state ``y``; else use ``initial``)."""
     vx0: float | None = None
+    """Initial vx, m/s (a model with a state ``vx``)."""
     vy0: float | None = None
+    """Initial vy, m/s (a model with a state ``vy``)."""
     initial: dict[str, float] = Field(default_factory=dict)
     """Initial value of any state by name (m, m/s, rad, rad/s); the others start at 0, and
     in a model with state x, y, vx, vy, x and y start at 1e-6 m unless given."""
@@ -179,9 +199,14 @@ class SimulationDefaults(_Strict):
 
 class Parameter(_Strict):
     value: float
+    """Default value, in its unit (SI; speeds in rpm)."""
     unit: str
+    """The unit: a built-in quantity's own unit (see the table of quantities), or any unit of a
+    declared parameter ('N/m^3')."""
     source: str = Field(min_length=1)
+    """Where the value comes from ('paper Table 1', 'assumption: …'): shown in the model card."""
     note: str = ""
+    """What a declared parameter means (the model card's text for it)."""
     low: float | None = None
     """Smallest allowed value (inclusive) of a user-declared parameter."""
     high: float | None = None
@@ -202,13 +227,23 @@ class Spec(_Strict):
     """
 
     model: ModelInfo
+    """What the model is called and where it comes from."""
     structure: Structure | None = None
     """The ball set of a one-body spec's one bearing (use ``[[bearings]]`` otherwise)."""
     bodies: list[Body] | None = None
+    """The rigid bodies and their coordinates (left out: one planar body ``rotor`` with mass
+    ``rotor_mass``)."""
     bearings: list[Bearing] | None = None
+    """The ball bearings between bodies, or between a body and ``ground``."""
     simulation: SimulationDefaults = SimulationDefaults()
+    """Default times and initial state of a run (``--duration``, ``--dt`` … override them)."""
     parameters: dict[str, Parameter]
+    """Every runtime parameter by name: a built-in quantity (fixed unit and range), a built-in
+    quantity of one bearing or body (``<quantity>_<name>``), or a parameter the spec declares
+    (with ``low`` and ``high``)."""
     terms: list[TermEntry] = Field(min_length=1)  # type: ignore[valid-type]
+    """The force terms, summed into the equations of motion; each attaches to a body or a
+    bearing."""
 
     @model_validator(mode="after")
     def _check_physics(self) -> Spec:

@@ -44,6 +44,8 @@ def harris_force(ctx: Context) -> sp.Expr:
 class Centrifugal(Term):
     kind: Literal["centrifugal"] = "centrifugal"
     variant: Literal["paper_eq9", "loaded_zone"]
+    """``paper_eq9``: paper Eq. 9 as printed, on every ball (cancels for equally spaced balls);
+    ``loaded_zone``: Harris' ½ m_b D_m ω_cage², relieving the balls in contact only."""
 
     attaches: ClassVar[tuple[Owner, ...]] = ("bearing",)
     summary: ClassVar[str] = "centrifugal ball force"

@@ -73,9 +73,15 @@ class HertzContact(Term):
 
     kind: Literal["hertz_contact"] = "hertz_contact"
     cage: Literal["race_diameters", "pitch_diameter"] = "race_diameters"
+    """Cage speed: ``race_diameters`` ω·D_i/(D_i + D_o) (paper Eq. 1) or ``pitch_diameter`` ω/2·(1 −
+    D_b/D_m) (rolling without slip)."""
     stiffness: Literal["given", "geometry"] = "given"
+    """``given``: the parameter ``contact_stiffness``; ``geometry``: k from the ball, groove
+    conformities and material (Hertz)."""
     clearance: Clearance = "radial"
+    """``radial``: γ_0 = ``radial_clearance``; ``diametral``: γ_0 = ``diametral_clearance``/2."""
     damping: DampingLaw = "none"
+    """Per-ball contact damping: ``none`` or ``hunt_crossley`` (``hunt_crossley_damping``)."""
 
     needs: ClassVar[tuple[str, ...]] = ("speed_rpm",)
     attaches: ClassVar[tuple[Owner, ...]] = ("bearing",)
