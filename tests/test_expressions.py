@@ -16,6 +16,7 @@ import pytest
 import sympy as sp
 import tomli_w
 
+from analysis.model import load_model
 from modelgen.assemble import assemble
 from modelgen.codegen import CasadiPrinter, _preview_module, render
 from modelgen.expressions import ExpressionError, check_expression, parse_expression
@@ -148,3 +149,47 @@ def test_round_trip_keeps_user_parameters_and_expressions(tmp_path):
     again = parse_spec(tomllib.loads(tomli_w.dumps(spec.model_dump())))
     assert again == spec
     assert spec.quantity("g").range_text() == "[0, 100] m/s^2"
+
+
+def test_per_ball_expressions_see_the_ball_angle_index_and_count(tmp_path):
+    """A ball term of theta, i and n_balls (a load doubled on ball 1 that depends on the
+    ball's angle): what it adds to the generated rhs equals its sum over the balls written
+    out by hand, θ_i = 2π(i − 1)/N_b + ω_cage t."""
+    base = tomllib.loads((SPECS / "balanced-rotor.toml").read_text())
+    data = {**base, "terms": [*base["terms"], {
+        "kind": "expression", "description": "ball-dependent load",
+        "ball": "kb*delta*(1 + Heaviside(1.5 - i))*cos(theta)**2/n_balls"}],
+        "parameters": {**base["parameters"], "kb": {
+            "value": 3e7, "unit": "N/m", "source": "test", "low": 0.0, "high": 1e12}}}
+    rhs = {}
+    for key, spec_data in (("with", data), ("without", base)):
+        folder = tmp_path / key
+        folder.mkdir()
+        path = folder / "balanced-rotor.toml"
+        path.write_text(tomli_w.dumps(spec_data))
+        files = render(path).files
+        with _preview_module("balanced_rotor", files["balanced_rotor/__init__.py"]) as module:
+            rhs[key] = module.build(7).rhs
+    model = load_model("balanced-rotor")
+    values = {**model.defaults, "kb": 3e7}
+    p = np.array(list(values.values()))
+    n_balls, gamma = 7, values["radial_clearance"]
+    cage = float(model.cage_speed("bearing", model.parameter_vector(model.defaults)))
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        z = np.concatenate([rng.uniform(1.2 * gamma, 2 * gamma, 1),  # balls near θ = 0 in
+                            rng.uniform(-0.3 * gamma, 0.3 * gamma, 1),  # contact
+                            rng.uniform(-0.05, 0.05, 2)])
+        t = rng.uniform(0, 1)
+        fx = fy = 0.0
+        for i in range(1, n_balls + 1):
+            theta = 2 * math.pi * (i - 1) / n_balls + cage * t
+            delta = z[0] * math.cos(theta) + z[1] * math.sin(theta) - gamma
+            if delta > 0:
+                q = values["kb"] * delta * (1 + (i == 1)) * math.cos(theta) ** 2 / n_balls
+                fx, fy = fx - q * math.cos(theta), fy - q * math.sin(theta)
+        added = (np.asarray(rhs["with"](t, z, p)).ravel()
+                 - np.asarray(rhs["without"](t, z, p[:-1])).ravel())
+        want = np.array([0, 0, fx, fy]) / values["rotor_mass"]
+        np.testing.assert_allclose(added, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+        assert np.abs(want).max() > 0
