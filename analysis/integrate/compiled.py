@@ -32,7 +32,7 @@ import shutil
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -347,27 +347,43 @@ def compiled_function(fn: ca.Function, test_args: tuple | None = None,
     version. With ``test_args`` the loaded function must reproduce ``fn`` on them (else it is
     rebuilt). Memoised per process by the function object.
     """
+    return compiled_functions([fn], [test_args], compiled)[0]
+
+
+def compiled_functions(fns: Sequence[ca.Function],
+                       test_args: Sequence[tuple | None] | None = None,
+                       compiled: bool = True) -> list[ca.Function]:
+    """Several Functions compiled into one library (one C source, one compiler run; their
+    common dependencies written once), as ``compiled_function``: the same cache, key and
+    self-test (``test_args[i]`` for ``fns[i]``, None: none), ``fns`` themselves when
+    ``compiled`` is False or no compiler works (one warning). The library is named after
+    ``fns[0]``. Memoised per process by the function objects.
+    """
+    fns = list(fns)
     if not compiled:
-        return fn
-    memo = ("function", id(fn), str(cache_dir()))
+        return fns
+    tests = list(test_args) if test_args is not None else [None] * len(fns)
+    command = compiler_command()
+    memo = ("function", *(id(fn) for fn in fns), tuple(command), str(cache_dir()))
     if memo in _REGISTRY.libraries:
         return _REGISTRY.libraries[memo]
-    command = compiler_command()
-    stem = f"bd_fn_{fn.name()}"
-    source = _c_source([fn], stem)
+    stem = f"bd_fn_{fns[0].name()}"
+    source = _c_source(fns, stem)
     key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
                          .encode()).hexdigest()
     path = cache_dir() / f"{stem}_{key[:20]}.so"
 
-    def load() -> ca.Function | None:
+    def load() -> list[ca.Function] | None:
         try:
-            ext = ca.external(fn.name(), str(path))
-            if test_args is not None:
-                for want, got in zip(fn(*test_args), ext(*test_args), strict=True):
+            loaded = [ca.external(fn.name(), str(path)) for fn in fns]
+            for fn, ext, args in zip(fns, loaded, tests, strict=True):
+                if args is None:
+                    continue
+                for want, got in zip(fn.call(list(args)), ext.call(list(args)), strict=True):
                     want, got = np.asarray(want), np.asarray(got)
                     if not np.all(np.abs(got - want) <= _SELF_TEST_RTOL * np.abs(want).max()):
                         return None
-            return ext
+            return loaded
         except RuntimeError:
             return None
 
@@ -379,5 +395,5 @@ def compiled_function(fn: ca.Function, test_args: tuple | None = None,
             result = load()
         except (CompileError, OSError) as exc:
             _fallback_warning(str(exc))
-    _REGISTRY.libraries[memo] = result or fn
+    _REGISTRY.libraries[memo] = result or fns
     return _REGISTRY.libraries[memo]
