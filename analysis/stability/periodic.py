@@ -215,14 +215,31 @@ def _prepare(system: System, period: str | Period | None) -> tuple[System, Perio
     return system, per
 
 
-def default_guess(system: System, per: Period, settle: float,
+SETTLE_PERIODS = 20
+"""Fewest forcing periods simulated for the default guess (``default_settle``)."""
+
+
+def default_settle(system: System, per: Period) -> float:
+    """Simulated time (s) before the default guess, from the model's own time scales: the
+    spec's transient (1 s for the bearing models, 300 s for Duffing), at least
+    ``SETTLE_PERIODS`` periods ``per`` (the Mathieu spec has no transient)."""
+    model = system.model
+    period_s = period_seconds(model, system.structure, per, dict(system.parameters))
+    return max(float(model.simulation_defaults.get("transient", 0.0)),
+               SETTLE_PERIODS * period_s)
+
+
+def default_guess(system: System, per: Period, settle: float | None,
                   dt: float) -> tuple[np.ndarray, float]:
-    """The state after simulating about ``settle`` seconds from the system's state, taken
-    at a whole number n of periods, and the section time 0: the system is T-periodic, so the
-    state at t = nT is a state at forcing phase 0 (keeping t0 = nT would make the section
-    phase depend on T)."""
+    """The state after simulating about ``settle`` seconds (None: ``default_settle``) from
+    the system's state, taken at a whole number n of periods, and the section time 0: the
+    system is T-periodic, so the state at t = nT is a state at forcing phase 0 (keeping
+    t0 = nT would make the section phase depend on T)."""
     model, values = system.model, dict(system.parameters)
     period_s = period_seconds(model, system.structure, per, values)
+    settle = default_settle(system, per) if settle is None else float(settle)
+    if not (math.isfinite(settle) and settle >= 0):
+        raise InputError(f"settle: must be a finite number >= 0 s, got {settle!r}")
     n_periods = max(1, round(settle / period_s))
     t_end = n_periods * period_s
     steps = steps_per_period(model, system.structure, per, values, dt) * n_periods
@@ -239,7 +256,7 @@ def shoot(
     *,
     segments: int = 1,
     dt: float | None = None,
-    settle: float = 0.5,
+    settle: float | None = None,
     tol: float = 1e-10,
     max_iter: int = 40,
     **parameters: float,
@@ -251,7 +268,8 @@ def shoot(
     ``Period.parse`` (``vc``, ``shaft:2``, ``ratio:16/5``, ``vc[left]``,
     ``param:forcing_period`` …) or a ``Period``; None: ``default_period``. ``guess`` (the
     state at time ``t0`` s, the model's state order) defaults to the end of a simulation of
-    about ``settle`` s from the system's state. ``segments`` > 1 selects multiple shooting.
+    about ``settle`` s from the system's state (default: the spec's transient, at least
+    ``SETTLE_PERIODS`` periods: ``default_settle``). ``segments`` > 1 selects multiple shooting.
     The RK4 step is at most ``dt`` (s; default: the spec's), adjusted so a whole number of
     steps fits the period. ``tol`` bounds the scaled residual |Φ_T(z0) − z0| / scale.
     """
@@ -376,7 +394,7 @@ def stability_boundary(
     dt: float | None = None,
     xtol: float | None = None,
     max_iter: int = 60,
-    settle: float = 0.5,
+    settle: float | None = None,
     guess: np.ndarray | None = None,
     **parameters: float,
 ) -> StabilityBoundary:
