@@ -685,8 +685,9 @@ def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome])
         text = out.stderr.strip()
         if case.id == "output-is-folder" or (IS_ROOT and case.id == "output-folder-locked"):
             text = "(see the note below the table)"
-        elif not case.one_line:
-            text = " ".join(line.strip(" │╭╮╰╯─") for line in text.splitlines()[-3:]).strip()
+        elif not case.one_line:  # click's usage error: the line after the usage lines
+            errors = [line for line in text.splitlines() if line.startswith("Error: ")]
+            text = errors[-1].removeprefix("Error: ") if errors else text.splitlines()[-1]
         rows[case.group].append(_row(case.what, case.shown(), text))
     parts = [DOCS_HEAD]
     for group in GROUPS:

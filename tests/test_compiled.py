@@ -148,7 +148,7 @@ def test_block_plan_covers_the_steps_in_few_calls(n_steps):
 
 @pytest.fixture(scope="module")
 def bench():
-    from analysis.cli import _benchmark_module
+    from analysis.cli.reports import _benchmark_module
 
     return _benchmark_module()
 
@@ -186,9 +186,9 @@ def test_bench_command_prints_the_table(cli):
 def test_bench_command_outside_a_checkout_says_where_the_benchmarks_are(tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    import analysis.cli
+    import analysis.cli.reports
 
-    monkeypatch.setattr(analysis.cli, "BENCHMARKS", tmp_path / "benchmarks")
+    monkeypatch.setattr(analysis.cli.reports, "BENCHMARKS", tmp_path / "benchmarks")
     res = CliRunner().invoke(analysis.cli.app, ["bench", "--repeat", "1"])
     assert res.exit_code == 2
     lines = res.output.strip().splitlines()

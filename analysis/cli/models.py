@@ -1,0 +1,91 @@
+"""`bearingdyn generate` and `bearingdyn models`: code from specs, and the list of models."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    app,
+    reports_errors,
+)
+from analysis.errors import BearingdynError
+
+
+@app.command()
+@reports_errors
+def generate(
+    specs: Annotated[list[str] | None, typer.Argument(
+        help="Spec names (shipped or in BEARINGDYN_MODELS) or .toml paths (default: every "
+             "shipped spec).")] = None,
+    check: Annotated[bool, typer.Option(
+        "--check", help="Only compare; exit 1 when the generated code is stale.")] = False,
+    out: Annotated[Path | None, typer.Option(
+        help="Folder to write a loadable model into (give it to any command in place of a "
+             "model name). Default: generated/ for shipped specs, the user cache for others "
+             "(never the package).")] = None,
+):
+    """Generate a model's code from its equation spec (deterministic).
+
+    Shipped specs go to the package's generated/; any other spec goes to the user cache
+    (where `bearingdyn simulate SPEC.toml` finds it), or to --out DIR.
+    """
+    from modelgen.codegen import default_root
+    from modelgen.codegen import generate as run_generate
+    from modelgen.locations import cached_model_root, is_shipped
+    from modelgen.spec import load_spec, shipped_spec_names
+
+    names = specs or shipped_spec_names()
+    changed = run_generate(names, root=out, check=check)
+    targets: dict[Path, list[str]] = {}
+    for name in names:
+        _, path = load_spec(name)
+        target = out if out is not None else (
+            default_root() if is_shipped(path) else cached_model_root(path))
+        targets.setdefault(Path(target), []).append(str(name))
+    if check:
+        if changed:
+            typer.echo("stale generated files (run `bearingdyn generate`):\n  "
+                       + "\n  ".join(changed), err=True)
+            raise typer.Exit(1)
+        inside = [n for t, ns in targets.items() if t == default_root() for n in ns]
+        outside = {t: ns for t, ns in targets.items() if t != default_root()}
+        if inside:
+            typer.echo(f"generated/ matches its specs ({', '.join(inside)})")
+        for target, ns in outside.items():
+            typer.echo(f"{target} matches its specs ({', '.join(ns)})")
+        return
+    typer.echo(f"wrote {len(changed)} file(s)" + (": " + ", ".join(changed) if changed
+                                                 else " (all up to date)"))
+    for target, ns in targets.items():
+        if target == default_root():
+            typer.echo(f"{', '.join(ns)}: in the package's generated/")
+        elif out is not None:
+            typer.echo(f"{', '.join(ns)}: in {target.resolve()} (load it by giving that folder "
+                       "as the model, e.g. `bearingdyn simulate " + str(target) + " -o run.nc`)")
+        else:
+            typer.echo(f"{', '.join(ns)}: in the user cache, {target} (commands given the "
+                       "spec's path or name load it from there)")
+
+
+@app.command()
+@reports_errors
+def models():
+    """List the shipped models and the specs in BEARINGDYN_MODELS folders: origin, state
+    size n, bearings with their default balls, spec hash and title."""
+    from analysis.model import available_models, load_model, model_origin
+    from modelgen.errors import SpecError
+
+    for name in available_models():
+        origin = model_origin(name)
+        try:
+            m = load_model(name)
+        except (BearingdynError, SpecError) as exc:
+            typer.echo(f"{name:26s} {origin}: cannot load ({exc})")
+            continue
+        bearings = ", ".join(f"{b.name} {b.default_n_balls} balls" for b in m.bearings) \
+            or "no bearings"
+        typer.echo(f"{name:26s} {origin:8s} n = {m.n_state:2d}  {bearings:30s} "
+                   f"sha256 {m.spec_sha256[:12]}  {m.module.TITLE}")

@@ -1,0 +1,175 @@
+"""Commands on one run: `simulate`, `spectrum`, `poincare` and `plot`."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    ModelArgument,
+    NBallsOption,
+    SetOption,
+    _save_figure,
+    app,
+    frequency_words,
+    parse_n_balls,
+    parse_sets,
+    reports_errors,
+)
+from analysis.errors import InputError
+
+
+@app.command()
+@reports_errors
+def simulate(
+    model: ModelArgument,
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    n_balls: NBallsOption = None,
+    speed_rpm: Annotated[float | None, typer.Option(help="Shaft speed, rpm.")] = None,
+    sets: SetOption = None,
+    duration: Annotated[float | None, typer.Option(help="Simulated time, s.")] = None,
+    transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
+    dt: Annotated[float | None, typer.Option(help="RK4 step and output spacing, s.")] = None,
+    method: Annotated[str, typer.Option(help="rk4 (fixed step) or cvodes.")] = "rk4",
+    save_every: Annotated[int, typer.Option(help="Keep every n-th step.")] = 1,
+    no_compile: Annotated[bool, typer.Option(
+        "--no-compile", help="Run RK4 in the CasADi VM instead of compiled C.")] = False,
+):
+    """Integrate a model and write its motion (every state variable over t) to netCDF."""
+    from analysis.integrate.simulate import simulate as run
+    from analysis.io import save_dataset
+    from analysis.model import balls_text
+
+    params = parse_sets(sets)
+    if speed_rpm is not None:
+        params["speed_rpm"] = speed_rpm
+    start = time.perf_counter()
+    ds = run(model, parse_n_balls(n_balls), duration=duration, transient=transient, dt=dt,
+             method=method, save_every=save_every, compiled=not no_compile, **params)
+    wall = time.perf_counter() - start
+    save_dataset(ds, output)
+    speed = f"{ds.attrs['speed_rpm']:g} rpm, " if "speed_rpm" in ds.attrs else ""
+    typer.echo(f"wrote {output}: {ds.attrs['model']}, {balls_text(ds.attrs)}, {speed}"
+               f"t = {float(ds.t[0]):g}…{float(ds.t[-1]):g} s ({ds.sizes['t']} samples), "
+               f"{method} dt = {ds.attrs['dt']:g} s, wall {wall:.2f} s; variables "
+               f"{', '.join(ds.attrs['state_names'].split())}")
+
+
+@app.command()
+@reports_errors
+def spectrum(
+    run_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn simulate`.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print the peaks as JSON.")] = False,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.")] = None,
+    max_peaks: Annotated[int, typer.Option(help="Peaks per variable.")] = 8,
+    var: Annotated[list[str] | None, typer.Option(
+        "--var", help="State variable to analyse, repeatable (default: the first body's "
+                      "displacements, x and y).")] = None,
+):
+    """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
+    of a run's displacements or of any state variables."""
+    from analysis.io import load_dataset
+    from analysis.signal import cage_frequencies, displacement_names, vc_frequencies
+    from analysis.signal.spectrum import peak_table
+
+    ds = load_dataset(run_file)
+    variables = tuple(var) if var else displacement_names(ds)
+    peaks = peak_table(ds, variables, max_peaks=max_peaks)
+    if as_json:
+        typer.echo(json.dumps({"shaft_hz": ds.attrs.get("shaft_hz"),
+                               "vc_hz": ds.attrs.get("vc_hz"),
+                               "vc": vc_frequencies(ds.attrs),
+                               "cage": cage_frequencies(ds.attrs),
+                               "peaks": [p.as_dict() for p in peaks]}, indent=2))
+    else:
+        typer.echo(frequency_words(ds.attrs))
+        width = max(3, *(len(v) for v in variables))
+        typer.echo(f"{'var':>{width}} {'frequency (Hz)':>15} {'amplitude':>14}  label")
+        for p in peaks:
+            unit = ds[p.direction].attrs.get("units", "")
+            typer.echo(f"{p.direction:>{width}} {p.frequency_hz:15.2f} "
+                       f"{p.amplitude:10.3e} {unit:<4} {p.label or '?'}")
+    if output:
+        from analysis.reports.plots import save_figure, spectrum_figure
+
+        save_figure(spectrum_figure(ds, variables), output)
+        typer.echo(f"wrote {output}", err=as_json)
+
+
+@app.command()
+@reports_errors
+def poincare(
+    run_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn simulate`.")],
+    section: Annotated[str, typer.Option(
+        help="shaft, cage or vc period (of the first bearing), cage[BEARING], vc[BEARING], "
+             "or param:NAME (the period in s held by parameter NAME, e.g. "
+             "param:forcing_period).")] = "shaft",
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the points as JSON.")] = False,
+    x: Annotated[str | None, typer.Option(
+        "--x", help="State variable on the figure's horizontal axis (default: each "
+                    "displacement of the first body, against its velocity).")] = None,
+    y: Annotated[str | None, typer.Option(
+        "--y", help="State variable on the vertical axis (default: the velocity of --x).")
+    ] = None,
+):
+    """Stroboscopic Poincaré section of a run (once per shaft, cage, VC or parameter
+    period); every state variable is sampled."""
+    from analysis.io import load_dataset
+    from analysis.signal import displacement_names, run_state_names
+    from analysis.signal.poincare import SECTION_SYNTAX, parse_section, poincare_section
+
+    try:
+        parse_section(section)  # the syntax, before the file is read
+    except InputError:
+        raise InputError(f"--section: must be {SECTION_SYNTAX}, got {section!r}") from None
+    ds = load_dataset(run_file)
+    names = run_state_names(ds)
+    for option, name in (("--x", x), ("--y", y)):
+        if name is not None and name not in names:
+            raise InputError(f"{option}: no state variable {name!r} in this run; "
+                             f"variables: {', '.join(names)}")
+    if y is not None and x is None:
+        raise InputError("--y: give --x too")
+    try:
+        pts = poincare_section(ds, section)
+    except InputError as exc:
+        if str(exc).startswith("section: must be"):
+            raise InputError(f"--section: must be {SECTION_SYNTAX}, got {section!r}") from None
+        raise
+    shown = (x, y) if x else displacement_names(ds)
+    if as_json:
+        typer.echo(json.dumps({v: pts[v].values.tolist() for v in ("t", *names)}))
+    else:
+        ranges = ", ".join(f"{v} in [{float(pts[v].min()):.4e}, {float(pts[v].max()):.4e}] "
+                           f"{pts[v].attrs.get('units', '')}".rstrip()
+                           for v in shown if v is not None)
+        typer.echo(f"{pts.sizes['k']} points on the {section} section "
+                   f"(period {pts.attrs['section_period_s'] * 1e3:.4f} ms); {ranges}")
+    if output:
+        from analysis.reports.plots import poincare_figure, save_figure
+
+        save_figure(poincare_figure(ds, section, [(x, y)] if x else None), output)
+        typer.echo(f"wrote {output}", err=as_json)
+
+
+
+
+@app.command()
+@reports_errors
+def plot(
+    result: Annotated[Path, typer.Argument(help="Any bearingdyn netCDF result.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file (PNG, PDF, SVG).")],
+    var: Annotated[list[str] | None, typer.Option(
+        "--var", help="State variable to draw, repeatable (a diagram's section points, or a "
+                      "run's spectra; default: the first body's displacements).")] = None,
+):
+    """Draw the natural figure of a result file (run, branch, diagram or chart)."""
+    from analysis.io import open_result
+    from analysis.reports.plots import any_figure
+
+    _save_figure(any_figure(open_result(result), var), output)

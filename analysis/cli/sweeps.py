@@ -1,0 +1,110 @@
+"""Grids of settings: `sweep` (bifurcation diagrams) and `chart` (stability charts)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    ExecutorOption,
+    ModelArgument,
+    NBallsOption,
+    QuietOption,
+    SchedulerOption,
+    SetOption,
+    WorkersOption,
+    _executor,
+    app,
+    parse_n_balls,
+    parse_sets,
+    reports_errors,
+)
+
+
+@app.command()
+@reports_errors
+def sweep(
+    model: ModelArgument,
+    param: Annotated[str, typer.Option(
+        help="Runtime parameter on the grid, or n_balls (a model with one bearing) / "
+             "n_balls[BEARING] (several).")],
+    start: Annotated[float, typer.Option("--from", help="First value.")],
+    stop: Annotated[float, typer.Option("--to", help="Last value.")],
+    num: Annotated[int, typer.Option(help="Number of grid values.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    direction: Annotated[str, typer.Option(help="up, down or both.")] = "up",
+    follow: Annotated[bool, typer.Option(
+        help="Start each value from the previous end state (shows hysteresis).")] = True,
+    transient: Annotated[float, typer.Option(help="Dropped time per value, s.")] = 1.0,
+    samples: Annotated[int, typer.Option(help="Poincaré points per value.")] = 200,
+    section: Annotated[str, typer.Option(
+        help="shaft, cage, vc, cage[BEARING], vc[BEARING] or param:NAME.")] = "shaft",
+    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    quiet: QuietOption = False,
+):
+    """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram
+
+    setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
+                      section, dt)
+    ex = _executor(executor, workers, scheduler)
+    try:
+        ds = bifurcation_diagram(setting, Axis.linear(param, start, stop, num), output,
+                                 direction=direction, follow=follow, executor=ex,
+                                 progress=ProgressReporter(f"sweep {param}", quiet))
+    finally:
+        ex.close()
+    typer.echo(f"wrote {output}: {ds.sizes[param]} values × {ds.sizes['direction']} "
+               f"direction(s), {samples} section points each ({ex.name})")
+
+
+@app.command()
+@reports_errors
+def chart(
+    model: ModelArgument,
+    x: Annotated[str, typer.Option(help="x axis name:start:stop:count, e.g. "
+                                        "speed_rpm:1000:10000:200.")],
+    y: Annotated[str, typer.Option(help="y axis, e.g. n_balls:5:12 (one bearing) or "
+                                        "n_balls[left]:5:12 (several).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    transient: Annotated[float, typer.Option(help="Dropped time per point, s.")] = 1.0,
+    revolutions: Annotated[int, typer.Option(
+        help="Recorded periods of the section (shaft revolutions by default).")] = 200,
+    section: Annotated[str, typer.Option(
+        help="Section the points are classified on: shaft, cage, vc, cage[BEARING], "
+             "vc[BEARING] or param:NAME.")] = "shaft",
+    lyapunov: Annotated[bool, typer.Option(help="Largest Lyapunov exponent at every "
+                                                "point.")] = True,
+    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    quiet: QuietOption = False,
+    table: Annotated[bool, typer.Option("--table", help="Print the chart as a table.")] = False,
+):
+    """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.sweep import Axis, Setting, chart_table, stability_chart
+
+    setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, revolutions,
+                      section, dt, lyapunov)
+    ex = _executor(executor, workers, scheduler)
+    try:
+        ds = stability_chart(setting, Axis.parse(x), Axis.parse(y), output, executor=ex,
+                             progress=ProgressReporter("chart", quiet))
+    finally:
+        ex.close()
+    typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
+               f"points ({ex.name})")
+    if table:
+        typer.echo(chart_table(ds))
