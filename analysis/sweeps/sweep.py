@@ -4,10 +4,36 @@
   unbalance, damping, …) or its structure (``n_balls`` for a model with one bearing,
   ``n_balls[left]`` for the bearing ``left`` of a model with several) on a grid; at each
   value the motion is simulated, the transient dropped and ``samples`` Poincaré points of
-  every state variable kept. With ``follow=True`` each point starts from the end state
-  of the previous one, up and/or down the grid (hysteresis shows as different branches).
+  every state variable kept. With ``follow=True`` each value continues the previous one,
+  up and/or down the grid (hysteresis shows as different branches).
 * ``stability_chart``: a 2-D grid; each point classified (``analysis.stability.classify``) as
   periodic-n, quasi-periodic or chaotic, with its largest Lyapunov exponent and amplitude.
+
+Following keeps the forcing phase. The model is non-autonomous: its forcing depends on time
+only through angles ω_j·t (each bearing's cage angle, the shaft angle of the unbalance, a
+forcing period of its own), so a state belongs with the angles at its time. A followed value
+starts from the previous value's end state z(t_end) at the time
+
+    t_start = t_end · T_new / T_old      (T: the period of the section, s)
+
+at which the new value has run as many section periods as the old one had at t_end. Its
+section angle is then exactly the old one, and so is every other forcing angle when the grid
+parameter scales all forcing frequencies by one factor (the speed: shaft, cages and VC are
+proportional to it) or leaves them unchanged (in the shipped models: load, damping,
+clearance, unbalance, …). Where it changes their ratios (``n_balls``, race diameters) only
+the section's angle is carried: no start time matches incommensurate angles all at once.
+
+Why not restart at t = 0 (what following did before): the end state lies at some fraction
+of a section period past a section time (and, with several forcing frequencies, at some
+phase of the others), so the restart kicks the rotor by about the orbit's size and lets it
+fall onto whatever attractor coexists (the period-3 orbit of the balanced rotor at 50 N,
+say). Why not keep t_end itself: at a new speed the angles at t_end differ from the old
+ones by Δω·t_end, many turns after a few values. Why not restart at t = 0 from the last
+section point: exact for a single forcing frequency, but it drops the phase of any other
+(the shaft angle of an unbalanced rotor on the VC section). Time runs on along a chain (a
+few tens of seconds for a hundred values: the angles lose no significant accuracy); each
+run's start time is stored with its point (``t_start`` in the result), so a resumed chain
+continues bit for bit.
 
 Both run through one executor (``analysis.sweeps.executors``: serial, local processes or Dask) and
 store each finished point at once (``analysis.sweeps.store``): re-running an interrupted command
@@ -27,10 +53,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
-from analysis.integrate.simulate import run_attrs, simulate, state_at
+from analysis.errors import InputError, SimulationError
+from analysis.integrate.checks import check_rk4_step
+from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.simulate import blow_up_limit, run_attrs, simulate, state_at, to_dataset
 from analysis.io import save_dataset
-from analysis.model import BallCounts, load_model
+from analysis.model import BallCounts, System, load_model
 from analysis.signal import displacement_names
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
@@ -147,19 +175,75 @@ def check_grid(setting: Setting, *axes: Axis) -> None:
                       setting.section)
 
 
-def _record(setting: Setting, n_balls: BallCounts, values: dict[str, float],
-            initial_state=None) -> xr.Dataset:
-    """Simulate transient + ``samples`` section periods."""
+def _period(setting: Setting, n_balls: BallCounts, values: dict[str, float]) -> float:
+    """The period (s) of the setting's section at a grid value."""
     model = load_model(setting.model)
     full = model.parameters(values)
     freqs = model.frequencies(model.structure(n_balls), full)
     try:
-        period = period_of({**full, **freqs.as_dict()}, setting.section)
+        return period_of({**full, **freqs.as_dict()}, setting.section)
     except InputError as exc:
         raise InputError(f"section {setting.section}: no period here ({exc})") from None
-    duration = setting.transient + (setting.samples + 0.5) * period
-    return simulate(model, n_balls, duration=duration, transient=setting.transient,
-                    dt=setting.dt, initial_state=initial_state, **values)
+
+
+def _duration(setting: Setting, period: float) -> float:
+    """Simulated time (s) of a value: the transient, then ``samples`` + ½ section periods."""
+    return setting.transient + (setting.samples + 0.5) * period
+
+
+def _record(setting: Setting, n_balls: BallCounts, values: dict[str, float],
+            initial_state=None) -> xr.Dataset:
+    """Simulate transient + ``samples`` section periods from t = 0."""
+    duration = _duration(setting, _period(setting, n_balls, values))
+    return simulate(load_model(setting.model), n_balls, duration=duration,
+                    transient=setting.transient, dt=setting.dt, initial_state=initial_state,
+                    **values)
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a value's run starts: ``state`` (SI, the model's order) at time ``time`` (s)."""
+
+    state: tuple[float, ...]
+    time: float = 0.0
+
+
+def _record_from(setting: Setting, n_balls: BallCounts, values: dict[str, float],
+                 start: Start) -> xr.Dataset:
+    """Like ``_record`` but from ``start.state`` at t = ``start.time``: fixed-step RK4 on
+    t = start.time + n·dt (the integrator's own times), the transient dropped.
+    (``simulate`` always starts at t = 0.)"""
+    model = load_model(setting.model)
+    system = System.make(model, n_balls, start.state, **values)
+    duration, dt = _duration(setting, _period(setting, n_balls, values)), setting.dt
+    check_rk4_step(model, system.structure, dict(system.parameters), dt, "rk4")
+    n_steps = round(duration / dt)
+    states = run_rk4(library(model, system.structure), system.p, system.state, dt, n_steps,
+                     t0=start.time)
+    elapsed = np.arange(n_steps + 1) * dt
+    _check_bounded(system, states, start.time + elapsed)
+    keep = elapsed >= setting.transient - 1e-12 * duration
+    attrs = run_attrs(model, system.structure, dict(system.parameters))
+    attrs.update(method="rk4", dt=dt, save_every=1, duration=duration,
+                 transient=setting.transient, t_start=start.time)
+    attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, system.state,
+                                                          strict=True)})
+    return to_dataset(start.time + elapsed[keep], states[:, keep], attrs, model)
+
+
+def _check_bounded(system: System, states: np.ndarray, times: np.ndarray) -> None:
+    """``SimulationError`` when a state is not finite or a body's centre is beyond
+    ``blow_up_limit`` (m), as ``simulate`` checks its runs."""
+    limit = blow_up_limit(dict(system.parameters))
+    bad = ~np.all(np.isfinite(states), axis=0)
+    for i, j in system.model.centre_indices():
+        radius = np.abs(states[i]) if j is None else np.hypot(states[i], states[j])
+        bad |= radius > limit
+    if np.any(bad):
+        raise SimulationError(
+            f"the motion blew up at t = {times[int(np.argmax(bad))]:.6g} s (displacement "
+            f"not finite or beyond {limit:g} m); try a smaller dt, more damping, or check "
+            "the parameters")
 
 
 def _amplitudes(ds: xr.Dataset) -> dict[str, float]:
@@ -168,16 +252,33 @@ def _amplitudes(ds: xr.Dataset) -> dict[str, float]:
     return {f"amplitude_{v}": float(np.ptp(ds[v].values)) / 2 for v in displacement_names(ds)}
 
 
-def diagram_point(setting: Setting, n_balls, values, initial_state=None) -> dict:
-    """Poincaré samples of every state variable, end state and amplitudes at one grid
-    value."""
-    ds = _record(setting, n_balls, values, initial_state)
+def diagram_point(setting: Setting, n_balls: BallCounts, values: dict[str, float],
+                  start: Start | None = None) -> dict:
+    """Poincaré samples of every state variable, amplitudes, and the run's start and end
+    (``t_start``, ``t_final`` in s, ``final`` the end state) at one grid value; from the
+    spec's initial state at t = 0 without ``start``."""
+    if start is None:
+        ds, t_start = _record(setting, n_balls, values), 0.0
+    else:
+        ds, t_start = _record_from(setting, n_balls, values, start), start.time
     pts = poincare_section(ds, setting.section)
     k = setting.samples
     out = {v: pts[v].values[:k] for v in ds.attrs["state_names"].split()}
     out["final"] = state_at(ds, -1)
+    out["t_start"] = t_start
+    out["t_final"] = float(ds.t[-1])
     out.update(_amplitudes(ds))
     return out
+
+
+def follow_start(setting: Setting, previous: tuple[BallCounts, dict[str, float]],
+                 point: Mapping, n_balls: BallCounts, values: dict[str, float]) -> Start:
+    """Start of a followed value after the ``previous`` (n_balls, values) ended as
+    ``point`` (a result of ``diagram_point``): its end state at the time with the same
+    section phase, t = t_final·T_new/T_old (s; see the module docstring)."""
+    periods = float(point["t_final"]) / _period(setting, *previous)
+    return Start(tuple(np.asarray(point["final"], dtype=float)),
+                 periods * _period(setting, n_balls, values))
 
 
 def chart_point(setting: Setting, n_balls, values) -> dict:
@@ -205,6 +306,11 @@ def chart_point(setting: Setting, n_balls, values) -> dict:
 
 # --- bifurcation diagrams -----------------------------------------------------------------
 
+FOLLOW_RESTART = "end state at the same section phase"
+"""How a followed value starts (``follow_start``); part of a diagram's stored definition
+and of its attrs (``follow_restart``)."""
+
+
 @dataclass(frozen=True)
 class Chain:
     """One direction of a diagram: grid indices in order, run by one worker."""
@@ -222,19 +328,23 @@ class Chain:
 
 
 def run_chain(chain: Chain) -> int:
-    """Compute the missing points of one chain in order, storing each as it finishes."""
+    """Compute the missing points of one chain in order, storing each as it finishes; a
+    followed value starts where the previous one ended (``follow_start``)."""
     store = PointStore(chain.output, chain.definition)
-    done, state, computed = store.done(), None, 0
+    done, computed = store.done(), 0
+    previous, point = None, None
     for i in chain.order():
         key = f"{chain.direction}-{i:05d}"
-        if key in done:
-            state = tuple(store.load(key)["final"]) if chain.follow else None
-            continue
         n_balls, values = chain.setting.at(**{chain.axis.name: chain.axis.values[i]})
-        out = diagram_point(chain.setting, n_balls, values, state if chain.follow else None)
-        store.save(key, out)
-        state = tuple(out["final"])
-        computed += 1
+        if key in done:
+            point = store.load(key)
+        else:
+            start = follow_start(chain.setting, previous, point, n_balls, values) \
+                if chain.follow and point is not None else None
+            point = diagram_point(chain.setting, n_balls, values, start)
+            store.save(key, point)
+            computed += 1
+        previous = (n_balls, values)
     return computed
 
 
@@ -257,6 +367,8 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
     definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
                   "structure": _structure(setting), "directions": directions,
                   "follow": follow}
+    if follow:  # stores of the former restarts at t = 0 are not resumed with these
+        definition["restart"] = FOLLOW_RESTART
     store = PointStore(output, definition)
     chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
     total = len(chains) * len(axis.values)
@@ -294,7 +406,7 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
     arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
               for v in model.state_names}
     amp = {v: np.full((len(directions), n), np.nan) for v in first
-           if v.startswith("amplitude_")}
+           if v.startswith("amplitude_") or v == "t_start"}
     for d, direction in enumerate(directions):
         for i in range(n):
             point = store.load(f"{direction}-{i:05d}")
@@ -306,9 +418,14 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
                 {"units": units[v], "long_name": f"{v} on the {setting.section} section"})
             for v in arrays}
     data.update({v: (("direction", axis.name), amp[v],
-                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amp})
+                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amp
+                 if v != "t_start"})
+    data["t_start"] = (("direction", axis.name), amp["t_start"],
+                       {"units": "s", "long_name": "time at which the value's run starts"})
     attrs = _attrs(setting, "diagram")
     attrs.update(param=axis.name, follow=int(follow))
+    if follow:
+        attrs.update(follow_restart=FOLLOW_RESTART)
     return xr.Dataset(data, coords={"direction": directions, axis.name: _axis_coord(axis),
                                     "k": np.arange(setting.samples)}, attrs=attrs)
 
