@@ -38,7 +38,10 @@ def sweep(
     sets: SetOption = None,
     direction: Annotated[str, typer.Option(help="up, down or both.")] = "up",
     follow: Annotated[bool, typer.Option(
-        help="Start each value from the previous end state (shows hysteresis).")] = True,
+        help="Start each value from the previous value's end state at the same forcing "
+             "phase (time carried, scaled by the section period: shows hysteresis); "
+             "--no-follow: every value from the spec's initial state at t = 0, in "
+             "parallel.")] = True,
     transient: Annotated[float, typer.Option(help="Dropped time per value, s.")] = 1.0,
     samples: Annotated[int, typer.Option(help="Poincaré points per value.")] = 200,
     section: Annotated[str, typer.Option(
