@@ -25,6 +25,9 @@ from analysis.cli.common import (
     reports_errors,
 )
 
+RUNNING_ROWS = 200
+"""Most rows of each running estimate in the JSON output (evenly thinned, the last kept)."""
+
 
 @app.command()
 @reports_errors
@@ -33,35 +36,87 @@ def lyapunov(
     n_balls: NBallsOption = None,
     speed_rpm: SpeedOption = None,
     sets: SetOption = None,
-    duration: Annotated[float, typer.Option(help="Averaging time after the transient, s.")] = 5.0,
-    transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
-    dt: Annotated[float | None, typer.Option(help="RK4 step, s.")] = None,
+    duration: Annotated[float | None, typer.Option(
+        help="Averaging time, s (default: ten times the spec's duration).")] = None,
+    transient: Annotated[float | None, typer.Option(
+        help="Time before the averaging starts, s (default: the spec's).")] = None,
+    tangent_transient: Annotated[float | None, typer.Option(
+        help="Renormalised time before the averaging whose logs are discarded, s (the last "
+             "part of the transient; default: a tenth of the spec's transient).")] = None,
+    dt: Annotated[float | None, typer.Option(help="RK4 step, s (default: the spec's).")] = None,
     renorm_every: Annotated[int, typer.Option(help="RK4 steps between QR steps.")] = 100,
     as_json: JsonOption = False,
-    output: Annotated[Path | None, typer.Option("-o", "--output",
-                                                help="Figure of the running estimates.")] = None,
+    output: Annotated[Path | None, typer.Option(
+        "-o", "--output", help="Figure of the running estimates (the discarded tangent "
+                               "transient shaded).")] = None,
 ):
     """Lyapunov spectrum (one exponent per state variable, 1/s) from the tangent dynamics of
-    the RK4 map."""
+    the RK4 map, with its running estimates."""
     from analysis.stability.lyapunov import lyapunov as run_lyapunov
 
-    res = run_lyapunov(model, parse_n_balls(n_balls), duration=duration, transient=transient,
-                       dt=dt, renorm_every=renorm_every, **_parameters(speed_rpm, sets))
+    res = run_lyapunov(model, parse_n_balls(n_balls), renorm_every=renorm_every,
+                       **_given(duration=duration, transient=transient,
+                                tangent_transient=tangent_transient, dt=dt),
+                       **_parameters(speed_rpm, sets))
     data = {"exponents": res.exponents.values.tolist(), "ci95": res.ci95.values.tolist(),
             "sum_of_exponents": res.attrs["sum_of_exponents"],
             "mean_divergence": res.attrs["mean_divergence"],
+            **{k: float(res.attrs[k]) for k in ("dt", "transient", "tangent_transient",
+                                                  "duration")},
+            "averaging_start": float(res.t[0]) - float(res.t[1] - res.t[0]),
+            "running": _running_json(res.running, "t"),
+            "transient_running": _running_json(res.transient_running, "t_transient"),
             **{k: int(v) for k, v in res.attrs.items() if str(k).startswith("n_balls")}}
     if as_json:
         typer.echo(json.dumps(data, indent=2))
     else:
-        for k, (lam, ci) in enumerate(zip(data["exponents"], data["ci95"], strict=True), 1):
-            typer.echo(f"λ{k} = {lam:12.5g} ± {ci:.2g} 1/s (95 %)")
-        typer.echo(f"sum = {data['sum_of_exponents']:.6g} 1/s; mean divergence "
-                   f"{data['mean_divergence']:.6g} 1/s")
+        _echo_lyapunov(res, data)
     if output:
-        from analysis.reports.plots import lyapunov_figure
+        _save_figure(_lyapunov_figure(res), output, err=as_json)
 
-        _save_figure(lyapunov_figure(res), output, err=as_json)
+
+def _running_json(running, dim: str) -> dict:
+    """``{"t": [...], "exponents": [[λ1, λ2, …] per time]}`` of a running estimate (1/s
+    over s), thinned evenly to at most ``RUNNING_ROWS`` rows (the last kept)."""
+    size = running.sizes[dim]
+    keep = np.unique(np.linspace(0, size - 1, min(size, RUNNING_ROWS)).round().astype(int)) \
+        if size else np.array([], dtype=int)
+    part = running.isel({dim: keep})
+    return {"t": part[dim].values.tolist(), "exponents": part.values.tolist()}
+
+
+def _echo_lyapunov(res, data: dict) -> None:
+    """The exponents, the sum rule, the lengths and λ1's running estimate in words."""
+    for k, (lam, ci) in enumerate(zip(data["exponents"], data["ci95"], strict=True), 1):
+        typer.echo(f"λ{k} = {lam:12.5g} ± {ci:.2g} 1/s (95 %)")
+    typer.echo(f"sum = {data['sum_of_exponents']:.6g} 1/s; mean divergence "
+               f"{data['mean_divergence']:.6g} 1/s")
+    typer.echo(f"averaged over {data['duration']:g} s from t = {data['averaging_start']:g} s "
+               f"after a tangent transient of {data['tangent_transient']:g} s (discarded)")
+    running = res.running.sel(index=1)
+    marks = [running.isel(t=max(0, round(f * running.sizes["t"]) - 1))
+             for f in (0.1, 0.25, 0.5, 0.75, 1.0)]
+    typer.echo("running λ1: " + ", ".join(f"{float(m):.4g} (t = {float(m.t):.4g} s)"
+                                           for m in marks))
+
+
+def _lyapunov_figure(res):
+    """``lyapunov_figure`` with the running estimates of the discarded tangent transient
+    (dashed, grey span) before the averaging, at the averaged estimates' vertical scale."""
+    from analysis.reports.plots import lyapunov_figure
+
+    fig = lyapunov_figure(res)
+    if res.sizes.get("t_transient", 0):
+        ax = fig.axes[0]
+        limits = ax.get_ylim()
+        t = res.t_transient.values
+        ax.axvspan(t[0] - (t[1] - t[0] if len(t) > 1 else 0.0), t[-1], color="0.9",
+                   label="tangent transient (discarded)")
+        for k in res.index.values:
+            ax.plot(t, res.transient_running.sel(index=k), ls="--", lw=0.8, color="0.4")
+        ax.set_ylim(limits)
+        ax.legend(fontsize=8)
+    return fig
 
 
 @app.command()
@@ -75,14 +130,16 @@ def floquet(
     segments: Annotated[int, typer.Option(help="Shooting segments (1: single).")] = 1,
     dt: Annotated[float | None, typer.Option(
         help="Largest RK4 step, s (default: the spec's).")] = None,
-    settle: Annotated[float, typer.Option(help="Simulated time for the guess, s.")] = 0.5,
+    settle: Annotated[float | None, typer.Option(
+        help="Simulated time for the guess, s (default: the spec's transient, at least 20 "
+             "periods).")] = None,
     as_json: JsonOption = False,
 ):
     """Periodic orbit by Newton shooting, its Floquet multipliers and stability."""
     from analysis.stability.periodic import shoot
 
-    orbit = shoot(model, parse_n_balls(n_balls), period, segments=segments, settle=settle,
-                  **_given(dt=dt), **_parameters(speed_rpm, sets))
+    orbit = shoot(model, parse_n_balls(n_balls), period, segments=segments,
+                  **_given(dt=dt, settle=settle), **_parameters(speed_rpm, sets))
     if as_json:
         typer.echo(json.dumps(orbit.as_dict(), indent=2))
         return

@@ -18,6 +18,7 @@ converge more slowly in Δt than smooth ones.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from functools import cache
 from pathlib import Path
@@ -33,30 +34,79 @@ from analysis.model import BallCounts, Model, Structure, System, as_system
 
 BLOCKS = 10
 """Batches for the confidence interval of the exponents (batch means)."""
+DURATION_FACTOR = 10
+"""Default averaging time in spec durations (30 s for the bearing models: a 95 % interval of
+λ1 below 5 1/s for the paper's case, N_b = 6…10; 6000 s for Duffing)."""
+TANGENT_TRANSIENT_FRACTION = 0.1
+"""Default tangent transient as a fraction of the spec's transient (0.1 s for the bearing
+models, 30 s for Duffing): time for the tangent vectors to turn from the identity frame into
+the Lyapunov (covariant-ordered) frame before the logs are averaged."""
 
 
 @cache
-def _tangent_block(model: Model, structure: Structure, n_vectors: int, renorm_every: int,
-                   n_renorm: int) -> ca.Function:
-    """(z, t, Q, p, h) -> (z, t, Q, log|diag R| per renormalisation (k × n_renorm))."""
+def tangent_step(model: Model, structure: Structure,
+                 n_vectors: int) -> tuple[ca.Function, ca.Function]:
+    """One RK4 step of the state and ``n_vectors`` tangent vectors, as SX Functions.
+
+    ``step(s, p, h, t0, c) -> s'`` with ``s = [z; k; vec(Q)]``: the state z (SI units)
+    after step k, whose time is ``t0 + k·h`` (s) as in ``compiled.rk4_blocks`` (so the
+    states are those of ``simulate`` bit for bit), and the tangent vectors Q (n × k) moved by
+    the exact derivative of the step (forward-mode AD, ``jtimes``). The subexpressions that
+    depend on p, h and t0 only (the cage rotations, …) are the inputs ``c``, computed once
+    per call by ``constants(p, h, t0) -> c`` (``casadi.extract_parametric``).
+    """
     funcs = model.functions(structure)
-    n_par, n = len(model.parameter_names), model.n_state
-    z, t, h = ca.SX.sym("z", n), ca.SX.sym("t"), ca.SX.sym("h")
-    p, q = ca.SX.sym("p", n_par), ca.SX.sym("q", n, n_vectors)
-    z_next = funcs.rk4_step(t, z, p, h)
-    state = ca.vertcat(z, t, ca.vec(q))
-    step = ca.Function("tangent_step", [state, p, h],
-                       [ca.vertcat(z_next, t + h, ca.vec(ca.jtimes(z_next, z, q)))])
-    fold = step.fold(renorm_every)
-    s, pm, hm = ca.MX.sym("s", state.shape[0]), ca.MX.sym("p", n_par), ca.MX.sym("h")
-    moved = fold(s, ca.repmat(pm, 1, renorm_every), ca.repmat(hm, 1, renorm_every))
-    q_new, logs = _qr_logs(n, n_vectors)(ca.reshape(moved[n + 1:], n, n_vectors))
-    block = ca.Function("renorm", [s, pm, hm],
-                        [ca.vertcat(moved[:n + 1], ca.vec(q_new)), logs])
-    run = block.mapaccum("renorm_run", n_renorm)
-    s0 = ca.MX.sym("s0", state.shape[0])
-    out_state, out_logs = run(s0, ca.repmat(pm, 1, n_renorm), ca.repmat(hm, 1, n_renorm))
-    return ca.Function("lyapunov_block", [s0, pm, hm], [out_state[:, -1], out_logs])
+    n, n_par = model.n_state, len(model.parameter_names)
+    z, k, q = ca.SX.sym("z", n), ca.SX.sym("k"), ca.SX.sym("q", n, n_vectors)
+    p, h, t0 = ca.SX.sym("p", n_par), ca.SX.sym("h"), ca.SX.sym("t0")
+    z_next = funcs.rk4_step(t0 + k * h, z, p, h)
+    moved = ca.vertcat(z_next, k + 1, ca.vec(ca.jtimes(z_next, z, q)))
+    expr, extracted, values = ca.extract_parametric(moved, ca.vertcat(p, h, t0))
+    c = ca.vertcat(*extracted)
+    step = ca.Function("tangent_step", [ca.vertcat(z, k, ca.vec(q)), p, h, t0, c], [expr])
+    return step, ca.Function("tangent_constants", [p, h, t0], [ca.vertcat(*values)])
+
+
+def _renormalisation(model: Model, structure: Structure, n_vectors: int, renorm_every: int,
+                     with_states: bool) -> ca.Function:
+    """``(s, p, h, t0, c) -> (s', log|diag R| (k), [Z])``: ``renorm_every`` steps of
+    ``tangent_step``, then Q re-orthonormalised by QR; Z ((n + 1) × renorm_every) holds
+    ``[z; k]`` after every step when ``with_states``."""
+    step, _ = tangent_step(model, structure, n_vectors)
+    n = model.n_state
+    s, p, h, t0, c = (ca.MX.sym(name, step.sparsity_in(i))
+                      for i, name in enumerate(("s", "p", "h", "t0", "c")))
+    repeated = [ca.repmat(a, 1, renorm_every) for a in (p, h, t0, c)]
+    if with_states:
+        states = step.mapaccum(renorm_every)(s, *repeated)
+        last, outputs = states[:, -1], [states[:n + 1, :]]
+    else:
+        last, outputs = step.fold(renorm_every)(s, *repeated), []
+    q_new, logs = _qr_logs(n, n_vectors)(ca.reshape(last[n + 1:], n, n_vectors))
+    return ca.Function("renorm", [s, p, h, t0, c],
+                       [ca.vertcat(last[:n + 1], ca.vec(q_new)), logs, *outputs])
+
+
+@cache
+def tangent_block(model: Model, structure: Structure, n_vectors: int, renorm_every: int,
+                  n_renorm: int, with_states: bool = False) -> ca.Function:
+    """``(s, p, h, t0) -> (s', logs (k × n_renorm), [Z])``: ``n_renorm`` renormalisations
+    of ``renorm_every`` steps each (see ``tangent_step`` for s); Z ((n + 1) ×
+    renorm_every·n_renorm) holds ``[z; k]`` after every step when ``with_states``."""
+    renorm = _renormalisation(model, structure, n_vectors, renorm_every, with_states)
+    _, constants = tangent_step(model, structure, n_vectors)
+    s, p, h, t0 = (ca.MX.sym(name, renorm.sparsity_in(i))
+                   for i, name in enumerate(("s", "p", "h", "t0")))
+    args = [ca.repmat(a, 1, n_renorm) for a in (p, h, t0, constants(p, h, t0))]
+    out = renorm.mapaccum(n_renorm)(s, *args)
+    name = f"lyapunov_{_tag(model, structure)}_k{n_vectors}_r{renorm_every}_n{n_renorm}"
+    return ca.Function(name + ("_states" if with_states else ""), [s, p, h, t0],
+                       [out[0][:, -1], *out[1:]])
+
+
+def _tag(model: Model, structure: Structure) -> str:
+    balls = "_".join(str(b) for b in structure) or "0"
+    return f"{model.name.replace('-', '_')}_nb{balls}"
 
 
 @cache
@@ -69,12 +119,50 @@ def _qr_logs(n: int, n_vectors: int) -> ca.Function:
                                         ca.log(ca.fabs(ca.diag(r)))])
 
 
+def default_lengths(model: Model) -> tuple[float, float, float]:
+    """(transient, duration, tangent transient) in s from the model's own time scale: the
+    spec's transient, ``DURATION_FACTOR`` times its duration (the simulated time of a run:
+    3 s for the bearing models, 600 s for Duffing) and ``TANGENT_TRANSIENT_FRACTION`` of its
+    transient."""
+    sim = model.simulation_defaults
+    transient = float(sim.get("transient", 0.0))
+    duration = DURATION_FACTOR * float(sim["duration"])
+    return transient, duration, TANGENT_TRANSIENT_FRACTION * transient
+
+
+def renorm_counts(dt: float, renorm_every: int, duration: float,
+                  tangent_transient: float) -> tuple[int, int]:
+    """(discarded, averaged) numbers of renormalisations, both multiples of ``BLOCKS`` (one
+    call of the tangent block each): the tangent transient rounded up, the averaging time
+    rounded to the nearest (at least ``BLOCKS``)."""
+    interval = dt * renorm_every
+    calls = math.ceil(tangent_transient / (interval * BLOCKS) - 1e-9)
+    averaged = max(BLOCKS, round(duration / interval))
+    return BLOCKS * max(0, calls), averaged - averaged % BLOCKS
+
+
+def _check_options(n: int, n_exponents, renorm_every, duration: float,
+                   tangent_transient: float) -> int:
+    if isinstance(n_exponents, bool) or not isinstance(n_exponents, (int, np.integer)) or \
+            not 1 <= n_exponents <= n:
+        raise InputError(f"n_exponents: must be an integer in [1, {n}], got {n_exponents!r}")
+    if not (isinstance(renorm_every, int) and renorm_every >= 1):
+        raise InputError(f"renorm_every: must be an integer >= 1, got {renorm_every!r}")
+    if not (math.isfinite(duration) and duration > 0):
+        raise InputError(f"duration: must be a finite number > 0 s, got {duration!r}")
+    if not (math.isfinite(tangent_transient) and tangent_transient >= 0):
+        raise InputError(f"tangent_transient: must be a finite number >= 0 s, "
+                         f"got {tangent_transient!r}")
+    return int(n_exponents)
+
+
 def lyapunov(
     system: System | Model | str | Path,
     n_balls: BallCounts = None,
     *,
-    duration: float = 5.0,
+    duration: float | None = None,
     transient: float | None = None,
+    tangent_transient: float | None = None,
     dt: float | None = None,
     n_exponents: int | None = None,
     renorm_every: int = 100,
@@ -82,60 +170,103 @@ def lyapunov(
     compiled: bool = True,
     **parameters: float,
 ) -> xr.Dataset:
-    """Lyapunov exponents (1/s), largest first, averaged over ``duration`` seconds after a
-    ``transient`` (s).
+    """Lyapunov exponents (1/s), largest first, averaged over ``duration`` seconds.
 
     ``system``: a ``System`` or a model (name, spec path, ``Model``) completed by
     ``n_balls``, ``initial_state`` (the model's state order and units) and ``**parameters``.
+    Times (s) default to the model's own (``default_lengths``): ``transient`` and
+    ``duration`` to the spec's, ``tangent_transient`` to a tenth of the spec's transient;
+    ``dt`` to the spec's step.
+
+    The state alone runs for ``transient`` − ``tangent_transient``; then the tangent vectors
+    start from the identity frame and are renormalised for ``tangent_transient`` seconds
+    with their logs discarded (the frame turns into the Lyapunov frame; averaging from the
+    identity frame biases λ1 by O(1/duration)), then averaged for ``duration``. The
+    averaging thus starts at max(``transient``, ``tangent_transient``); the tangent
+    transient is rounded up to whole blocks of ten renormalisations. The states are those of
+    ``simulate`` bit for bit (the same RK4 steps at times k·dt), wherever the tangent starts.
     ``n_exponents`` in [1, n] (default n, the model's state size: the whole spectrum).
-    ``dt`` (s) and ``transient`` default to the spec's.
 
     Returns a Dataset with ``exponents`` (dim ``index``), their 95 % confidence half-widths
-    ``ci95`` (batch means over ten blocks), ``running`` (the running estimates over time,
-    dims ``t`` × ``index``, to judge convergence) and the mean phase-space divergence
-    ``mean_divergence`` (1/s) as an attribute, next to the run's provenance (``run_attrs``).
-    ``compiled``: the tangent block runs as C (``analysis.integrate.compiled``), else in the
-    CasADi VM.
+    ``ci95`` (batch means over ten blocks), ``running`` (the running estimates over the
+    averaging time, dims ``t`` × ``index``, to judge convergence), ``transient_running``
+    (those of the discarded tangent transient, dims ``t_transient`` × ``index``) and the mean
+    phase-space divergence ``mean_divergence`` (1/s) as an attribute, next to the run's
+    provenance (``run_attrs``). ``compiled``: the tangent block runs as C
+    (``analysis.integrate.compiled``), else in the CasADi VM.
     """
     system = as_system(system, n_balls, initial_state, **parameters)
     model, structure, values = system.model, system.structure, dict(system.parameters)
     n = model.n_state
-    sim = model.simulation_defaults
-    transient = float(sim["transient"] if transient is None else transient)
-    dt = float(sim["dt"] if dt is None else dt)
-    n_exponents = n if n_exponents is None else n_exponents
-    if isinstance(n_exponents, bool) or not isinstance(n_exponents, (int, np.integer)) or \
-            not 1 <= n_exponents <= n:
-        raise InputError(f"n_exponents: must be an integer in [1, {n}], got {n_exponents!r}")
-    n_exponents = int(n_exponents)
-    if not (isinstance(renorm_every, int) and renorm_every >= 1):
-        raise InputError(f"renorm_every: must be an integer >= 1, got {renorm_every!r}")
-    if not duration > 0:
-        raise InputError(f"duration: must be > 0 s, got {duration!r}")
-    if transient > 0:
-        settled = simulate(system, duration=transient + dt, transient=transient, dt=dt)
-        z0 = state_at(settled, 0)
-        t0 = float(settled.t[0])
-    else:
-        z0, t0 = system.state, 0.0
-    n_renorm = max(BLOCKS, round(duration / (dt * renorm_every)))
-    n_renorm -= n_renorm % BLOCKS
-    per_call = BLOCKS  # one block shape for every duration: one compilation per model
+    default_transient, default_duration, default_tangent = default_lengths(model)
+    transient = float(default_transient if transient is None else transient)
+    duration = float(default_duration if duration is None else duration)
+    tangent_transient = float(default_tangent if tangent_transient is None
+                              else tangent_transient)
+    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
+    n_exponents = _check_options(n, n if n_exponents is None else n_exponents,
+                                 renorm_every, duration, tangent_transient)
+    discarded, averaged = renorm_counts(dt, renorm_every, duration, tangent_transient)
+    start = max(0, round(transient / dt) - discarded * renorm_every)
+    z0 = _state_after(system, start, dt)
     p = system.p
-    state = np.concatenate([z0, [t0], np.eye(n)[:, :n_exponents].T.ravel()])
-    block = compiled_function(_tangent_block(model, structure, n_exponents, renorm_every,
-                                             per_call), (state, p, dt), compiled)
+    state = np.concatenate([z0, [start], np.eye(n)[:, :n_exponents].T.ravel()])
+    block = compiled_function(tangent_block(model, structure, n_exponents, renorm_every,
+                                            BLOCKS), (state, p, dt, 0.0), compiled)
     logs, traces, jac = [], [], system.functions.jac
-    for _ in range(n_renorm // per_call):
-        out_state, out_logs = block(state, p, dt)
+    for call in range((discarded + averaged) // BLOCKS):
+        out_state, out_logs = block(state, p, dt, 0.0)
         state = np.asarray(out_state).ravel()
         if not np.all(np.isfinite(state)):
-            raise SimulationError(f"the tangent dynamics blew up near t = {state[n]:.6g} s; "
-                                  "try a smaller dt")
+            raise SimulationError(f"the tangent dynamics blew up near t = "
+                                  f"{state[n] * dt:.6g} s; try a smaller dt")
         logs.append(np.asarray(out_logs))
-        traces.append(np.trace(np.asarray(jac(state[n], state[:n], p))))
-    return _result(model, structure, values, np.concatenate(logs, axis=1), dt * renorm_every,
-                   t0, float(np.mean(traces)), dt, renorm_every, duration, transient)
+        if call >= discarded // BLOCKS:
+            traces.append(np.trace(np.asarray(jac(state[n] * dt, state[:n], p))))
+    logs_all = np.concatenate(logs, axis=1)
+    interval = dt * renorm_every
+    res = _result(model, structure, values, logs_all[:, discarded:], interval,
+                  (start + discarded * renorm_every) * dt, float(np.mean(traces)), dt,
+                  renorm_every, duration, transient)
+    res.attrs["tangent_transient"] = discarded * interval
+    return _with_transient(res, logs_all[:, :discarded], interval, start * dt)
+
+
+def _state_after(system: System, steps: int, dt: float) -> np.ndarray:
+    """The state after ``steps`` RK4 steps of ``dt`` s from the system's state at t = 0
+    (``simulate``: its checks and its blocks)."""
+    if steps == 0:
+        return np.asarray(system.state, dtype=float)
+    settled = simulate(system, duration=(steps + 1) * dt, transient=steps * dt, dt=dt,
+                       save_every=1)
+    return state_at(settled, 0)
+
+
+def running_mean(logs: np.ndarray, interval: float) -> np.ndarray:
+    """Running estimates (1/s), k × m: the mean growth rate of the logs (k × m, one column
+    per renormalisation ``interval`` s) from the first column to each."""
+    return np.cumsum(logs, axis=1) / (interval * np.arange(1, logs.shape[1] + 1))
+
+
+def batch_ci95(logs: np.ndarray, interval: float) -> np.ndarray:
+    """95 % confidence half-widths (1/s) of the mean growth rates of the logs (k × m, m a
+    multiple of ``BLOCKS``): batch means over ``BLOCKS`` batches, Student t with 9 d.o.f."""
+    k, m = logs.shape
+    batches = logs.reshape(k, BLOCKS, m // BLOCKS).sum(axis=2) / (interval * (m // BLOCKS))
+    return 2.262 * batches.std(axis=1, ddof=1) / np.sqrt(BLOCKS)
+
+
+def _with_transient(res: xr.Dataset, logs: np.ndarray, interval: float,
+                    t_start: float) -> xr.Dataset:
+    """``res`` with ``transient_running``: the running estimates over the discarded tangent
+    transient (logs k × m from ``t_start`` s), dims ``t_transient`` × ``index``."""
+    times = t_start + interval * np.arange(1, logs.shape[1] + 1)
+    return res.assign(transient_running=(("t_transient", "index"),
+                                         running_mean(logs, interval).T,
+                                         {"units": "1/s", "long_name":
+                                          "running estimate over the discarded tangent "
+                                          "transient"})).assign_coords(
+        t_transient=("t_transient", times, {"units": "s"}))
 
 
 def _result(model: Model, structure: Structure, values: dict, logs: np.ndarray, interval: float,
@@ -143,10 +274,9 @@ def _result(model: Model, structure: Structure, values: dict, logs: np.ndarray, 
             transient: float) -> xr.Dataset:
     k, n = logs.shape
     times = t0 + interval * np.arange(1, n + 1)
-    running = np.cumsum(logs, axis=1) / (interval * np.arange(1, n + 1))
+    running = running_mean(logs, interval)
     exponents = running[:, -1]
-    batches = logs.reshape(k, BLOCKS, n // BLOCKS).sum(axis=2) / (interval * (n // BLOCKS))
-    ci95 = 2.262 * batches.std(axis=1, ddof=1) / np.sqrt(BLOCKS)  # Student t, 9 d.o.f.
+    ci95 = batch_ci95(logs, interval)
     attrs = run_attrs(model, structure, values)
     attrs.update(method="rk4 tangent map + QR (Benettin)", dt=dt, renorm_every=renorm_every,
                  duration=duration, transient=transient, mean_divergence=mean_trace,
