@@ -24,6 +24,7 @@ Sections: those of ``analysis.signal.poincare`` (``shaft``, ``cage``, ``vc``,
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -54,15 +55,17 @@ class Classification:
         return asdict(self)
 
 
-def default_section(ds: xr.Dataset) -> str:
+def default_section(ds: xr.Dataset | Mapping) -> str:
     """'vc' for a balanced rotor in one bearing (single forcing frequency VC);
     'param:forcing_period' for a model without bearings that has that parameter (e.g.
-    ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g. ``duffing``)."""
-    balanced = ds.attrs.get("unbalance_force", 0.0) == 0.0
-    if balanced and ds.attrs.get("vc_hz", 0.0) > 0:
+    ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g. ``duffing``). ``ds``: a
+    run, or its attrs."""
+    attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
+    balanced = attrs.get("unbalance_force", 0.0) == 0.0
+    if balanced and attrs.get("vc_hz", 0.0) > 0:
         return "vc"
-    no_bearings = "n_balls" in ds.attrs and int(ds.attrs["n_balls"]) == 0
-    if no_bearings and "forcing_period" in ds.attrs:
+    no_bearings = "n_balls" in attrs and int(attrs["n_balls"]) == 0
+    if no_bearings and "forcing_period" in attrs:
         return "param:forcing_period"
     return "shaft"
 
@@ -76,23 +79,24 @@ def _pairs(names: tuple[str, ...]) -> list[tuple[str, str]]:
     return pairs
 
 
-def _normalised_points(ds: xr.Dataset, pts: xr.Dataset) -> tuple[np.ndarray, float]:
+def _normalised_points(pts: xr.Dataset, ptp: Mapping[str, float]) -> tuple[np.ndarray, float]:
     """Section points of every state variable, with velocities divided by the section's
-    angular frequency, and the orbit size: the largest peak-to-peak of the positions over
-    the run (in the first position's unit; positions of another unit, e.g. tilts in rad,
-    are rescaled to the same size)."""
+    angular frequency, and the orbit size: the largest peak-to-peak ``ptp`` of the positions
+    over the run (in the first position's unit; positions of another unit, e.g. tilts in
+    rad, are rescaled to the same size)."""
     omega = 2 * np.pi / pts.attrs["section_period_s"]
-    pairs = _pairs(state_names(ds))
-    units = [str(ds[q].attrs.get("units", "")) for q, _ in pairs]
-    ptp = {u: max(float(np.ptp(ds[q].values)) for (q, _), uq in zip(pairs, units, strict=True)
-                  if uq == u) for u in units}
-    size = max(ptp[units[0]], 1e-300)
+    names = state_names(pts)
+    pairs = _pairs(names)
+    units = [str(pts[q].attrs.get("units", "")) for q, _ in pairs]
+    scale = {u: max(ptp[q] for (q, _), uq in zip(pairs, units, strict=True) if uq == u)
+             for u in units}
+    size = max(scale[units[0]], 1e-300)
     columns = {}
     for (q, v), u in zip(pairs, units, strict=True):
-        factor = size / max(ptp[u], 1e-300) if u != units[0] else 1.0
+        factor = size / max(scale[u], 1e-300) if u != units[0] else 1.0
         columns[q] = pts[q].values * factor
         columns[v] = pts[v].values / omega * factor
-    p = np.stack([columns[name] for name in state_names(ds)], axis=1)
+    p = np.stack([columns[name] for name in names], axis=1)
     return p, size
 
 
@@ -136,23 +140,46 @@ def classify(
     """
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
-    points, size = _normalised_points(ds, pts)
+    ptp = {v: float(np.ptp(ds[v].values)) for v in state_names(ds)}
+
+    def largest() -> tuple[float, float]:
+        found = exponents if exponents is not None else _exponents_of_run(ds, lyapunov_duration)
+        return float(found.exponents[0]), float(found.ci95[0])
+
+    return classify_section(pts, ptp, largest, rel_tol=rel_tol, max_period=max_period,
+                            chaos_floor=chaos_floor)
+
+
+def classify_section(
+    pts: xr.Dataset,
+    ptp: Mapping[str, float],
+    largest: Callable[[], tuple[float, float]],
+    *,
+    rel_tol: float = 1e-3,
+    max_period: int = 16,
+    chaos_floor: float = 0.01,
+) -> Classification:
+    """Classify a motion from its Poincaré points ``pts`` (``poincare_section`` of a run, or
+    the same Dataset built otherwise: the run's attrs with ``section`` and
+    ``section_period_s``), the peak-to-peak ``ptp`` of every state variable over the run
+    (SI units) and ``largest()``: (λ1, its 95 % half-width) in 1/s, called only when the
+    points cannot decide. The steps of ``classify``."""
+    section, attrs = pts.attrs["section"], pts.attrs
+    points, size = _normalised_points(pts, ptp)
     n = repeat_period(points, size, rel_tol, max_period)
     if n is not None:
         return Classification(f"periodic-{n}", f"{n} distinct point(s) on the {section} "
                               "section", section, len(points), period=n)
     ratio = None
-    two_forcings = ds.attrs.get("unbalance_force", 0.0) > 0 and ds.attrs.get("vc_hz", 0) > 0
+    two_forcings = attrs.get("unbalance_force", 0.0) > 0 and attrs.get("vc_hz", 0) > 0
     if two_forcings and section == "shaft":
-        ratio = graph_ratio(points, np.mod(pts.t.values * ds.attrs["vc_hz"], 1.0))
+        ratio = graph_ratio(points, np.mod(pts.t.values * attrs["vc_hz"], 1.0))
         if ratio < GRAPH_RATIO:
             return Classification("quasi-periodic", "two-frequency torus locked to X and VC "
                                    "(points on a smooth curve of the ball-set phase)",
                                    section, len(points), graph_ratio=ratio)
-    if exponents is None:
-        exponents = _exponents_of_run(ds, lyapunov_duration)
-    lam, ci = float(exponents.exponents[0]), float(exponents.ci95[0])
-    floor = chaos_floor * 2 * np.pi / pts.attrs["section_period_s"]
+    lam, ci = largest()
+    floor = chaos_floor * 2 * np.pi / attrs["section_period_s"]
     if lam - ci > 0 and lam > floor:
         return Classification("chaotic", f"largest Lyapunov exponent {lam:.4g} ± {ci:.2g} 1/s "
                               "(95 %) > 0", section, len(points), largest_exponent=lam,
