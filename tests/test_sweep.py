@@ -46,9 +46,11 @@ def test_interrupted_sweep_resumes_to_the_same_result(tmp_path):
     again = _cli([*SWEEP, "-o", "part.nc"], tmp_path)
     assert again.wait(timeout=600) == 0, again.stderr.read()
     a, b = open_result(tmp_path / "whole.nc"), open_result(tmp_path / "part.nc")
-    for var in ("x", "y", "vx", "vy", "amplitude_x", "amplitude_y"):
+    for var in ("x", "y", "vx", "vy", "amplitude_x", "amplitude_y", "t_start"):
         np.testing.assert_array_equal(a[var].values, b[var].values)
     assert not parts.exists()
+    starts = a.t_start.values[0]  # time carried on from value to value (the forcing phase)
+    assert starts[0] == 0.0 and np.all(np.diff(starts) > 0)
 
 
 def test_resume_refuses_a_different_sweep(tmp_path):
