@@ -77,7 +77,8 @@ def test_branch_stability_and_file_round_trip(resonance_branch, tmp_path):
 
 def _section_points(ds):
     pts = poincare_section(ds, "shaft")
-    return _normalised_points(ds, pts)
+    ptp = {name: float(np.ptp(ds[name].values)) for name in ds.data_vars}
+    return _normalised_points(pts, ptp)
 
 
 def test_period_doubling_confirmed_by_branch_switching_and_brute_force():

@@ -64,6 +64,13 @@ class BranchPoint:
     amplitude: float
     special: str = ""
     newton_iterations: int = 0
+    ds: float = 0.0
+    """Scaled arclength step planned from this point (what a restart from it uses)."""
+    angle: float = 0.0
+    """Angle between this point's tangent and the previous point's (deg)."""
+    contraction: float = 0.0
+    """Largest Newton contraction ratio |Δw_{k+1}| / |Δw_k| of the corrector (0: one
+    iteration)."""
 
     @property
     def n_unstable(self) -> int:
@@ -139,10 +146,27 @@ def _tangent(jac: np.ndarray, previous: np.ndarray | None, direction: float) -> 
     return -tau if ref < 0 else tau
 
 
-def _correct(prob: _Problem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
-             max_iter: int = 8):
-    """Newton on [G(w); τ·(w − w_pred)] = 0. Returns (w, jac, mono, iterations) or None."""
+@dataclass
+class _Newton:
+    """A converged corrector: the point, its Jacobian and monodromy matrix, the iterations,
+    the largest contraction ratio |Δw_{k+1}| / |Δw_k| and the distance from the predictor
+    (scaled variables)."""
+
+    w: np.ndarray
+    jac: np.ndarray
+    mono: np.ndarray
+    iterations: int
+    contraction: float
+    distance: float
+
+
+def _newton(prob: _Problem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
+            max_iter: int = 8) -> _Newton | None:
+    """Newton on [G(w); τ·(w − w_pred)] = 0 from the predictor ``w_pred``; None when it does
+    not converge in ``max_iter`` iterations (or meets a non-finite value or a singular
+    matrix). Steps below 100·tol (rounding level) do not count in the contraction ratio."""
     w = w_pred.copy()
+    previous, contraction = None, 0.0
     for it in range(1, max_iter + 1):
         g, jac, mono = prob.residual(w)
         h = np.concatenate([g, [np.dot(tau, w - w_pred)]])
@@ -153,10 +177,21 @@ def _correct(prob: _Problem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
         except np.linalg.LinAlgError:
             return None
         w = w + dw
-        if np.linalg.norm(dw) < tol and np.linalg.norm(g) < 1e3 * tol:
+        size = float(np.linalg.norm(dw))
+        if previous is not None and previous > 100 * tol:
+            contraction = max(contraction, size / previous)
+        previous = size
+        if size < tol and np.linalg.norm(g) < 1e3 * tol:
             g, jac, mono = prob.residual(w)
-            return w, jac, mono, it
+            return _Newton(w, jac, mono, it, contraction, float(np.linalg.norm(w - w_pred)))
     return None
+
+
+def _correct(prob: _Problem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
+             max_iter: int = 8):
+    """Newton on [G(w); τ·(w − w_pred)] = 0. Returns (w, jac, mono, iterations) or None."""
+    out = _newton(prob, w_pred, tau, tol, max_iter)
+    return None if out is None else (out.w, out.jac, out.mono, out.iterations)
 
 
 def _point(prob: _Problem, w: np.ndarray, jac: np.ndarray, mono: np.ndarray,
@@ -190,9 +225,10 @@ def _pd_test(point: BranchPoint) -> float:
 
 def _locate(prob: _Problem, a: BranchPoint, b: BranchPoint, kind: str,
             test: Callable[[BranchPoint], float], tol: float, direction: float,
-            iterations: int = 12) -> BranchPoint:
+            iterations: int = 12, strict: bool = False) -> BranchPoint | None:
     """Bisection on the chord from a to b (corrected onto the branch) for the sign change of
-    ``test``; returns the located point labelled ``kind``."""
+    ``test``; returns the located point labelled ``kind`` (when no corrector converges: b,
+    or None if ``strict``)."""
     wa, wb = _w(prob, a), _w(prob, b)
     chord = (wb - wa) / np.linalg.norm(wb - wa)
     sign_a = np.sign(test(a))
@@ -209,9 +245,83 @@ def _locate(prob: _Problem, a: BranchPoint, b: BranchPoint, kind: str,
         else:
             hi = mid
     if best is None:  # no corrector converged inside the interval: b is the best estimate
+        if strict:
+            return None
         best = b
     best.special = kind
     return best
+
+
+@dataclass(frozen=True)
+class StepGuards:
+    """Tests every continuation step must pass; a refused step is retried with half the
+    arclength step ds, and the run stops (status ``refused …``) when even ``ds_min`` is
+    refused. They keep the corrector on the branch it started from: a step that lands on
+    another branch (a period-1 orbit next to a period-3 one, say) fails at least one.
+
+    * ``max_contraction``: the largest Newton contraction ratio |Δw_{k+1}| / |Δw_k| of the
+      corrector (quadratic convergence from a good predictor gives ≪ 0.1);
+    * ``max_correction``: the largest distance of the corrected point from the predictor,
+      in units of ds;
+    * ``max_angle``: the largest angle (deg) between the tangents at the two ends of the
+      step, and between the secant (the chord from one end to the other) and either tangent;
+    * the parameter must move the way both tangents point unless their parameter components
+      differ in sign, and when they do, a fold (LP) must be located between the ends (a
+      corrected point where λ is extreme), else the step is refused.
+
+    ``active = False`` turns every test off (the behaviour before the guards).
+    """
+
+    max_contraction: float = 0.5
+    max_correction: float = 0.5
+    max_angle: float = 30.0
+    active: bool = True
+
+
+def _angle(u: np.ndarray, v: np.ndarray) -> float:
+    """Angle between two vectors (deg)."""
+    cos = np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v))
+    return math.degrees(math.acos(float(np.clip(cos, -1.0, 1.0))))
+
+
+def _step_refusal(prob: _Problem, a: BranchPoint, b: BranchPoint, newton: _Newton,
+                  ds: float, guards: StepGuards) -> str:
+    """Why the step from ``a`` to ``b`` (corrected by ``newton`` from a predictor ds away)
+    is refused by ``guards``; '' when it passes (the fold test is ``_fold_between``)."""
+    if not guards.active:
+        return ""
+    if newton.contraction > guards.max_contraction:
+        return (f"Newton contraction {newton.contraction:.2f} > "
+                f"{guards.max_contraction:g}")
+    if newton.distance > guards.max_correction * ds:
+        return (f"the corrector moved {newton.distance / ds:.2f} ds > "
+                f"{guards.max_correction:g} ds from the predictor")
+    if b.angle > guards.max_angle:
+        return f"the tangent turned {b.angle:.1f}° > {guards.max_angle:g}°"
+    secant = _w(prob, b) - _w(prob, a)
+    worst = max(_angle(secant, a.tangent), _angle(secant, b.tangent))
+    if worst > guards.max_angle:
+        return f"the secant is {worst:.1f}° > {guards.max_angle:g}° off a tangent"
+    same_side = np.sign(a.tangent[-1]) == np.sign(b.tangent[-1])
+    if same_side and secant[-1] * a.tangent[-1] < 0 and abs(secant[-1]) > 1e-9 * ds:
+        return "the parameter moved against both tangents"
+    return ""
+
+
+def _fold_between(prob: _Problem, a: BranchPoint, b: BranchPoint, tol: float,
+                  direction: float) -> BranchPoint | None:
+    """The fold (LP) between ``a`` and ``b``, whose tangents' parameter components differ
+    in sign: located by bisection and checked to be a parameter extremum (beyond both ends,
+    up to 1e-3 of the step in λ). None when no corrector converges or the located point is
+    not an extremum: then the sign change is no fold of one branch, and the step is
+    refused."""
+    lp = _locate(prob, a, b, "LP", _lp_test, tol, direction, strict=True)
+    if lp is None:
+        return None
+    slack = 1e-3 * abs(b.lam - a.lam) + 1e-12 * prob.s_lam
+    beyond_a = (lp.lam - a.lam) * np.sign(a.tangent[-1]) >= -slack
+    beyond_b = (lp.lam - b.lam) * np.sign(b.tangent[-1]) <= slack
+    return lp if beyond_a and beyond_b else None
 
 
 def _complex_outside(point: BranchPoint) -> int:
@@ -237,8 +347,9 @@ def continue_orbits(
     max_points: int = 200,
     dt: float | None = None,
     tol: float = 1e-9,
-    settle: float = 0.5,
+    settle: float | None = None,
     progress: Callable[[str], None] | None = None,
+    guards: StepGuards | None = None,
     **parameters: float,
 ) -> xr.Dataset:
     """Continue a branch of periodic orbits in ``param`` from ``start`` towards ``stop``
@@ -248,9 +359,11 @@ def continue_orbits(
     ``n_balls`` and ``**parameters``. ``period``: as in ``periodic.shoot`` (text for
     ``Period.parse``; None: ``periodic.default_period``). The first orbit is found by
     ``periodic.shoot`` at ``param = start`` (from ``guess``, the state at ``t0`` s, or a
-    simulation of ``settle`` s). ``ds``, ``ds_min``, ``ds_max`` are arclength steps in the
-    scaled variables (λ scaled by |stop − start|). ``dt``: the largest RK4 step (s; default
-    the spec's). Returns the branch as a Dataset (see ``branch_dataset``).
+    simulation of about ``settle`` s; None: the model's own ``periodic.default_settle``).
+    ``ds``, ``ds_min``, ``ds_max`` are arclength steps in the scaled variables (λ scaled by
+    |stop − start|). ``dt``: the largest RK4 step (s; default the spec's). ``guards``: the
+    tests every step must pass (default ``StepGuards()``). Returns the branch as a Dataset
+    (see ``branch_dataset``).
     """
     system = as_system(system, n_balls, **parameters)
     mdl = system.model
@@ -266,50 +379,92 @@ def continue_orbits(
         raise InputError(f"start: no periodic orbit found at {param} = {start:g} "
                          f"({first.message})")
     return _continue_from(first, param, start, stop, ds, ds_min, ds_max, max_points,
-                          dt, tol, progress)
+                          dt, tol, progress, guards=guards)
 
 
 def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
                    ds: float, ds_min: float, ds_max: float, max_points: int,
-                   dt: float | None, tol: float, progress, label: str = "") -> xr.Dataset:
+                   dt: float | None, tol: float, progress, label: str = "",
+                   guards: StepGuards | None = None) -> xr.Dataset:
     if first.system is None:
         raise InputError("orbit: no System attached (continue from an orbit of shoot)")
     model = first.system.model
     per = as_period(model, first.period)
-    values = dict(first.values)
-    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
     # the step must stay below dt along the whole range (the period depends on λ)
-    n_steps = max(steps_per_period(model, first.structure, per, {**values, param: end}, dt)
-                  for end in (start, stop))
+    n_steps = _steps_for_range(model, first.structure, per, first.values, param,
+                               (start, stop), dt)
     n = model.n_state
-    prob = _Problem(model, first.structure, per, model.parameter_names.index(param), values,
-                    first.t0, n_steps, np.ones(n), abs(stop - start))
+    prob = _Problem(model, first.structure, per, model.parameter_names.index(param),
+                    dict(first.values), first.t0, n_steps, np.ones(n), abs(stop - start))
     prob.s_z = orbit_scale(prob, first.z0)
     direction = math.copysign(1.0, stop - start)
     w = np.concatenate([first.z0 / prob.s_z, [start / prob.s_lam]])
-    out = _correct(prob, w, np.eye(n + 1)[n], tol)  # re-solve at fixed λ with this step count
+    out = _newton(prob, w, np.eye(n + 1)[n], tol)  # re-solve at fixed λ with this step count
     if out is None:
         raise InputError(f"start: the orbit at {param} = {start:g} does not converge with "
                          f"{n_steps} steps per period")
-    w, jac, mono, it = out
-    branch = [_point(prob, w, jac, mono, None, direction, it)]
-    lo, hi = min(start, stop), max(start, stop)
-    status = "reached the end of the range"
+    point = _point(prob, out.w, out.jac, out.mono, None, direction, out.iterations)
+    point.ds = ds
+    return _trace(prob, point, stop, ds_min, ds_max, max_points, tol, progress, label,
+                  guards or StepGuards())
+
+
+def _steps_for_range(model: Model, structure: Structure, per: Period, values: dict,
+                     param: str, ends: tuple[float, float], dt: float | None) -> int:
+    """RK4 steps per period so that the step is at most ``dt`` (s; None: the spec's) at
+    both ends of the range of ``param``."""
+    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
+    return max(steps_per_period(model, structure, per, {**values, param: end}, dt)
+               for end in ends)
+
+
+def _step(prob: _Problem, prev: BranchPoint, ds: float, tol: float, direction: float,
+          guards: StepGuards) -> tuple[list[BranchPoint], BranchPoint] | str:
+    """One predictor-corrector step of ``ds`` from ``prev``: (special points located between,
+    the new point), or the reason it is refused (no convergence, or a guard)."""
+    newton = _newton(prob, _w(prob, prev) + ds * prev.tangent, prev.tangent, tol)
+    if newton is None:
+        return "no convergence"
+    point = _point(prob, newton.w, newton.jac, newton.mono, prev.tangent, direction,
+                   newton.iterations)
+    point.angle = _angle(prev.tangent, point.tangent)
+    point.contraction = newton.contraction
+    reason = _step_refusal(prob, prev, point, newton, ds, guards)
+    if reason:
+        return reason
+    lp = None
+    if _lp_test(prev) != 0 and np.sign(_lp_test(prev)) != np.sign(_lp_test(point)):
+        lp = _fold_between(prob, prev, point, tol, direction)
+        if lp is None and guards.active:
+            return "the parameter component of the tangent changed sign but no fold was found"
+    return _special_points(prob, prev, point, tol, direction, lp=lp), point
+
+
+def _trace(prob: _Problem, first: BranchPoint, stop: float, ds_min: float, ds_max: float,
+           max_points: int, tol: float, progress, label: str, guards: StepGuards,
+           attrs: dict | None = None) -> xr.Dataset:
+    """Continue from ``first`` (its tangent oriented the way to go, its ``ds`` the first
+    step) until λ leaves the range between ``first.lam`` and ``stop``, ``max_points``
+    points, or a step refused even at ``ds_min``."""
+    param = prob.param_name
+    branch, ds = [first], first.ds
+    lo, hi = min(first.lam, stop), max(first.lam, stop)
+    status, refused = "reached the end of the range", 0
     while len(branch) < max_points:
         prev = branch[-1]
-        w_prev = _w(prob, prev)
-        out = _correct(prob, w_prev + ds * prev.tangent, prev.tangent, tol)
-        if out is None:
+        result = _step(prob, prev, ds, tol, _direction(prev), guards)
+        if isinstance(result, str):
+            refused += result != "no convergence"
             ds /= 2
             if ds < ds_min:
-                status = f"step fell below ds_min = {ds_min:g} (no convergence)"
+                status = _refused_status(result, ds_min, param, prev.lam)
                 break
             continue
-        w, jac, mono, it = out
-        point = _point(prob, w, jac, mono, prev.tangent, direction, it)
-        branch.extend(_special_points(prob, prev, point, tol, direction))
+        found, point = result
+        branch.extend(found)
         branch.append(point)
-        ds = min(ds * 1.5, ds_max) if it <= 3 else max(ds / 1.5, ds_min)
+        ds = min(ds * 1.5, ds_max) if point.newton_iterations <= 3 else max(ds / 1.5, ds_min)
+        point.ds = ds
         if progress and len(branch) % 10 == 0:
             progress(f"{len(branch)} points, {param} = {point.lam:.6g}, "
                      f"{'stable' if point.stable else 'unstable'}")
@@ -317,16 +472,33 @@ def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
             break
     else:
         status = f"stopped after max_points = {max_points}"
-    return branch_dataset(model, prob, branch, param, status, label)
+    return branch_dataset(prob.model, prob, branch, param, status, label,
+                          refused_steps=refused, **(attrs or {}))
 
 
-def _special_points(prob, a: BranchPoint, b: BranchPoint, tol,
-                    direction) -> list[BranchPoint]:
-    """LP, PD and NS points between two consecutive branch points, located by bisection."""
-    found = []
+def _direction(point: BranchPoint) -> float:
+    """The sign of λ along the tangent (the start-up orientation of ``_tangent``)."""
+    return math.copysign(1.0, point.tangent[-1])
+
+
+def _refused_status(reason: str, ds_min: float, param: str, lam: float) -> str:
+    """The status of a run stopped because no step down to ``ds_min`` was accepted."""
+    if reason == "no convergence":
+        return f"step fell below ds_min = {ds_min:g} (no convergence)"
+    return (f"refused every step down to ds_min = {ds_min:g} from {param} = {lam:.8g} "
+            f"({reason}): possibly a jump to another branch")
+
+
+def _special_points(prob, a: BranchPoint, b: BranchPoint, tol, direction,
+                    lp: BranchPoint | None = None) -> list[BranchPoint]:
+    """LP, PD, BP and NS points between two consecutive branch points, located by
+    bisection (``lp``: the fold already located between them)."""
+    found = [lp] if lp is not None else []
     for kind, test in (("LP", _lp_test), ("PD", _pd_test), ("BP", _bp_test)):
         if kind == "BP" and found and found[0].special == "LP":
             continue  # at a fold det(M − I) changes sign too
+        if kind == "LP" and lp is not None:
+            continue
         if test(a) != 0 and np.sign(test(a)) != np.sign(test(b)):
             found.append(_locate(prob, a, b, kind, test, tol, direction))
     if _complex_outside(a) != _complex_outside(b):
@@ -339,21 +511,28 @@ def _special_points(prob, a: BranchPoint, b: BranchPoint, tol,
 
 
 def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], param: str,
-                   status: str, label: str = "") -> xr.Dataset:
+                   status: str, label: str = "", **extra: object) -> xr.Dataset:
     """The branch as a Dataset: ``param`` value, amplitude (of the first state variable),
     z0 (dims ``point`` × ``state``, the model's state names), the n multipliers (real and
-    imaginary parts, dim ``k``), stability and special-point labels along ``point``; attrs
-    from ``run_attrs`` (model, spec, balls per bearing, parameters, state names)."""
+    imaginary parts, dim ``k``), stability and special-point labels along ``point``; what a
+    restart needs (``continue_from_branch``): the tangent (dim ``w``: the scaled state, then
+    the parameter) and the planned step ``ds`` at each point, the scales ``state_scale``
+    (the states' units) and attr ``param_scale`` (the parameter's unit), attrs ``t0`` (s),
+    ``period`` and ``steps_per_period``; the guards' measures ``tangent_angle`` (deg) and
+    ``newton_contraction``; attrs from ``run_attrs`` (model, spec, balls per bearing,
+    parameters, state names) and ``extra``."""
     mult = np.array([p.multipliers for p in branch])
     attrs = run_attrs(model, prob.structure, prob.values)
     attrs.update(param=param, period=str(prob.period), steps_per_period=prob.n_steps,
-                 t0=prob.t0, status=status, branch=label or f"period {prob.period}")
+                 t0=prob.t0, status=status, branch=label or f"period {prob.period}",
+                 param_scale=prob.s_lam, **extra)
     attrs.pop(param, None)
+    units = model.state_units
     return xr.Dataset(
         {param: ("point", np.array([p.lam for p in branch]),
                  {"units": model.units[param]}),
          "amplitude": ("point", np.array([p.amplitude for p in branch]),
-                       {"units": model.state_units[model.state_names[0]],
+                       {"units": units[model.state_names[0]],
                         "long_name": f"half peak-to-peak {model.state_names[0]} over one "
                                      "period"}),
          "z0": (("point", "state"), np.array([p.z0 for p in branch])),
@@ -362,7 +541,17 @@ def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], para
          "multiplier_abs": (("point", "k"), np.abs(mult)),
          "stable": ("point", np.array([int(p.stable) for p in branch])),
          "special": ("point", np.array([p.special for p in branch], dtype=object)),
-         "newton_iterations": ("point", np.array([p.newton_iterations for p in branch]))},
+         "newton_iterations": ("point", np.array([p.newton_iterations for p in branch])),
+         "tangent": (("point", "w"), np.array([p.tangent for p in branch]),
+                     {"long_name": "unit tangent in the scaled variables (z0 / state_scale, "
+                                   f"{param} / param_scale)"}),
+         "ds": ("point", np.array([p.ds for p in branch]),
+                {"long_name": "scaled arclength step planned from the point"}),
+         "tangent_angle": ("point", np.array([p.angle for p in branch]),
+                           {"units": "deg", "long_name": "angle from the previous tangent"}),
+         "newton_contraction": ("point", np.array([p.contraction for p in branch])),
+         "state_scale": ("state", np.asarray(prob.s_z, dtype=float),
+                         {"long_name": "scale of each state in the unknowns"})},
         coords={"point": np.arange(len(branch)), "state": list(model.state_names),
                 "k": np.arange(1, model.n_state + 1)},
         attrs=attrs)
@@ -423,9 +612,10 @@ def continue_from_orbit(orbit: PeriodicOrbit, *, param: str, stop: float, ds: fl
                         ds_min: float = 1e-6, ds_max: float = 0.05, max_points: int = 200,
                         dt: float | None = None, tol: float = 1e-9,
                         progress: Callable[[str], None] | None = None,
-                        label: str = "") -> xr.Dataset:
+                        label: str = "", guards: StepGuards | None = None) -> xr.Dataset:
     """Continue a branch from an already solved orbit of ``periodic.shoot`` (e.g. after
-    branch switching) in ``param`` towards ``stop``; ``dt`` (s) defaults to the spec's."""
+    branch switching) in ``param`` towards ``stop``; ``dt`` (s) defaults to the spec's;
+    ``guards`` as in ``continue_orbits``."""
     start = orbit.values[param]
     return _continue_from(orbit, param, start, stop, ds, ds_min, ds_max, max_points,
-                          dt, tol, progress, label)
+                          dt, tol, progress, label, guards)
