@@ -1,4 +1,5 @@
-"""Continuation never jumps between branches silently (step guards), checked against shooting.
+"""Continuation never jumps between branches silently (step guards), checked against shooting;
+branch switching at a symmetry-breaking pitchfork (BP), checked against brute force.
 
 Defect case: the period-3 orbit (period ``vc:3``) of the balanced rotor (N_b = 8, 50 N) at
 7989.9 rpm, continued towards 7600 rpm. Without the guards, large steps pass its fold and
@@ -13,8 +14,15 @@ import numpy as np
 import pytest
 
 from analysis.integrate.flow import Period, evaluate, flow_map
+from analysis.integrate.simulate import simulate, state_at
 from analysis.model import System
-from analysis.stability.continuation import StepGuards, continue_orbits
+from analysis.stability.continuation import (
+    StepGuards,
+    continue_from_orbit,
+    continue_orbits,
+    first_point,
+    switch_branch_point,
+)
 from analysis.stability.periodic import PeriodicOrbit, shoot, system_of_attrs
 
 RPM = 30 / math.pi
@@ -110,3 +118,72 @@ def test_duffing_subharmonic_guards_fire_and_label_the_fold():
 
     assert genuine(at(lp[0] + 0.01))
     assert not genuine(at(lp[0] - 0.01))
+
+
+# --------------------------------------------------------------------------- branch points
+
+PITCHFORK = dict(linear_stiffness=1.0, cubic_stiffness=1.0, damping=0.2, forcing_amplitude=20.0)
+"""Duffing, hardening: the large symmetric orbit (x(t + T/2) = −x(t)) loses stability in a
+supercritical symmetry-breaking pitchfork near ω = 1.1557 rad/s."""
+SYMMETRIC_GUESS = np.array([4.19, 0.0, 0.15, 0.0])  # near the symmetric orbit at ω = 1.12
+
+
+def simulated(omega: float, state, periods: int = 400, n: int = 600):
+    """Brute force: the state after ``periods`` forcing periods (n RK4 steps each) and x
+    over the last period (n samples)."""
+    period = 2 * math.pi / omega
+    ds = simulate("duffing", None, duration=periods * period,
+                  transient=(periods - 1) * period, dt=period / n, initial_state=tuple(state),
+                  speed_rpm=omega * RPM, **PITCHFORK)
+    return state_at(ds, -1), ds.x.values[:-1]
+
+
+@pytest.fixture(scope="module")
+def symmetric_branch():
+    return continue_orbits("duffing", param="speed_rpm", start=1.12 * RPM, stop=1.3 * RPM,
+                           period="shaft", guess=SYMMETRIC_GUESS, t0=0.0, dt=0.01,
+                           **PITCHFORK)
+
+
+def test_bp_on_the_symmetric_branch_matches_the_brute_force_pitchfork(symmetric_branch):
+    """The BP of continuation against the pitchfork of simulated attractors: their mean x
+    (zero on a symmetric orbit) grows as √(ω − ω_BP); a line through the squares meets
+    zero at ω_BP."""
+    br = symmetric_branch
+    bp = first_point(br, "BP")
+    assert bp is not None and "LP" not in set(br.special.values)
+    omega_bp = br.speed_rpm.values[bp] / RPM
+    assert np.abs(br.multiplier_real.values[bp] - 1).min() < 1e-3
+    omegas = np.array([1.16, 1.165, 1.17])
+    means = np.array([simulated(w, (4.15, 0.0, 0.8, 0.0))[1].mean() for w in omegas])
+    slope, intercept = np.polyfit(omegas, means**2, 1)
+    assert omega_bp == pytest.approx(-intercept / slope, abs=3e-4)  # measured 1.15567
+
+
+def test_bp_switching_finds_the_simulated_asymmetric_orbit(symmetric_branch):
+    br = symmetric_branch
+    bp = first_point(br, "BP")
+    orbit = switch_branch_point(br, bp)
+    assert orbit.converged and orbit.period == "shaft" and orbit.stability == "stable"
+    omega = orbit.values["speed_rpm"] / RPM
+    period = 2 * math.pi / omega
+    # asymmetric: the mirror image of its state half a period on, −z(T/2), is not z(0) ...
+    half = simulate("duffing", None, duration=period / 2, transient=0.0, dt=period / 600,
+                    save_every=300, initial_state=tuple(orbit.z0), speed_rpm=omega * RPM,
+                    **PITCHFORK)
+    mirror = -state_at(half, -1)
+    size = np.abs(orbit.z0).max()
+    assert np.abs(mirror - orbit.z0).max() > 0.02 * size  # measured 0.048
+    # ... and brute force from the unstable symmetric orbit, nudged either way, settles on
+    # the orbit or on its mirror image
+    symmetric = shoot(br.attrs["model"], None, "shaft", br.z0.values[bp], 0.0, dt=period / 600,
+                      **{**PITCHFORK, "speed_rpm": omega * RPM})
+    assert symmetric.converged and symmetric.stability == "unstable"
+    ends = [simulated(omega, symmetric.z0 + np.array([s * 1e-3, 0, 0, 0]))[0] for s in (1, -1)]
+    for end in ends:
+        gaps = [np.abs(end - z).max() / size for z in (orbit.z0, mirror)]
+        assert min(gaps) < 1e-5
+    # the asymmetric branch goes on to the period doubling of test_continuation (1.2093)
+    asym = continue_from_orbit(orbit, param="speed_rpm", stop=1.3 * RPM, dt=0.01)
+    pd = asym.speed_rpm.values[asym.special.values == "PD"] / RPM
+    assert len(pd) >= 1 and pd[0] == pytest.approx(1.2093, abs=2e-4)

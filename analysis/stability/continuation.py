@@ -557,27 +557,69 @@ def branch_dataset(model: Model, prob: _Problem, branch: list[BranchPoint], para
         attrs=attrs)
 
 
-def switch_period_doubling(branch: xr.Dataset, point: int, *, offset: float = 0.02,
-                           kick: float = 0.05, dt: float | None = None) -> PeriodicOrbit:
-    """The period-2 orbit born at the period doubling ``branch.point[point]`` (label PD).
+@dataclass(frozen=True)
+class _Switch:
+    """What branch switching at a special point looks for: the critical multiplier (the
+    smallest real part at a PD, the largest at a BP) must be beyond ``bound`` on the
+    unstable side; the new orbit has the period ``period(base)`` and must not be the old
+    orbit (``fallen_back``)."""
 
-    Steps ``offset`` × |range| into the side where the period-1 orbit is unstable, solves the
-    period-1 orbit there, kicks it along the eigenvector of its multiplier below −1 by
-    ``kick`` × the orbit size, and shoots for a fixed point of the doubled period. The result
-    is checked to be a genuine period-2 orbit (Φ_T(z) ≠ z).
+    kind: str
+    critical: Callable[[np.ndarray], int]
+    beyond: Callable[[float], bool]
+    bound: str
+    period: Callable[[Period], Period]
+    orbit: str
+    fallen_back: Callable[[PeriodicOrbit, PeriodicOrbit, np.ndarray], bool]
+
+
+def _repeats_after_base_period(one: PeriodicOrbit, new: PeriodicOrbit,
+                               size: np.ndarray) -> bool:
+    """The period-2 orbit ``new`` is an orbit of ``one``'s period: Φ_T(z) = z."""
+    model = one.system.model
+    half = evaluate(flow_map(model, one.structure, as_period(model, one.period), one.n_steps),
+                    new.z0, new.t0, one.system.p)[0]
+    return bool(np.max(np.abs((half - new.z0) / size)) < 1e-6)
+
+
+def _same_orbit(one: PeriodicOrbit, new: PeriodicOrbit, size: np.ndarray) -> bool:
+    """``new`` is the orbit ``one`` again (same state at the section)."""
+    return bool(np.max(np.abs((new.z0 - one.z0) / size)) < 1e-6)
+
+
+SWITCHES = {
+    "PD": _Switch("PD", lambda mu: int(np.argmin(mu.real)), lambda r: r < -1, "below −1",
+                  Period.doubled, "period-1", _repeats_after_base_period),
+    "BP": _Switch("BP", lambda mu: int(np.argmax(mu.real)), lambda r: r > 1, "above +1",
+                  lambda per: per, "symmetric", _same_orbit),
+}
+
+
+def switch_branch(branch: xr.Dataset, point: int, *, offset: float = 0.02,
+                  kick: float = 0.05, dt: float | None = None) -> PeriodicOrbit:
+    """The orbit born at the special point ``branch.point[point]``: the period-2 orbit at a
+    period doubling (label PD), the asymmetric orbit at a symmetry-breaking pitchfork (BP).
+
+    Steps ``offset`` × |range| into the side where the branch's orbit is unstable, solves
+    that orbit there, kicks it along the eigenvector of its critical multiplier (below −1 at
+    a PD, above +1 at a BP: the direction of the kernel of M ∓ I at the point) by ``kick`` ×
+    the orbit size, and shoots for a fixed point of the doubled (PD) or the same (BP)
+    period. The result is checked not to be the old orbit (``converged = False`` with the
+    reason otherwise). ``dt`` (s): the RK4 step, default the branch's own.
     """
-    if str(branch.special.values[point]) != "PD":
-        raise InputError(f"point: {point} is not a period-doubling point (label "
-                         f"'{branch.special.values[point]}')")
+    kind = str(branch.special.values[point])
+    if kind not in SWITCHES:
+        raise InputError(f"point: {point} is not a PD or BP point (label '{kind}')")
+    rule = SWITCHES[kind]
     attrs = branch.attrs
     param = attrs["param"]
-    base = system_of_attrs({**attrs, param: float(branch[param][point])})
-    model = base.model
     lam = float(branch[param][point])
+    base = system_of_attrs({**attrs, param: lam})
+    model = base.model
     unstable_side = [i for i in (point + 1, point - 1)
                      if 0 <= i < branch.sizes["point"] and not branch.stable.values[i]]
     if not unstable_side:
-        raise InputError(f"point: no unstable period-1 orbit next to point {point}")
+        raise InputError(f"point: no unstable {rule.orbit} orbit next to point {point}")
     step = float(branch[param][unstable_side[0]]) - lam
     lam += math.copysign(offset * _range(branch, param), step)
     system = base.replace(**{param: lam})
@@ -586,21 +628,46 @@ def switch_period_doubling(branch: xr.Dataset, point: int, *, offset: float = 0.
         attrs["steps_per_period"])
     one = shoot(system, None, period, branch.z0.values[point], float(attrs["t0"]), dt=dt)
     mu, vectors = np.linalg.eig(one.monodromy)
-    k = int(np.argmin(mu.real))
-    if not (one.converged and mu[k].real < -1):
-        raise InputError(f"point: no period-1 orbit with a multiplier below −1 at {param} = "
-                         f"{lam:g} ({one.message}; multipliers {np.round(mu, 4)})")
+    k = rule.critical(mu)
+    if not (one.converged and rule.beyond(mu[k].real)):
+        raise InputError(f"point: no {rule.orbit} orbit with a multiplier {rule.bound} at "
+                         f"{param} = {lam:g} ({one.message}; multipliers {np.round(mu, 4)})")
     v = np.real(vectors[:, k])
     size = state_scale(one.z0, one.period_s, model.module.STATE_UNITS)
     guess = one.z0 + kick * size * v / np.max(np.abs(v / size))
-    two = shoot(one.system, None, period.doubled(), guess, one.t0, dt=dt)
-    if two.converged:
-        half = evaluate(flow_map(model, one.structure, period, one.n_steps), two.z0, two.t0,
-                        one.system.p)[0]
-        if np.max(np.abs((half - two.z0) / size)) < 1e-6:
-            two.converged = False
-            two.message = "Newton fell back onto the period-1 orbit; try a larger kick"
-    return two
+    new = shoot(one.system, None, rule.period(period), guess, one.t0, dt=dt)
+    if new.converged and rule.fallen_back(one, new, size):
+        new.converged = False
+        new.message = f"Newton fell back onto the {rule.orbit} orbit; try a larger kick"
+    return new
+
+
+def switch_period_doubling(branch: xr.Dataset, point: int, *, offset: float = 0.02,
+                           kick: float = 0.05, dt: float | None = None) -> PeriodicOrbit:
+    """The period-2 orbit born at the period doubling ``branch.point[point]`` (label PD):
+    ``switch_branch`` at a PD point. The result is checked to be a genuine period-2 orbit
+    (Φ_T(z) ≠ z)."""
+    if str(branch.special.values[point]) != "PD":
+        raise InputError(f"point: {point} is not a period-doubling point (label "
+                         f"'{branch.special.values[point]}')")
+    return switch_branch(branch, point, offset=offset, kick=kick, dt=dt)
+
+
+def switch_branch_point(branch: xr.Dataset, point: int, *, offset: float = 0.02,
+                        kick: float = 0.05, dt: float | None = None) -> PeriodicOrbit:
+    """The asymmetric orbit born at the branch point ``branch.point[point]`` (label BP, a
+    real multiplier through +1 without a fold: a symmetry-breaking pitchfork):
+    ``switch_branch`` at a BP point. The result is checked not to be the symmetric orbit."""
+    if str(branch.special.values[point]) != "BP":
+        raise InputError(f"point: {point} is not a branch point (label "
+                         f"'{branch.special.values[point]}')")
+    return switch_branch(branch, point, offset=offset, kick=kick, dt=dt)
+
+
+def first_point(branch: xr.Dataset, kind: str) -> int | None:
+    """Index of the first point labelled ``kind`` (LP, PD, BP, NS) on ``branch``, or None."""
+    found = np.nonzero(branch.special.values == kind)[0]
+    return int(found[0]) if len(found) else None
 
 
 def _range(branch: xr.Dataset, param: str) -> float:
@@ -619,3 +686,122 @@ def continue_from_orbit(orbit: PeriodicOrbit, *, param: str, stop: float, ds: fl
     start = orbit.values[param]
     return _continue_from(orbit, param, start, stop, ds, ds_min, ds_max, max_points,
                           dt, tol, progress, label, guards)
+
+
+def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, stop: float,
+                         ds: float | None = None, ds_min: float = 1e-6, ds_max: float = 0.05,
+                         max_points: int = 200, dt: float | None = None, tol: float = 1e-9,
+                         progress: Callable[[str], None] | None = None, label: str = "",
+                         guards: StepGuards | None = None) -> xr.Dataset:
+    """Continue again from point ``point`` (negative: from the end) of a stored branch (a
+    Dataset or netCDF file of ``continue_orbits``) towards ``stop`` (the parameter's unit),
+    in either direction: the branch's tangent there is oriented so that the parameter
+    moves towards ``stop``.
+
+    The branch's own model (spec file, else name), balls, parameters, period, section time
+    t0 and steps per period are used, and, when stored, its scales, its tangent and its
+    planned step ``ds`` at the point (``ds`` overrides it): continued over the same range, a
+    restart reproduces the original points after ``point``. ``dt`` (s): more steps per
+    period when the range needs them (default the spec's step). Other arguments as in
+    ``continue_orbits``.
+    """
+    source = ""
+    if not isinstance(branch, xr.Dataset):
+        from analysis.io import open_result
+
+        source, branch = str(branch), open_result(branch)
+    attrs = branch.attrs
+    param = str(attrs.get("param", ""))
+    if not param or "z0" not in branch:
+        raise InputError(f"branch: {source or 'the dataset'} is not a continuation branch "
+                         "(no param attribute or z0)")
+    size = branch.sizes["point"]
+    if not -size <= point < size:
+        raise InputError(f"point: must be in [{-size}, {size - 1}] (the branch has {size} "
+                         f"points), got {point}")
+    k = point % size
+    lam = float(branch[param][k])
+    if not math.isfinite(stop) or stop == lam:
+        raise InputError(f"stop: must be finite and differ from {param} = {lam:g} at point {k}")
+    prob = _problem_of_branch(branch, lam, stop, dt)
+    prob.model.parameters({param: stop})  # range check of the end value
+    z0 = branch.z0.values[k]
+    if prob.s_z is None:
+        prob.s_z = orbit_scale(prob, z0)
+    direction = math.copysign(1.0, stop - lam)
+    tau = branch.tangent.values[k] if "tangent" in branch else None
+    if tau is not None and tau[-1] * direction < 0:
+        tau = -tau
+    w = np.concatenate([z0 / prob.s_z, [lam / prob.s_lam]])
+    n = prob.n
+    out = _newton(prob, w, np.eye(n + 1)[n] if tau is None else tau, tol)
+    if out is None:
+        raise InputError(f"point: the stored orbit at {param} = {lam:g} does not converge "
+                         f"with {prob.n_steps} steps per period")
+    first = _point(prob, out.w, out.jac, out.mono, tau, direction, out.iterations)
+    if tau is not None:
+        first.tangent = tau
+    stored_ds = float(branch.ds.values[k]) if "ds" in branch else 0.0
+    first.ds = ds if ds is not None else (stored_ds if stored_ds > 0 else 0.01)
+    first.special = str(branch.special.values[k])
+    return _trace(prob, first, stop, ds_min, ds_max, max_points, tol, progress,
+                  label or str(attrs.get("branch", "")), guards or StepGuards(),
+                  attrs={"restarted_from": f"{source or 'branch'} point {k}"})
+
+
+def _problem_of_branch(branch: xr.Dataset, lam: float, stop: float,
+                       dt: float | None) -> _Problem:
+    """The ``_Problem`` of a stored branch at ``param = lam``, with enough steps per period
+    for the range to ``stop`` (at least the branch's own) and its scales (``s_z`` None when
+    the file has none: an older file)."""
+    attrs = branch.attrs
+    param = str(attrs["param"])
+    system = system_of_attrs({**attrs, param: lam})
+    model = system.model
+    per = as_period(model, str(attrs["period"]))
+    values = dict(system.parameters)
+    n_steps = max(int(attrs["steps_per_period"]),
+                  _steps_for_range(model, system.structure, per, values, param, (lam, stop),
+                                   dt))
+    s_lam = float(attrs.get("param_scale", abs(stop - lam)))
+    prob = _Problem(model, system.structure, per, model.parameter_names.index(param), values,
+                    float(attrs["t0"]), n_steps, np.ones(model.n_state), s_lam)
+    prob.s_z = np.asarray(branch.state_scale.values, dtype=float) \
+        if "state_scale" in branch else None
+    return prob
+
+
+def special_points(branch: xr.Dataset) -> list[dict]:
+    """The labelled points of a branch: label, point index, the parameter value (its unit)
+    and the n multipliers (real and imaginary parts)."""
+    param = branch.attrs["param"]
+    return [{"kind": str(kind), "point": int(j), "value": float(branch[param].values[j]),
+             "multipliers_real": branch.multiplier_real.values[j].tolist(),
+             "multipliers_imag": branch.multiplier_imag.values[j].tolist()}
+            for j, kind in enumerate(branch.special.values) if kind]
+
+
+def special_point_lines(branch: xr.Dataset) -> list[str]:
+    """One line per special point in the parameter's own unit, e.g.
+    ``LP  speed_rpm = 7871.75 rpm  (point 41)``."""
+    param = branch.attrs["param"]
+    unit = str(branch[param].attrs.get("units", ""))
+    return [f"{p['kind']}  {param} = {p['value']:.6g} {unit}".rstrip() + f"  (point {p['point']})"
+            for p in special_points(branch)]
+
+
+def branch_summary(branch: xr.Dataset) -> dict:
+    """What a branch is, in plain types (``bearingdyn continue --json``): model, parameter
+    and its unit, period, points, parameter range covered, stable points, status, refused
+    steps, the special points (``special_points``) and where it restarted from."""
+    attrs, param = branch.attrs, branch.attrs["param"]
+    values = branch[param].values
+    return {"branch": str(attrs.get("branch", "")), "model": str(attrs["model"]),
+            "param": param, "units": str(branch[param].attrs.get("units", "")),
+            "period": str(attrs["period"]), "points": int(branch.sizes["point"]),
+            "range": [float(values.min()), float(values.max())],
+            "stable_points": int(branch.stable.values.sum()),
+            "status": str(attrs["status"]),
+            "refused_steps": int(attrs.get("refused_steps", 0)),
+            "restarted_from": str(attrs.get("restarted_from", "")) or None,
+            "special_points": special_points(branch)}
