@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 
 from analysis.cli.common import (
-    ModelArgument,
+    JsonOption,
     NBallsOption,
     PeriodOption,
     SetOption,
@@ -20,59 +21,134 @@ from analysis.cli.common import (
     parse_sets,
     reports_errors,
 )
+from analysis.errors import InputError
+
+SWITCH_SUFFIX = {"PD": "period2", "BP": "asymmetric"}
+"""File name suffix of the branch switched to at the first PD / BP point."""
 
 
 @app.command("continue")
 @reports_errors
 def continue_(
-    model: ModelArgument,
-    param: Annotated[str, typer.Option(help="Runtime parameter to vary.")],
-    start: Annotated[float, typer.Option("--from", help="Start value (parameter unit).")],
     stop: Annotated[float, typer.Option("--to", help="End value (parameter unit).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the branch.")],
+    model: Annotated[str | None, typer.Argument(
+        metavar="[MODEL]",
+        help="Model: a shipped name, a name in a BEARINGDYN_MODELS folder, a .toml spec or a "
+             "generated folder (not with --from-branch).")] = None,
+    param: Annotated[str | None, typer.Option(help="Runtime parameter to vary.")] = None,
+    start: Annotated[float | None, typer.Option(
+        "--from", help="Start value (parameter unit).")] = None,
+    from_branch: Annotated[Path | None, typer.Option(
+        "--from-branch", help="Continue from a point of this branch file instead (its model, "
+                              "parameters, period and step; either direction).")] = None,
+    point: Annotated[int, typer.Option(
+        help="The point of --from-branch to start from (negative: from the end).")] = -1,
     n_balls: NBallsOption = None,
     sets: SetOption = None,
     period: PeriodOption = None,
     dt: Annotated[float | None, typer.Option(
         help="Largest RK4 step, s (default: the spec's).")] = None,
-    settle: Annotated[float, typer.Option(help="Simulated time for the first guess, s.")] = 0.5,
+    settle: Annotated[float | None, typer.Option(
+        help="Simulated time for the first guess, s (default: the model's own time scale, "
+             "as floquet).")] = None,
     max_points: Annotated[int, typer.Option(help="Points per branch.")] = 200,
     ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
     switch_pd: Annotated[bool, typer.Option(
         "--switch-pd", help="Also continue the period-2 branch from the first PD.")] = False,
+    switch_bp: Annotated[bool, typer.Option(
+        "--switch-bp", help="Also continue the asymmetric branch from the first BP "
+                            "(symmetry-breaking pitchfork).")] = False,
     plot: Annotated[Path | None, typer.Option(help="Figure of the branch(es).")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    as_json: JsonOption = False,
 ):
-    """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection."""
+    """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection; every
+    step guarded against jumps to another branch."""
     from analysis.io import save_dataset
-    from analysis.stability import continuation as cont
 
-    progress = None if quiet else typer.echo
-    branch = cont.continue_orbits(model, parse_n_balls(n_balls), param=param, start=start,
-                                  stop=stop, period=period, settle=settle,
-                                  max_points=max_points, ds_max=ds_max, progress=progress,
-                                  **_given(dt=dt), **parse_sets(sets))
+    def say(text: str) -> None:
+        typer.echo(text, err=as_json)
+
+    progress = None if quiet else say
+    common = dict(max_points=max_points, ds_max=ds_max, progress=progress, **_given(dt=dt))
+    branch = _first_branch(model, param, start, stop, from_branch, point, n_balls, sets,
+                           period, settle, common)
     branches = [branch]
-    if switch_pd:
-        pds = np.nonzero(branch.special.values == "PD")[0]
-        if len(pds) == 0:
-            typer.echo("no period doubling on the branch: nothing to switch to", err=True)
-        else:
-            two = cont.switch_period_doubling(branch, int(pds[0]), dt=None)
-            if not two.converged:
-                typer.echo(f"branch switching failed: {two.message}", err=True)
-            else:
-                branches.append(cont.continue_from_orbit(
-                    two, param=param, stop=stop, max_points=max_points, ds_max=ds_max,
-                    progress=progress, label=f"period {two.period}", **_given(dt=dt)))
-    for i, br in enumerate(branches):
-        path = output if i == 0 else output.with_name(f"{output.stem}-period2{output.suffix}")
+    for kind, wanted in (("PD", switch_pd), ("BP", switch_bp)):
+        if wanted:
+            switched = _switched_branch(branch, kind, stop, common, say)
+            if switched is not None:
+                branches.append(switched)
+    paths = [output if i == 0 else
+             output.with_name(f"{output.stem}-{SWITCH_SUFFIX[br.attrs['switched_at']]}"
+                              f"{output.suffix}") for i, br in enumerate(branches)]
+    for br, path in zip(branches, paths, strict=True):
         save_dataset(br, path)
-        specials = [f"{k} at {br[param].values[j]:.6g}" for j, k in
-                    enumerate(br.special.values) if k]
-        typer.echo(f"wrote {path}: {br.sizes['point']} orbits ({br.attrs['branch']}), "
-                   f"{br.attrs['status']}; special points: {', '.join(specials) or 'none'}")
+        if not as_json:
+            _print_branch(br, path)
     if plot:
         from analysis.reports.plots import branch_figure
 
-        _save_figure(branch_figure(branches), plot)
+        _save_figure(branch_figure(branches), plot, err=as_json)
+    if as_json:
+        from analysis.stability.continuation import branch_summary
+
+        typer.echo(json.dumps({
+            "branches": [{"file": str(path), **branch_summary(br)}
+                         for br, path in zip(branches, paths, strict=True)],
+            "plot": str(plot) if plot else None}, indent=2))
+
+
+def _first_branch(model, param, start, stop, from_branch, point, n_balls, sets, period,
+                  settle, common: dict):
+    """The branch from MODEL --param --from, or from a point of --from-branch."""
+    from analysis.stability import continuation as cont
+
+    if from_branch is not None:
+        given = [name for name, value in (("MODEL", model), ("--param", param),
+                                          ("--from", start), ("--n-balls", n_balls),
+                                          ("--set", sets), ("--period", period),
+                                          ("--settle", settle))
+                 if value not in (None, [])]
+        if given:
+            raise InputError(f"from-branch: the branch file sets the model, parameters and "
+                             f"period; drop {', '.join(given)}")
+        return cont.continue_from_branch(from_branch, point, stop=stop, **common)
+    missing = [name for name, value in (("MODEL", model), ("--param", param),
+                                        ("--from", start)) if value is None]
+    if missing:
+        raise InputError(f"continue: give {', '.join(missing)} (or --from-branch BRANCH.nc)")
+    return cont.continue_orbits(model, parse_n_balls(n_balls), param=param, start=start,
+                                stop=stop, period=period, **_given(settle=settle), **common,
+                                **parse_sets(sets))
+
+
+def _switched_branch(branch, kind: str, stop: float, common: dict,
+                     say: Callable[[str], None]):
+    """The branch born at the first ``kind`` (PD or BP) point, or None (said why)."""
+    from analysis.stability import continuation as cont
+
+    k = cont.first_point(branch, kind)
+    if k is None:
+        say(f"no {kind} point on the branch: nothing to switch to")
+        return None
+    orbit = cont.switch_branch(branch, k)
+    if not orbit.converged:
+        say(f"branch switching at {kind} (point {k}) failed: {orbit.message}")
+        return None
+    what = "period " + orbit.period if kind == "PD" else f"asymmetric, period {orbit.period}"
+    new = cont.continue_from_orbit(orbit, param=branch.attrs["param"], stop=stop,
+                                   label=what, **common)
+    new.attrs["switched_at"] = kind
+    return new
+
+
+def _print_branch(branch, path: Path) -> None:
+    from analysis.stability.continuation import special_point_lines
+
+    lines = special_point_lines(branch)
+    typer.echo(f"wrote {path}: {branch.sizes['point']} orbits ({branch.attrs['branch']}), "
+               f"{branch.attrs['status']}; special points: {len(lines) or 'none'}")
+    for line in lines:
+        typer.echo(f"  {line}")
