@@ -405,22 +405,21 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
     first = store.load(f"{directions[0]}-{0:05d}")
     arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
               for v in model.state_names}
-    amp = {v: np.full((len(directions), n), np.nan) for v in first
-           if v.startswith("amplitude_") or v == "t_start"}
+    amplitudes = [v for v in first if v.startswith("amplitude_")]
+    per_value = {v: np.full((len(directions), n), np.nan) for v in [*amplitudes, "t_start"]}
     for d, direction in enumerate(directions):
         for i in range(n):
             point = store.load(f"{direction}-{i:05d}")
             for v in arrays:
                 arrays[v][d, i, :len(point[v])] = point[v]
-            for v in amp:
-                amp[v][d, i] = point[v]
+            for v in per_value:
+                per_value[v][d, i] = point[v]
     data = {v: (("direction", axis.name, "k"), arrays[v],
                 {"units": units[v], "long_name": f"{v} on the {setting.section} section"})
             for v in arrays}
-    data.update({v: (("direction", axis.name), amp[v],
-                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amp
-                 if v != "t_start"})
-    data["t_start"] = (("direction", axis.name), amp["t_start"],
+    data.update({v: (("direction", axis.name), per_value[v],
+                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amplitudes})
+    data["t_start"] = (("direction", axis.name), per_value["t_start"],
                        {"units": "s", "long_name": "time at which the value's run starts"})
     attrs = _attrs(setting, "diagram")
     attrs.update(param=axis.name, follow=int(follow))
