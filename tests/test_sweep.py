@@ -145,3 +145,23 @@ def test_structure_axis_names_its_bearing():
         {"right": 9, "left": 6}, {"damping": 50.0})
     with pytest.raises(ValueError, match="axis"):
         Axis.parse("n_balls[left]:7")
+
+
+def test_followed_value_starts_at_the_same_forcing_angles():
+    """With unbalance the forcing has the shaft and the VC frequency; a speed step scales
+    both, so the start time of the next value (``follow_start``) gives the end state the
+    shaft and cage angles it ended with, whichever section is followed."""
+    from analysis.model import load_model
+    from analysis.sweeps.sweep import follow_start
+
+    model = load_model("vakharia2015")
+    end = {"final": np.array([1e-6, 2e-6, 3e-3, 4e-3]), "t_final": 1.2345}
+    for section in ("shaft", "vc"):
+        setting = Setting("vakharia2015", 8, {}, transient=0.1, samples=10, section=section)
+        start = follow_start(setting, (8, {"speed_rpm": 5000.0}), end, 8,
+                             {"speed_rpm": 5200.0})
+        assert start.state == tuple(end["final"])
+        for key in ("shaft_hz", "cage_hz", "vc_hz"):
+            old, new = (model.frequencies(model.structure(8), model.parameters(
+                {"speed_rpm": rpm})).as_dict()[key] for rpm in (5000.0, 5200.0))
+            assert new * start.time == pytest.approx(old * end["t_final"], rel=1e-14)
