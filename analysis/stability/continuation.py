@@ -6,7 +6,12 @@ parameter (scaled by the requested range).
 Equations: G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 (shooting, ``analysis.integrate.flow``) plus the
 arclength condition τ·(w − w_pred) = 0 of Keller's method; the bordered Newton matrix is built
 from the monodromy matrix and ∂Φ/∂λ, both by AD (the period's own dependence on λ, e.g. on the
-speed, included). The step adapts to the Newton iterations.
+speed, included). The step adapts to the Newton iterations, and every step must pass the
+``StepGuards`` (Newton contraction, distance from the predictor, angles between the tangents
+and the secant, the direction of λ, a located fold where the tangent's λ component flips):
+a refused step is retried at half the step, so that a corrector landing on a neighbouring
+branch (the period-1 orbit beside a period-3 one, say) is refused, not accepted silently.
+The guards are tests with thresholds in the scaled variables, not a proof of connectedness.
 
 Special points, located by bisection on the arclength:
   * LP (fold): the parameter component of the tangent changes sign (a multiplier passes +1);
@@ -14,7 +19,9 @@ Special points, located by bisection on the arclength:
   * BP (branch point): det(M − I) changes sign without a fold (a symmetry-breaking
     pitchfork, say);
   * NS (Neimark–Sacker): the number of complex multipliers outside the unit circle changes.
-``switch_period_doubling`` starts the period-2 branch at a PD point.
+``switch_branch`` starts the period-2 branch at a PD point (``switch_period_doubling``) or the
+asymmetric branch at a BP point (``switch_branch_point``); ``continue_from_branch`` restarts
+from a point of a stored branch, in either direction.
 
 Non-smoothness: where an orbit starts or stops touching a ball (grazing), the branch has a
 kink that no smooth test function sees; continuation passes it, the multipliers jump, and a
