@@ -33,7 +33,7 @@ def continue_(
     stop: Annotated[float, typer.Option("--to", help="End value (parameter unit).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the branch.")],
     model: Annotated[str | None, typer.Argument(
-        metavar="[MODEL]",
+        metavar="MODEL",
         help="Model: a shipped name, a name in a BEARINGDYN_MODELS folder, a .toml spec or a "
              "generated folder (not with --from-branch).")] = None,
     param: Annotated[str | None, typer.Option(help="Runtime parameter to vary.")] = None,
