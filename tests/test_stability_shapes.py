@@ -190,7 +190,8 @@ def test_classify_sections_every_state():
     assert c.section == "vc" and c.nature == "periodic-1"
     pts = poincare_section(ds, "vc")
     assert list(pts.data_vars) == list(ds.data_vars) and pts.sizes["k"] == c.n_points
-    points, size = _normalised_points(ds, pts)
+    points, size = _normalised_points(pts, {name: float(np.ptp(ds[name].values))
+                                            for name in ds.data_vars})
     assert points.shape == (c.n_points, 8) and size == pytest.approx(
         max(np.ptp(ds[v].values) for v in ("x_rotor", "y_rotor", "x_housing", "y_housing")))
 
