@@ -75,6 +75,17 @@ def test_lengths_default_to_the_model_time_scale():
     assert abs(lam - 0.10) < 0.02 and lam - ci > 0.05  # Ueda chaos
 
 
+def test_default_length_reaches_the_interval_target_on_the_paper_case():
+    """The paper's chaotic case (N_b = 6) at the default lengths (1 s transient, 30 s
+    averaged): λ1's 95 % half-width is at most 5 1/s, and λ1 agrees within it with a second
+    window of the same length further along the attractor."""
+    first = lyapunov("vakharia2015", 6, n_exponents=1)
+    assert first.attrs["duration"] == 30.0 and float(first.ci95[0]) <= 5.0
+    later = lyapunov("vakharia2015", 6, n_exponents=1, transient=31.0)
+    ci = float(first.ci95[0]) + float(later.ci95[0])
+    assert abs(float(first.exponents[0] - later.exponents[0])) < ci
+
+
 def test_ueda_attractor_is_chaotic_with_exact_neutral_modes():
     """Ueda's Duffing attractor: λ1 > 0; the decoupled y motion (y'' + c y' = 0) has the
     exponents 0 and −c/M exactly."""
