@@ -60,7 +60,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.integrate.flow import Period, evaluate, flow_map
+from analysis.integrate.flow import Period, evaluate
 from analysis.integrate.simulate import run_attrs
 from analysis.model import Model, Structure
 from analysis.stability.continuation import _correct, _Problem, _tangent, orbit_scale
@@ -73,23 +73,43 @@ at one of the two points (test functions are normalised: dimensionless, O(1)).""
 NS_ENTRIES = ((0, 0), (0, 1), (1, 0), (1, 1))
 
 
+def _tangent_step(model: Model, structure: Structure, r: int) -> ca.Function:
+    """One RK4 step carrying r tangent vectors, as an SX Function:
+    ``(s, p, h, t0) -> s'`` with ``s = [z; k; vec(Y)]``, z the state after step k (time
+    ``t0 + k·h``, as in ``flow.flow_map``) and Y' = (∂z'/∂z) Y (n × r): Y_k = M_k Y_0."""
+    step = model.functions(structure).rk4_step
+    n, n_par = model.n_state, len(model.parameter_names)
+    z, k, y = ca.SX.sym("z", n), ca.SX.sym("k"), ca.SX.sym("Y", n, r)
+    p, h, t0 = ca.SX.sym("p", n_par), ca.SX.sym("h"), ca.SX.sym("t0")
+    z_next = step(t0 + k * h, z, p, h)
+    s = ca.vertcat(z, k, ca.vec(y))
+    return ca.Function("tangent_step", [s, p, h, t0],
+                       [ca.vertcat(z_next, k + 1, ca.vec(ca.jtimes(z_next, z, y)))])
+
+
 @cache
 def bilinear_gradients(model: Model, structure: Structure, period: Period, n_steps: int,
                        r: int) -> ca.Function:
     """``grad(z0, t0, p, A, B) -> (Gz, Gp)``: column i of Gz (n × r) and Gp (n_par × r) is
     the gradient with respect to z0 and p of the bilinear form a_iᵀ M(z0, t0, p) b_i (A, B:
-    n × r), M the monodromy matrix of ``flow_map`` over ``n_steps`` RK4 steps.
+    n × r), M the monodromy matrix of the RK4 map of ``flow.flow_map`` (``n_steps`` steps
+    of h = T(p)/n_steps, the period's dependence on p included).
 
-    Reverse-mode AD (CasADi) through the flow map in the virtual machine (the compiled
-    blocks carry no derivatives of their own): the second derivatives of the discrete RK4
-    map, exactly. These give ∂A/∂x of the bordered test functions, and the fold's
-    normal-form coefficient pᵀB(q, q) = ∇_z(pᵀ M q)·q."""
-    flow = flow_map(model, structure, period, n_steps, compiled=False)
+    M b_i is carried step by step as a tangent vector (Y' = A Y, ``_tangent_step``) and the
+    gradient of aᵀ M b is taken by reverse-mode AD (CasADi, virtual machine) through those
+    steps: the second derivatives of the discrete RK4 map, exactly, at the cost of a few
+    flows of n (r + 1) states. These give ∂A/∂x of the bordered test functions, and the
+    fold's normal-form coefficient pᵀB(q, q) = ∇_z(pᵀ M q)·q."""
+    structure = model.structure(structure)
     n, n_par = model.n_state, len(model.parameter_names)
     z0, t0, p = ca.MX.sym("z0", n), ca.MX.sym("t0"), ca.MX.sym("p", n_par)
     a, b = ca.MX.sym("a", n, r), ca.MX.sym("b", n, r)
-    mono = flow(z0, t0, p)[1]
-    phi = ca.sum1(a * ca.mtimes(mono, b)).T
+    h = period.seconds(model, structure, p) / n_steps
+    run = _tangent_step(model, structure, r).fold(n_steps)
+    s_end = run(ca.vertcat(z0, 0, ca.vec(b)),
+                *(ca.repmat(x, 1, n_steps) for x in (p, h, t0)))
+    y = ca.reshape(s_end[n + 1:], n, r)
+    phi = ca.sum1(a * y).T
     return ca.Function("bilinear_gradients", [z0, t0, p, a, b],
                        [ca.jacobian(phi, z0).T, ca.jacobian(phi, p).T],
                        ["z0", "t0", "p", "A", "B"], ["Gz", "Gp"])
@@ -422,6 +442,7 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     branch parameter by its range on the branch). The RK4 step count per period is the
     branch's. Returns the curve as a Dataset (``curve_dataset``).
     """
+    source = "" if isinstance(branch, xr.Dataset) else str(branch)
     if not isinstance(branch, xr.Dataset):
         from analysis.io import open_result
 
@@ -446,7 +467,8 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     prob.update_borders(first)
     curve, status = _follow(prob, first, (min(start, stop), max(start, stop)), ds, ds_min,
                             ds_max, max_points, tol, marks, progress)
-    return curve_dataset(prob, curve, param, status, branch, kind)
+    return curve_dataset(prob, curve, param, status, kind,
+                         source or str(branch.encoding.get("source", "")))
 
 
 def _start_problem(branch: xr.Dataset, index: int, kind: str, param: str, stop: float
@@ -539,13 +561,13 @@ def _marks(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, marks: Sequence[fl
 
 
 def curve_dataset(prob: _CurveProblem, curve: list[CurvePoint], param: str, status: str,
-                  branch: xr.Dataset, kind: str) -> xr.Dataset:
+                  kind: str, branch_file: str = "") -> xr.Dataset:
     """The curve as a Dataset along ``point``: both parameters as data variables named
     after themselves (with units), κ = cos θ and θ (NS), z0 (``point`` × ``state``), the
     multipliers, the amplitude, the codimension-two test functions (``test_<label>``), the
     ``special`` labels and ``marked``; attrs from ``run_attrs`` plus ``curve`` (LP, PD or
     NS), ``param1`` (the branch's), ``param2``, ``period``, ``steps_per_period``, ``t0``,
-    ``status``."""
+    ``status``, ``branch_file``."""
     model = prob.model
     p1 = prob.param_name
     mult = np.array([p.multipliers for p in curve])
@@ -554,7 +576,7 @@ def curve_dataset(prob: _CurveProblem, curve: list[CurvePoint], param: str, stat
         attrs.pop(name, None)
     attrs.update(kind="curve", curve=kind, param1=p1, param2=param, period=str(prob.period),
                  steps_per_period=prob.n_steps, t0=prob.t0, status=status,
-                 branch_file=str(branch.encoding.get("source", "")))
+                 branch_file=branch_file)
     units = model.units
     data = {
         p1: ("point", np.array([p.lam1 for p in curve]), {"units": units[p1]}),

@@ -1,0 +1,101 @@
+"""Figures of two-parameter curves (``analysis.stability.curves``), over a stability chart
+(``analysis.sweeps.sweep.stability_chart``) of the same two parameters when one is given."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from analysis.errors import InputError
+from analysis.reports.plots import NATURE_COLORS, NATURE_NAMES  # also selects Agg
+
+CURVE_STYLES = {"LP": ("C0", "-"), "PD": ("k", "-"), "NS": ("C3", "-")}
+CODIM2_MARKERS = {"CP": "v", "R1": "s", "R2": "D", "R3": "^", "R4": "p", "LPPD": "X",
+                  "LPNS": "P", "PDNS": "h"}
+CURVE_NAMES = {"LP": "fold (LP) curve", "PD": "period-doubling (PD) curve",
+               "NS": "Neimark–Sacker (NS) curve"}
+
+
+def axis_label(ds: xr.Dataset, name: str) -> str:
+    """``radial_load (N)``: a parameter and its unit from the variable's attributes."""
+    unit = str(ds[name].attrs.get("units", ""))
+    return name + (f" ({unit})" if unit else "")
+
+
+def curve_axes(curves: list[xr.Dataset], chart: xr.Dataset | None) -> tuple[str, str]:
+    """(x, y) parameter names of the figure: the chart's axes, or the first curve's
+    (branch parameter on x). Every curve must carry both as variables."""
+    if not curves:
+        raise InputError("curves: nothing to draw")
+    first = curves[0]
+    x, y = (chart.attrs["x"], chart.attrs["y"]) if chart is not None else (
+        first.attrs["param1"], first.attrs["param2"])
+    for ds in curves:
+        missing = [name for name in (x, y) if name not in ds.data_vars]
+        if missing:
+            raise InputError(f"chart: its axes are {x} and {y}, but the curve of "
+                             f"{ds.attrs.get('param1')} and {ds.attrs.get('param2')} has no "
+                             f"{missing[0]}")
+    return x, y
+
+
+def draw_chart(ax, chart: xr.Dataset, x: str, y: str) -> None:
+    """The chart's classes (periodic-1, periodic-2, …) as coloured cells with a legend."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
+    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    codes = chart.nature_code.transpose(y, x)
+    ax.pcolormesh(chart[x], chart[y], codes, cmap=cmap, norm=norm, shading="nearest",
+                  alpha=0.75)
+    present = sorted(set(np.unique(codes.values).tolist()))
+    ax.legend(handles=[Patch(color=NATURE_COLORS[k], alpha=0.75, label=NATURE_NAMES[k])
+                       for k in present], fontsize=8, loc="lower left",
+              title="brute-force chart", title_fontsize=8)
+
+
+def draw_curve(ax, ds: xr.Dataset, x: str, y: str):
+    """One curve and its labelled codimension-two points; returns the line."""
+    color, style = CURVE_STYLES.get(str(ds.attrs.get("curve")), ("C1", "-"))
+    (line,) = ax.plot(ds[x], ds[y], style, color=color, lw=1.6,
+                      label=CURVE_NAMES.get(str(ds.attrs.get("curve")), "curve"))
+    for i, label in enumerate(ds.special.values):
+        if label:
+            xi, yi = float(ds[x].values[i]), float(ds[y].values[i])
+            ax.plot(xi, yi, CODIM2_MARKERS.get(str(label), "o"), color="k", ms=7,
+                    mfc="w", mew=1.4)
+            ax.annotate(str(label), (xi, yi), xytext=(5, 5), textcoords="offset points",
+                        fontsize=8)
+    return line
+
+
+def curve_figure(curves: list[xr.Dataset], chart: xr.Dataset | None = None,
+                 title: str | None = None) -> Figure:
+    """Curves in the plane of their two parameters (with units), over the classes of
+    ``chart`` (a stability chart of the same two parameters) when given."""
+    x, y = curve_axes(curves, chart)
+    fig, ax = plt.subplots(figsize=(8, 5.5), layout="constrained")
+    if chart is not None:
+        draw_chart(ax, chart, x, y)
+        ax.add_artist(ax.get_legend())
+    lines = [draw_curve(ax, ds, x, y) for ds in curves]
+    seen = {}
+    for line in lines:
+        seen.setdefault(line.get_label(), line)
+    ax.legend(handles=list(seen.values()), fontsize=8, loc="upper right")
+    ax.set_xlabel(axis_label(curves[0], x))
+    ax.set_ylabel(axis_label(curves[0], y))
+    if chart is not None:
+        ax.set_xlim(float(chart[x].min()), float(chart[x].max()))
+        ax.set_ylim(float(chart[y].min()), float(chart[y].max()))
+    ax.grid(True, alpha=0.3)
+    first = curves[0]
+    ax.set_title(title or f"{first.attrs['model']}: "
+                 + ", ".join(sorted({CURVE_NAMES.get(str(c.attrs['curve']), 'curve')
+                                     for c in curves}))
+                 + (" over a brute-force stability chart" if chart is not None else ""),
+                 fontsize=9)
+    return fig
