@@ -257,10 +257,9 @@ def _crossings(curves, load: float) -> np.ndarray:
     out = []
     for cv in curves:
         s, f = cv.speed_rpm.values, cv.radial_load.values
+        out.extend(s[f == load])
         for i in range(len(s) - 1):
-            if f[i] == load:
-                out.append(s[i])
-            elif (f[i] - load) * (f[i + 1] - load) < 0:
+            if (f[i] - load) * (f[i + 1] - load) < 0:
                 out.append(s[i] + (load - f[i]) / (f[i + 1] - f[i]) * (s[i + 1] - s[i]))
     return np.unique(np.round(out, 6))
 

@@ -53,8 +53,8 @@ def draw_chart(ax, chart: xr.Dataset, x: str, y: str) -> None:
                   alpha=0.75)
     present = sorted(set(np.unique(codes.values).tolist()))
     ax.legend(handles=[Patch(color=NATURE_COLORS[k], alpha=0.75, label=NATURE_NAMES[k])
-                       for k in present], fontsize=8, loc="lower left",
-              title="brute-force chart", title_fontsize=8)
+                       for k in present], fontsize=8, loc="upper left",
+              bbox_to_anchor=(1.01, 1.0), title="brute-force chart", title_fontsize=8)
 
 
 def draw_curve(ax, ds: xr.Dataset, x: str, y: str):
@@ -77,7 +77,8 @@ def curve_figure(curves: list[xr.Dataset], chart: xr.Dataset | None = None,
     """Curves in the plane of their two parameters (with units), over the classes of
     ``chart`` (a stability chart of the same two parameters) when given."""
     x, y = curve_axes(curves, chart)
-    fig, ax = plt.subplots(figsize=(8, 5.5), layout="constrained")
+    fig, ax = plt.subplots(figsize=(9.5 if chart is not None else 8, 5.5),
+                           layout="constrained")
     if chart is not None:
         draw_chart(ax, chart, x, y)
         ax.add_artist(ax.get_legend())
@@ -85,7 +86,10 @@ def curve_figure(curves: list[xr.Dataset], chart: xr.Dataset | None = None,
     seen = {}
     for line in lines:
         seen.setdefault(line.get_label(), line)
-    ax.legend(handles=list(seen.values()), fontsize=8, loc="upper right")
+    outside = chart is not None  # the chart's legend is outside, top right: this one below
+    ax.legend(handles=list(seen.values()), fontsize=8,
+              loc="lower left" if outside else "upper right",
+              bbox_to_anchor=(1.01, 0.0) if outside else None)
     ax.set_xlabel(axis_label(curves[0], x))
     ax.set_ylabel(axis_label(curves[0], y))
     if chart is not None:
