@@ -510,7 +510,8 @@ def branch_multipliers(branch: xr.Dataset, index: int) -> np.ndarray:
 
 def _follow(prob: _CurveProblem, first: CurvePoint, box: tuple[float, float], ds: float,
             ds_min: float, ds_max: float, max_points: int, tol: float,
-            marks: Sequence[float], progress) -> tuple[list[CurvePoint], str]:
+            marks: Sequence[float], progress: Callable[[str], None] | None
+            ) -> tuple[list[CurvePoint], str]:
     """Pseudo-arclength steps until ``param`` leaves ``box`` (the end solved on the bound)."""
     curve, status = [first], f"stopped after max_points = {max_points}"
     lo, hi = box
