@@ -1,49 +1,141 @@
 """The stability-chart benchmark of the sweeps issue: N_b = 5…12 × 200 speeds (1000-10000 rpm),
-each point 1 s transient + 200 shaft revolutions, classified with its largest Lyapunov
-exponent, on all cores. Prints the wall time and the points per second per core.
+each point 1 s transient + 200.5 shaft revolutions (RK4, dt = 1e-5 s), classified with its
+largest Lyapunov exponent (``analysis.sweeps.points.chart_point``: states and tangent in one
+pass), on all cores. Prints the wall time and the points per second per core.
+
+In the same run, a serial reference: for ``--reference-points`` points of the grid, one chart
+point computed in this process against the model's compiled RK4 blocks
+(``analysis.integrate.compiled.library`` / ``Runner``: states only, no tangent, no
+classification) over the same simulated time from the same initial state; the ratio of the
+summed times is the chart's cost per point in units of a plain compiled RK4 run.
 
     python benchmarks/bench_chart.py [--speeds 200] [--workers N] [--executor processes|dask]
+                                     [--reference-points 10] [--repeat 3] [--no-chart]
 
-Use --speeds 10 for a quick estimate (80 points).
+Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
+``--quick`` is ``--speeds 10`` (80 points) for an estimate.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
+from analysis.integrate.compiled import Runner, library
+from analysis.model import as_system
 from analysis.reports.progress import ProgressReporter
 from analysis.sweeps.executors import make_executor
-from analysis.sweeps.sweep import Axis, Setting, stability_chart
+from analysis.sweeps.points import chart_point
+from analysis.sweeps.sweep import Axis, Setting, _duration, _period, stability_chart
+
+SETTING = Setting("vakharia2015", None, {}, transient=1.0, samples=200, lyapunov=True)
+WALL_TARGET = 150.0
+"""s of wall time for the 1600-point chart on 2 cores."""
+RATIO_TARGET = 2.5
+"""Chart point / compiled RK4 of the same simulated time (serial)."""
+
+
+def rk4_only(n_balls: int, values: dict[str, float], duration: float, dt: float) -> float:
+    """Seconds of wall time for round(duration / dt) compiled RK4 steps (states only) of the
+    chart's model from its initial state (``duration``, ``dt`` in s)."""
+    system = as_system(SETTING.model, n_balls, None, **values)
+    runner = Runner(library(system.model, system.structure), system.p, dt)
+    z0 = np.asarray(system.state, dtype=float)
+    start = time.perf_counter()
+    for _ in runner.blocks(z0, round(duration / dt)):
+        pass
+    return time.perf_counter() - start
+
+
+def one_point(n_balls: int, values: dict[str, float]) -> float:
+    """Seconds of wall time for one chart point computed in this process."""
+    start = time.perf_counter()
+    chart_point(SETTING, n_balls, values)
+    return time.perf_counter() - start
+
+
+def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
+    """Chart point against compiled RK4 at ``count`` grid points spread over both axes;
+    median of ``repeat`` interleaved runs each (the first call of each point, which loads
+    the libraries, not timed). Times in s."""
+    picks = []
+    for i in range(count):
+        ix = round(i * (len(x.values) - 1) / max(count - 1, 1))
+        n_balls = round(y.values[(3 * i) % len(y.values)])
+        picks.append((n_balls, {x.name: x.values[ix]}))
+    rows = []
+    for n_balls, values in picks:
+        duration = _duration(SETTING, _period(SETTING, n_balls, values))
+        one_point(n_balls, values)
+        rk4_only(n_balls, values, duration, SETTING.dt)
+        chart, rk4 = [], []
+        for _ in range(repeat):
+            chart.append(one_point(n_balls, values))
+            rk4.append(rk4_only(n_balls, values, duration, SETTING.dt))
+        rows.append((n_balls, values[x.name], duration, statistics.median(chart),
+                     statistics.median(rk4)))
+    chart_sum, rk4_sum = sum(r[3] for r in rows), sum(r[4] for r in rows)
+    return {"rows": rows, "chart": chart_sum / len(rows), "rk4": rk4_sum / len(rows),
+            "ratio": chart_sum / rk4_sum,
+            "simulated": sum(r[2] for r in rows) / len(rows)}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--speeds", type=int, default=200)
+    parser.add_argument("--quick", action="store_true", help="--speeds 10 (80 points)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--executor", default="processes")
+    parser.add_argument("--reference-points", type=int, default=10)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--no-chart", action="store_true",
+                        help="the serial reference only")
     args = parser.parse_args()
-    setting = Setting("vakharia2015", None, {}, transient=1.0, samples=200, lyapunov=True)
-    x = Axis.parse(f"speed_rpm:1000:10000:{args.speeds}")
+    speeds = 10 if args.quick else args.speeds
+    x = Axis.parse(f"speed_rpm:1000:10000:{speeds}")
     y = Axis.parse("n_balls:5:12")
+    full_x = Axis.parse("speed_rpm:1000:10000:200")
+
+    ref = serial_reference(full_x, y, args.reference_points, args.repeat)
+    print(f"serial reference, {len(ref['rows'])} points of the 1600-point grid "
+          f"(median of {args.repeat} each):")
+    print("| N_b | speed_rpm | simulated (s) | chart point (s) | compiled RK4, states "
+          "only (s) | ratio |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for n_balls, speed, duration, chart_s, rk4_s in ref["rows"]:
+        print(f"| {n_balls} | {speed:.0f} | {duration:.3f} | {chart_s:.4f} | {rk4_s:.4f} | "
+              f"{chart_s / rk4_s:.2f} |")
+    verdict = "met" if ref["ratio"] <= RATIO_TARGET else "MISSED"
+    print(f"mean per point: chart {ref['chart']:.4f} s, RK4 {ref['rk4']:.4f} s for "
+          f"{ref['simulated']:.3f} s simulated; ratio {ref['ratio']:.2f} "
+          f"(target <= {RATIO_TARGET}: {verdict})")
+    if args.no_chart:
+        return
+
     executor = make_executor(args.executor, args.workers)
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         try:
-            chart = stability_chart(setting, x, y, Path(tmp) / "chart.nc", executor=executor,
+            chart = stability_chart(SETTING, x, y, Path(tmp) / "chart.nc", executor=executor,
                                     progress=ProgressReporter("chart"))
         finally:
             executor.close()
         wall = time.perf_counter() - start
     points = chart.sizes["speed_rpm"] * chart.sizes["n_balls"]
     counts = {k: int((chart.nature == k).sum()) for k in sorted(set(chart.nature.values.ravel()))}
+    verdict = ("met" if wall <= WALL_TARGET else "MISSED") if points == 1600 and \
+        args.workers == 2 else "not this grid or worker count"
     print(f"{points} points ({y.values[0]:g}-{y.values[-1]:g} balls × {len(x.values)} speeds), "
           f"{args.workers} workers ({executor.name}): {wall:.1f} s wall, "
-          f"{points / wall / args.workers:.3f} points/s/core; target <= 300 s for 1600 points")
+          f"{points / wall / args.workers:.3f} points/s/core; target <= {WALL_TARGET:g} s for "
+          f"1600 points on 2 cores: {verdict}")
     print("classes:", counts)
 
 

@@ -62,6 +62,7 @@ from analysis.model import BallCounts, System, load_model
 from analysis.signal import displacement_names
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
+from analysis.sweeps.points import chart_point  # one pass; chart_point_two_pass below
 from analysis.sweeps.store import PointStore
 
 NATURE_CODES = {"periodic-1": 1, "periodic-2": 2, "periodic-n": 3, "quasi-periodic": 4,
@@ -281,8 +282,11 @@ def follow_start(setting: Setting, previous: tuple[BallCounts, dict[str, float]]
                  periods * _period(setting, n_balls, values))
 
 
-def chart_point(setting: Setting, n_balls, values) -> dict:
-    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point."""
+def chart_point_two_pass(setting: Setting, n_balls, values) -> dict:
+    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point, in
+    two passes (simulate and keep every state, then ``lyapunov`` from the record's first
+    state): the former chart point, kept for comparison. The chart uses
+    ``analysis.sweeps.points.chart_point`` (one pass)."""
     from analysis.stability.classify import classify
     from analysis.stability.lyapunov import lyapunov
 
