@@ -15,3 +15,7 @@ class StaleModelError(BearingdynError):
 
 class SimulationError(BearingdynError):
     """A numerical run failed (blow-up, solver failure)."""
+
+
+class WriteError(BearingdynError):
+    """A result could not be written (full disk, quota, I/O error); nothing was replaced."""

@@ -652,17 +652,18 @@ def test_continuation_start_failure_is_reported():
 
 
 def test_crash_mid_write_leaves_nothing(tmp_path):
+    from analysis.errors import WriteError
     from analysis.io import atomic_write
 
     def half_then_crash(tmp: Path) -> None:
         tmp.write_bytes(b"CDF\x01 half a result")
         raise OSError("disk full")
 
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(WriteError, match="disk full"):
         atomic_write(tmp_path / "run.nc", half_then_crash)
     assert list(tmp_path.iterdir()) == []
     (tmp_path / "run.nc").write_text("previous result")
-    with pytest.raises(OSError):
+    with pytest.raises(WriteError, match="nothing was changed"):
         atomic_write(tmp_path / "run.nc", half_then_crash)
     assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]
     assert (tmp_path / "run.nc").read_text() == "previous result", "the old file survives"

@@ -1,12 +1,14 @@
 """The ``bearingdyn`` command: one module per group of commands, all on one typer app.
 
 The modules register their commands when imported, in the order ``bearingdyn --help`` lists
-them: models, runs, stability, continuation, sweeps, reports.
+them: models, runs, stability, continuation, sweeps, reports. ``main`` is the console entry:
+the app with command-line usage errors (a mistyped option, a value of the wrong type) cut to
+one line and exit code 2, as every other bad input.
 """
 
 # isort: off
-from analysis.cli.common import app
+from analysis.cli.common import app, main
 from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
 # isort: on
 
-__all__ = ["app"]
+__all__ = ["app", "main"]

@@ -1,5 +1,5 @@
 """``python -m analysis.cli``."""
 
-from analysis.cli import app
+from analysis.cli import main
 
-app()
+main()

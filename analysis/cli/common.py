@@ -8,7 +8,12 @@ from typing import Annotated
 
 import typer
 
-from analysis.errors import BearingdynError, InputError
+try:  # typer >= 0.24 carries its own copy of click; older ones use click itself
+    from typer import _click as click
+except ImportError:  # pragma: no cover
+    import click
+
+from analysis.errors import BearingdynError, InputError, WriteError
 
 app = typer.Typer(no_args_is_help=True, rich_markup_mode=None, add_completion=False,
                   pretty_exceptions_enable=False,
@@ -23,7 +28,15 @@ def _main(debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks."
 
 
 def reports_errors(command):
-    """Turn user errors into one line on stderr and exit code 2 (tracebacks with --debug)."""
+    """The error edge of every command: nothing reaches the user as a traceback.
+
+    - a user error (``BearingdynError``, ``SpecError``): ``error: <message>``, exit code 2;
+    - a file system failure (full disk, permission, name too long): one line naming the
+      file, exit code 1;
+    - Ctrl-C: ``interrupted``, exit code 130 (atomic writes leave no partial file);
+    - anything else: ``internal error: <type>: <message>``, exit code 1.
+
+    ``bearingdyn --debug`` re-raises instead, so the traceback shows."""
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
@@ -31,28 +44,74 @@ def reports_errors(command):
 
         try:
             return command(*args, **kwargs)
+        except (typer.Exit, typer.Abort):
+            raise
+        except click.exceptions.BadParameter as exc:
+            hint = exc.param_hint or (exc.param.opts[0] if exc.param else "option")
+            hint = hint if isinstance(hint, str) else " / ".join(hint)
+            _fail(exc, f"error: {hint.strip(chr(39))}: {exc.message}", 2)
+        except click.exceptions.ClickException as exc:
+            _fail(exc, f"error: {exc.format_message()}", 2)
+        except WriteError as exc:  # not the user's input: the disk or the file system
+            _fail(exc, f"error: {exc}", 1)
         except (BearingdynError, SpecError) as exc:
-            if _state["debug"]:
-                raise
-            typer.echo(f"error: {exc}", err=True)
-            raise typer.Exit(2) from None
+            _fail(exc, f"error: {exc}", 2)
+        except KeyboardInterrupt as exc:
+            _fail(exc, "interrupted (nothing half-written was left)", 130)
+        except OSError as exc:
+            where = f" '{exc.filename}'" if exc.filename else ""
+            _fail(exc, f"error: cannot use{where}: {exc.strerror or exc}", 1)
+        except MemoryError as exc:
+            _fail(exc, "error: out of memory; try a shorter run or a coarser grid", 1)
+        except Exception as exc:  # the edge: one line, never a traceback
+            text = " ".join(str(exc).split())[:300]
+            _fail(exc, f"internal error: {type(exc).__name__}: {text} (run with --debug "
+                       "for the traceback)", 1)
 
     return wrapper
 
 
+def _fail(exc: BaseException, line: str, code: int) -> None:
+    if _state["debug"]:
+        raise exc
+    typer.echo(line, err=True)
+    raise typer.Exit(code) from None
+
+
 def parse_sets(items: list[str] | None) -> dict[str, float]:
-    """``["damping=100", "radial_load=20"]`` -> {"damping": 100.0, "radial_load": 20.0}."""
+    """``["damping=100", "radial_load=20"]`` -> {"damping": 100.0, "radial_load": 20.0}.
+
+    A parameter given twice is refused (which one was meant?), and so is ``n_balls``: the
+    balls are structure, given with ``--n-balls``."""
     values: dict[str, float] = {}
     for item in items or []:
         name, sep, text = item.partition("=")
-        if not sep or not name.strip():
+        name = name.strip()
+        if not sep or not name:
             raise InputError(f"--set: expected name=value, got {item!r}")
+        if name == "n_balls" or name.startswith("n_balls["):
+            raise InputError(f"--set {name}: the number of balls is structure, not a "
+                             f"parameter; give it with --n-balls")
         try:
-            values[name.strip()] = float(text)
+            value = float(text)
         except ValueError:
-            raise InputError(f"--set {name.strip()}: value must be a number, "
-                             f"got {text!r}") from None
+            raise InputError(f"--set {name}: value must be a number, got {text!r}") from None
+        if name in values:
+            raise InputError(f"--set {name}: given twice ({values[name]:g} and {value:g}); "
+                             "give each parameter once")
+        values[name] = value
     return values
+
+
+def _parameters(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
+    """``--set`` values with ``--speed-rpm`` merged in (refused when both give the speed)."""
+    params = parse_sets(sets)
+    if speed_rpm is not None:
+        if "speed_rpm" in params:
+            raise InputError(f"--speed-rpm: given twice (--speed-rpm {speed_rpm:g} and --set "
+                             f"speed_rpm={params['speed_rpm']:g}); give the speed once")
+        params["speed_rpm"] = speed_rpm
+    return params
 
 
 SetOption = Annotated[list[str] | None, typer.Option(
@@ -106,6 +165,40 @@ NBallsOption = Annotated[list[str] | None, typer.Option(
     callback=_check_n_balls)]
 
 
+def _check_output_option(param: typer.CallbackParam, value: Path | None,
+                         suffixes: tuple[str, ...] | None) -> Path | None:
+    from analysis.io import check_output
+
+    if value is not None:
+        option = max(param.opts, key=len) if param.opts else "--output"
+        try:
+            check_output(value, suffixes, option)
+        except InputError as exc:
+            raise typer.BadParameter(str(exc).removeprefix(f"{option}: "),
+                                     param_hint=option) from None
+    return value
+
+
+def netcdf_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
+    """Option callback: ``value`` can be written as a netCDF result (checked at once,
+    before the command runs)."""
+    from analysis.io import NETCDF_SUFFIXES
+
+    return _check_output_option(param, value, NETCDF_SUFFIXES)
+
+
+def figure_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
+    """Option callback: ``value`` can be written as a figure (PNG, PDF, SVG, …)."""
+    from analysis.io import FIGURE_SUFFIXES
+
+    return _check_output_option(param, value, FIGURE_SUFFIXES)
+
+
+def any_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
+    """Option callback: a file of any kind can be written at ``value``."""
+    return _check_output_option(param, value, None)
+
+
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""
@@ -123,13 +216,6 @@ def frequency_words(attrs) -> str:
         words.append(f"F = 1/forcing_period = {1 / float(attrs['forcing_period']):.4g} Hz")
     return ", ".join(words) or "no characteristic frequency"
 
-
-
-def _parameters(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
-    params = parse_sets(sets)
-    if speed_rpm is not None:
-        params["speed_rpm"] = speed_rpm
-    return params
 
 
 def _save_figure(fig, output: Path | None, err: bool = False) -> None:
@@ -177,3 +263,32 @@ def _executor(kind: str, workers: int | None, scheduler: str | None):
     from analysis.sweeps.executors import make_executor
 
     return make_executor(kind, workers, scheduler)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the command line (``bearingdyn``): usage errors that the parser finds before a
+    command runs (``--n-balls six``, an unknown option) end in one line and exit code 2,
+    with the command's ``--help`` named; ``--help`` and everything else as typer does."""
+    import sys
+
+    try:
+        code = app(args=args, standalone_mode=False)
+    except click.exceptions.UsageError as exc:
+        if exc.ctx is not None and type(exc).__name__ == "NoArgsIsHelpError":
+            typer.echo(exc.ctx.get_help())  # bare `bearingdyn`: the help, as before
+            sys.exit(0)
+        command = exc.ctx.command_path if exc.ctx else "bearingdyn"
+        typer.echo(f"error: {exc.format_message()} (see {command} --help)", err=True)
+        sys.exit(2)
+    except (typer.Abort, KeyboardInterrupt):
+        typer.echo("interrupted", err=True)
+        sys.exit(130)
+    except typer.Exit as exc:
+        sys.exit(exc.exit_code)
+    except Exception as exc:  # raised while the options were read: still one line
+        if "--debug" in (args if args is not None else sys.argv):
+            raise
+        typer.echo(f"internal error: {type(exc).__name__}: {exc} (run with --debug for the "
+                   "traceback)", err=True)
+        sys.exit(1)
+    sys.exit(code if isinstance(code, int) else 0)

@@ -17,6 +17,8 @@ from analysis.cli.common import (
     _given,
     _save_figure,
     app,
+    figure_output,
+    netcdf_output,
     parse_n_balls,
     parse_sets,
     reports_errors,
@@ -31,7 +33,8 @@ SWITCH_SUFFIX = {"PD": "period2", "BP": "asymmetric"}
 @reports_errors
 def continue_(
     stop: Annotated[float, typer.Option("--to", help="End value (parameter unit).")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the branch.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the branch.",
+                                         callback=netcdf_output)],
     model: Annotated[str | None, typer.Argument(
         metavar="MODEL",
         help="Model: a shipped name, a name in a BEARINGDYN_MODELS folder, a .toml spec or a "
@@ -59,7 +62,8 @@ def continue_(
     switch_bp: Annotated[bool, typer.Option(
         "--switch-bp", help="Also continue the asymmetric branch from the first BP "
                             "(symmetry-breaking pitchfork).")] = False,
-    plot: Annotated[Path | None, typer.Option(help="Figure of the branch(es).")] = None,
+    plot: Annotated[Path | None, typer.Option(help="Figure of the branch(es).",
+                                              callback=figure_output)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
     as_json: JsonOption = False,
 ):

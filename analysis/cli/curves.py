@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from analysis.cli.common import _save_figure, app, reports_errors
+from analysis.cli.common import _save_figure, app, figure_output, netcdf_output, reports_errors
 
 
 @app.command("curve")
@@ -21,13 +21,15 @@ def curve(
     param: Annotated[str, typer.Option(help="Second runtime parameter to vary.")],
     stop: Annotated[float, typer.Option(
         "--to", help="End value of --param (its unit); it starts at the branch's value.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the curve.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the curve.",
+                                         callback=netcdf_output)],
     max_points: Annotated[int, typer.Option(help="Points on the curve.")] = 300,
     ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
     chart: Annotated[Path | None, typer.Option(
         help="Stability chart (`bearingdyn chart`) over the same two parameters, drawn "
              "under the curve in --plot.")] = None,
-    plot: Annotated[Path | None, typer.Option(help="Figure of the curve (PNG).")] = None,
+    plot: Annotated[Path | None, typer.Option(help="Figure of the curve (PNG).",
+                                              callback=figure_output)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
 ):
     """Two-parameter continuation of an LP, PD or NS point; labels cusps (CP), strong

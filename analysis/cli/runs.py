@@ -13,11 +13,13 @@ from analysis.cli.common import (
     ModelArgument,
     NBallsOption,
     SetOption,
+    _parameters,
     _save_figure,
     app,
+    figure_output,
     frequency_words,
+    netcdf_output,
     parse_n_balls,
-    parse_sets,
     reports_errors,
 )
 from analysis.errors import InputError
@@ -27,7 +29,8 @@ from analysis.errors import InputError
 @reports_errors
 def simulate(
     model: ModelArgument,
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                         callback=netcdf_output)],
     n_balls: NBallsOption = None,
     speed_rpm: Annotated[float | None, typer.Option(help="Shaft speed, rpm.")] = None,
     sets: SetOption = None,
@@ -44,9 +47,7 @@ def simulate(
     from analysis.io import save_dataset
     from analysis.model import balls_text
 
-    params = parse_sets(sets)
-    if speed_rpm is not None:
-        params["speed_rpm"] = speed_rpm
+    params = _parameters(speed_rpm, sets)
     start = time.perf_counter()
     ds = run(model, parse_n_balls(n_balls), duration=duration, transient=transient, dt=dt,
              method=method, save_every=save_every, compiled=not no_compile, **params)
@@ -64,7 +65,8 @@ def simulate(
 def spectrum(
     run_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn simulate`.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print the peaks as JSON.")] = False,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.")] = None,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.",
+                                                callback=figure_output)] = None,
     max_peaks: Annotated[int, typer.Option(help="Peaks per variable.")] = 8,
     var: Annotated[list[str] | None, typer.Option(
         "--var", help="State variable to analyse, repeatable (default: the first body's "
@@ -108,7 +110,8 @@ def poincare(
         help="shaft, cage or vc period (of the first bearing), cage[BEARING], vc[BEARING], "
              "or param:NAME (the period in s held by parameter NAME, e.g. "
              "param:forcing_period).")] = "shaft",
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.")] = None,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.",
+                                                callback=figure_output)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the points as JSON.")] = False,
     x: Annotated[str | None, typer.Option(
         "--x", help="State variable on the figure's horizontal axis (default: each "
@@ -163,7 +166,8 @@ def poincare(
 @reports_errors
 def plot(
     result: Annotated[Path, typer.Argument(help="Any bearingdyn netCDF result.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file (PNG, PDF, SVG).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Figure file (PNG, PDF, SVG).",
+                                         callback=figure_output)],
     var: Annotated[list[str] | None, typer.Option(
         "--var", help="State variable to draw, repeatable (a diagram's section points, or a "
                       "run's spectra; default: the first body's displacements).")] = None,

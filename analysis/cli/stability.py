@@ -21,6 +21,7 @@ from analysis.cli.common import (
     _parameters,
     _save_figure,
     app,
+    figure_output,
     parse_n_balls,
     reports_errors,
 )
@@ -48,7 +49,7 @@ def lyapunov(
     as_json: JsonOption = False,
     output: Annotated[Path | None, typer.Option(
         "-o", "--output", help="Figure of the running estimates (the discarded tangent "
-                               "transient shaded).")] = None,
+                               "transient shaded).", callback=figure_output)] = None,
 ):
     """Lyapunov spectrum (one exponent per state variable, 1/s) from the tangent dynamics of
     the RK4 map, with its running estimates."""

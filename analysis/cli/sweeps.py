@@ -17,10 +17,12 @@ from analysis.cli.common import (
     WorkersOption,
     _executor,
     app,
+    netcdf_output,
     parse_n_balls,
     parse_sets,
     reports_errors,
 )
+from analysis.errors import InputError
 
 
 @app.command()
@@ -33,7 +35,8 @@ def sweep(
     start: Annotated[float, typer.Option("--from", help="First value.")],
     stop: Annotated[float, typer.Option("--to", help="Last value.")],
     num: Annotated[int, typer.Option(help="Number of grid values.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                         callback=netcdf_output)],
     n_balls: NBallsOption = None,
     sets: SetOption = None,
     direction: Annotated[str, typer.Option(help="up, down or both.")] = "up",
@@ -54,13 +57,15 @@ def sweep(
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram
+    from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram, check_grid
 
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
                       section, dt)
+    axis = Axis.linear(param, start, stop, num)
+    check_grid(setting, axis)  # every input, before a worker starts or a file is made
     ex = _executor(executor, workers, scheduler)
     try:
-        ds = bifurcation_diagram(setting, Axis.linear(param, start, stop, num), output,
+        ds = bifurcation_diagram(setting, axis, output,
                                  direction=direction, follow=follow, executor=ex,
                                  progress=ProgressReporter(f"sweep {param}", quiet))
     finally:
@@ -77,7 +82,8 @@ def chart(
                                         "speed_rpm:1000:10000:200.")],
     y: Annotated[str, typer.Option(help="y axis, e.g. n_balls:5:12 (one bearing) or "
                                         "n_balls[left]:5:12 (several).")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                         callback=netcdf_output)],
     n_balls: NBallsOption = None,
     sets: SetOption = None,
     transient: Annotated[float, typer.Option(help="Dropped time per point, s.")] = 1.0,
@@ -97,13 +103,25 @@ def chart(
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.sweep import Axis, Setting, chart_table, stability_chart
+    from analysis.sweeps.sweep import (
+        MAX_SAMPLES,
+        Axis,
+        Setting,
+        chart_table,
+        check_grid,
+        stability_chart,
+    )
 
+    if not 1 <= revolutions <= MAX_SAMPLES:
+        raise InputError(f"--revolutions: must be a whole number in [1, {MAX_SAMPLES}], "
+                         f"got {revolutions}")
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, revolutions,
                       section, dt, lyapunov)
+    axes = Axis.parse(x), Axis.parse(y)
+    check_grid(setting, *axes)  # every input, before a worker starts or a file is made
     ex = _executor(executor, workers, scheduler)
     try:
-        ds = stability_chart(setting, Axis.parse(x), Axis.parse(y), output, executor=ex,
+        ds = stability_chart(setting, *axes, output, executor=ex,
                              progress=ProgressReporter("chart", quiet))
     finally:
         ex.close()

@@ -15,6 +15,9 @@ from typing import Any, Protocol
 
 from analysis.errors import InputError
 
+MAX_WORKERS = 1024
+"""Most local worker processes."""
+
 
 class Executor(Protocol):
     name: str
@@ -115,6 +118,9 @@ def make_executor(kind: str = "processes", workers: int | None = None,
                   scheduler: str | None = None) -> Executor:
     """``serial``, ``processes`` (default: all cores) or ``dask`` (``scheduler`` address,
     or a LocalCluster with ``workers`` workers)."""
+    if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
+        raise InputError(f"--workers: must be a whole number in [1, {MAX_WORKERS}], "
+                         f"got {workers}")
     if scheduler:
         return DaskExecutor(scheduler=scheduler)
     if kind == "serial":

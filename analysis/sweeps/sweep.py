@@ -98,30 +98,49 @@ class Axis:
         """``speed_rpm:1000:10000:200`` (start:stop:count), or ``n_balls:5:12`` /
         ``n_balls[left]:5:12`` (every whole number from low to high)."""
         parts = text.split(":")
-        try:
-            if axis_bearing(parts[0]) is not None and len(parts) == 3:
-                low, high = int(parts[1]), int(parts[2])
-                if high < low:
-                    raise ValueError
-                return cls(parts[0], tuple(float(n) for n in range(low, high + 1)))
-            name, start, stop, num = parts[0], float(parts[1]), float(parts[2]), int(parts[3])
-            if len(parts) != 4 or not name:
-                raise ValueError
-        except (ValueError, IndexError):
-            raise InputError(f"axis: expected name:start:stop:count (or n_balls:low:high, "
-                             f"n_balls[bearing]:low:high), got {text!r}") from None
-        return cls.linear(name, start, stop, num)
+        form = ("expected name:start:stop:count (or n_balls:low:high, "
+                f"n_balls[bearing]:low:high), got {text!r}")
+        name = parts[0]
+        if not name:
+            raise InputError(f"axis: a parameter name is missing; {form}")
+        if axis_bearing(name) is not None and len(parts) == 3:
+            low, high = (_axis_number(name, p, int, form) for p in parts[1:])
+            if high < low:
+                raise InputError(f"axis {name}: low must be <= high (the balls run upward), "
+                                 f"got {low}:{high}; write {name}:{high}:{low}")
+            return cls.linear(name, low, high, high - low + 1)
+        if len(parts) != 4:
+            raise InputError(f"axis: {form}")
+        start, stop = (_axis_number(name, p, float, form) for p in parts[1:3])
+        return cls.linear(name, start, stop, _axis_number(name, parts[3], int, form))
 
     @classmethod
     def linear(cls, name: str, start: float, stop: float, num: int) -> Axis:
         """``num`` equally spaced values from ``start`` to ``stop`` (whole, distinct numbers
         for ``n_balls`` and ``n_balls[bearing]``)."""
-        if num < 1:
-            raise InputError(f"axis {name}: count must be >= 1, got {num}")
+        for what, value in (("start", start), ("stop", stop)):
+            if not math.isfinite(value):
+                raise InputError(f"axis {name}: {what} must be a finite number, got {value}")
+        if not 1 <= num <= MAX_AXIS_VALUES:
+            raise InputError(f"axis {name}: count must be in [1, {MAX_AXIS_VALUES}], got {num}")
         values = np.linspace(start, stop, num)
         if axis_bearing(name) is not None:
             values = np.unique(np.round(values))
         return cls(name, tuple(values.tolist()))
+
+
+MAX_AXIS_VALUES = 100_000
+"""Most values one grid axis may have (a chart of 1600 points takes minutes on 2 cores)."""
+MAX_GRID_POINTS = 1_000_000
+"""Most points a chart may have."""
+
+
+def _axis_number(name: str, text: str, kind: type, form: str):
+    try:
+        return kind(text)
+    except ValueError:
+        word = "a whole number" if kind is int else "a number"
+        raise InputError(f"axis {name}: {text!r} is not {word}; {form}") from None
 
 
 @dataclass(frozen=True)
@@ -156,10 +175,25 @@ class Setting:
 def check_grid(setting: Setting, *axes: Axis) -> None:
     """Raise ``InputError`` before anything runs when an axis or the base setting does not
     fit the model (an unknown parameter or bearing, balls out of range, a bad section)."""
+    _check_setting_times(setting)
     model = load_model(setting.model)
     model.parameters(setting.values)
     model.structure(setting.n_balls)
+    names = [axis.name for axis in axes]
+    if len(set(names)) < len(names):
+        raise InputError(f"axis {names[0]}: the same on both axes; give two different "
+                         "parameters (--x and --y)")
+    if math.prod(len(axis.values) for axis in axes) > MAX_GRID_POINTS:
+        raise InputError(f"axes: at most {MAX_GRID_POINTS} points in all, got "
+                         f"{' x '.join(str(len(a.values)) for a in axes)}")
     for axis in axes:
+        if axis.name in setting.values:
+            raise InputError(f"--set {axis.name}: also an axis; drop the --set (the axis "
+                             "gives its values)")
+        if axis_bearing(axis.name) is not None and isinstance(setting.n_balls, Mapping) \
+                and axis_bearing(axis.name) in setting.n_balls:
+            raise InputError(f"--n-balls {axis_bearing(axis.name)}: also an axis "
+                             f"({axis.name}); drop it from --n-balls")
         bearing = axis_bearing(axis.name)
         if bearing == "" and len(model.bearings) > 1:
             raise InputError(f"axis {axis.name}: model '{model.name}' has bearings "
@@ -174,6 +208,21 @@ def check_grid(setting: Setting, *axes: Axis) -> None:
             period_of({**model.parameters(values),
                        **model.frequencies(structure, model.parameters(values)).as_dict()},
                       setting.section)
+
+
+MAX_SAMPLES = 100_000
+"""Most section samples per grid value."""
+
+
+def _check_setting_times(setting: Setting) -> None:
+    """The times every point shares, each named as its option."""
+    if not (math.isfinite(setting.transient) and setting.transient >= 0):
+        raise InputError(f"transient: must be a finite number >= 0 s, got {setting.transient}")
+    if not (isinstance(setting.samples, int) and 1 <= setting.samples <= MAX_SAMPLES):
+        raise InputError(f"samples: must be a whole number in [1, {MAX_SAMPLES}] (section "
+                         f"periods recorded per value), got {setting.samples}")
+    if not (math.isfinite(setting.dt) and 0 < setting.dt <= 1e-2):
+        raise InputError(f"dt: must be in (0, 0.01] s, got {setting.dt}")
 
 
 def _period(setting: Setting, n_balls: BallCounts, values: dict[str, float]) -> float:
