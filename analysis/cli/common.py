@@ -270,7 +270,12 @@ def main(args: list[str] | None = None) -> None:
     command runs (``--n-balls six``, an unknown option) end in one line and exit code 2,
     with the command's ``--help`` named; ``--help`` and everything else as typer does."""
     import sys
+    import warnings
 
+    def one_line(message, category, filename, lineno, file=None, line=None):
+        typer.echo(f"warning: {' '.join(str(message).split())}", err=True)
+
+    warnings.showwarning = one_line
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:

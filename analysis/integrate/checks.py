@@ -119,3 +119,53 @@ def check_rk4_step(model: Model, n_balls: tuple[int, ...], values: dict[str, flo
         f"stiffest linearisation (contact and all terms) has |λ| = {largest:.4g} 1/s and RK4 "
         f"is stable only for |λ|·dt up to about 2.8; try dt = {nice_step(limit):g} s, or "
         "method cvodes")
+
+
+RESOLUTION_WARN = 20
+"""Fewer RK4 steps than this per period of the fastest forcing: a warning."""
+RESOLUTION_REFUSE = 4
+"""Fewer than this: refused (the forcing itself is not resolved)."""
+MAX_STEPS = 10**10
+"""Most RK4 steps one run may take (about an hour compiled at 4 states)."""
+
+
+def fastest_forcing(model: Model, structure, values: dict[str, float]) -> tuple[str, float]:
+    """(name, frequency in Hz) of the fastest periodic forcing: the shaft (X), each
+    bearing's varying compliance (VC, VC[name]) and a ``forcing_period`` parameter (F);
+    ("", 0.0) for an autonomous model."""
+    freqs = model.frequencies(structure, values)
+    named = [("X", freqs.shaft_hz)]
+    named += [(f"VC[{b}]" if len(freqs.vc) > 1 else "VC", f) for b, f in freqs.vc.items()]
+    period = values.get("forcing_period", 0.0)
+    if period > 0:
+        named.append(("F = 1/forcing_period", 1.0 / period))
+    return max(named, key=lambda item: item[1], default=("", 0.0))
+
+
+def check_resolution(model: Model, structure, values: dict[str, float], dt: float,
+                     duration: float | None = None, warn=None) -> float:
+    """Steps per period of the fastest forcing at step ``dt`` (s): refused below
+    ``RESOLUTION_REFUSE``, ``warn(message)`` below ``RESOLUTION_WARN`` (default: a Python
+    warning). Also refuses runs of more than ``MAX_STEPS`` steps. Returns the steps per
+    period (inf without forcing)."""
+    if duration is not None and duration / dt > MAX_STEPS:
+        raise InputError(f"duration: {duration:g} s at dt = {dt:g} s is {duration / dt:.3g} "
+                         f"RK4 steps; at most {MAX_STEPS:.0e} per run (shorten it or raise dt)")
+    name, freq = fastest_forcing(model, structure, values)
+    if not freq > 0:
+        return math.inf
+    steps = 1.0 / (freq * dt)
+    if steps < RESOLUTION_REFUSE:
+        raise InputError(f"dt: must resolve the fastest forcing {name} = {freq:.4g} Hz with at "
+                         f"least {RESOLUTION_REFUSE} steps per period (dt <= "
+                         f"{1 / (RESOLUTION_REFUSE * freq):.3g} s), got dt = {dt:g} s: "
+                         f"{steps:.3g} steps")
+    if steps < RESOLUTION_WARN:
+        import warnings
+
+        message = (f"dt = {dt:g} s gives only {steps:.3g} steps per period of {name} = "
+                   f"{freq:.4g} Hz (fewer than {RESOLUTION_WARN}): the spectrum near it and "
+                   f"the sections are coarse; dt <= {1 / (RESOLUTION_WARN * freq):.3g} s "
+                   "resolves it")
+        (warn or (lambda m: warnings.warn(m, RuntimeWarning, stacklevel=3)))(message)
+    return steps

@@ -244,8 +244,24 @@ def flow_map(model: Model, n_balls: tuple[int, ...], period: Period, n_steps: in
 
 def steps_per_period(model: Model, n_balls: tuple[int, ...], period: Period, values: dict,
                      dt: float) -> int:
-    """Number of RK4 steps so that the step is at most ``dt`` (s)."""
-    return max(1, math.ceil(period_seconds(model, n_balls, period, values) / dt - 1e-9))
+    """Number of RK4 steps so that the step is at most ``dt`` (s); ``InputError`` beyond
+    ``MAX_PERIOD_STEPS`` (the flow map and its derivatives would not fit in memory)."""
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
+    seconds = period_seconds(model, n_balls, period, values)
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise InputError(f"period {period}: must last a finite time > 0 s here, got "
+                         f"{seconds:g} s")
+    steps = seconds / dt
+    if steps > MAX_PERIOD_STEPS:
+        raise InputError(f"period {period}: {seconds:.4g} s is {steps:.3g} RK4 steps of "
+                         f"{dt:g} s; at most {MAX_PERIOD_STEPS:.0e} per period (a shorter "
+                         "period, or a larger dt)")
+    return max(1, math.ceil(steps - 1e-9))
+
+
+MAX_PERIOD_STEPS = 2_000_000
+"""Most RK4 steps in one period of a flow map (shooting, Floquet, continuation)."""
 
 
 def evaluate(flow: ca.Function, z0, t0: float, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.checks import check_rk4_step
+from analysis.integrate.checks import check_resolution, check_rk4_step
 from analysis.integrate.compiled import library, run_rk4
 from analysis.model import BallCounts, Model, Structure, System, as_system
 
@@ -96,9 +96,11 @@ def simulate(
     transient = float(sim["transient"] if transient is None else transient)
     dt = float(sim["dt"] if dt is None else dt)
     _check_times(duration, transient, dt)
-    check_rk4_step(model, n, values, dt, method)
     if not (isinstance(save_every, int) and save_every >= 1):
         raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
+    check_resolution(model, n, values, dt, duration)
+    _check_memory(model.n_state, round(duration / dt) // save_every, save_every)
+    check_rk4_step(model, n, values, dt, method)
     z0 = system.state
     n_steps = round(duration / dt)
     n_saved = n_steps // save_every
@@ -123,6 +125,20 @@ def simulate(
     if method == "cvodes":
         attrs.update(rtol=rtol, atol=atol)
     return to_dataset(times[keep], states[:, keep], attrs, model)
+
+
+MEMORY_BUDGET = 8 * 2**30
+"""Most bytes the states a run keeps in memory may take (their float64 values, twice: the
+blocks and the assembled array)."""
+
+
+def _check_memory(n_state: int, n_saved: int, save_every: int) -> None:
+    need = 2 * 8 * (n_state + 1) * (n_saved + 1)
+    if need > MEMORY_BUDGET:
+        raise InputError(f"save_every: the run would keep {n_saved + 1:.3g} samples "
+                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: raise "
+                         f"save_every to at least {math.ceil(save_every * need / MEMORY_BUDGET)} "
+                         "or shorten the run")
 
 
 def blow_up_limit(values: dict[str, float]) -> float:

@@ -338,6 +338,31 @@ def _complex_outside(point: BranchPoint) -> int:
     return int(np.sum((np.abs(mu.imag) > 1e-9) & (np.abs(mu) > 1 + 1e-9)))
 
 
+MAX_BRANCH_POINTS = 100_000
+"""Most points one branch or curve may have."""
+
+
+def check_steps(ds: float | None, ds_min: float, ds_max: float, max_points: int,
+                tol: float) -> None:
+    """Raise ``InputError`` unless 0 < ds_min <= ds_max and ds > 0 (scaled arclength
+    steps, each finite), 2 <= max_points <= ``MAX_BRANCH_POINTS`` and 0 < tol < 1;
+    checked before any orbit is computed."""
+    for name, value in (("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InputError(f"{name}: must be a finite number > 0, got {value!r}")
+    if ds_min > ds_max:
+        raise InputError(f"ds_min: must be <= ds_max = {ds_max:g}, got {ds_min:g}")
+    if ds is not None and not (isinstance(ds, (int, float)) and math.isfinite(ds) and ds > 0):
+        raise InputError(f"ds: must be a finite number > 0 (kept within [ds_min, ds_max]), "
+                         f"got {ds!r}")
+    if not tol < 1:
+        raise InputError(f"tol: must be in (0, 1), got {tol!r}")
+    if isinstance(max_points, bool) or not isinstance(max_points, int) or \
+            not 2 <= max_points <= MAX_BRANCH_POINTS:
+        raise InputError(f"max_points: must be a whole number in [2, {MAX_BRANCH_POINTS}], "
+                         f"got {max_points!r}")
+
+
 def continue_orbits(
     system: System | Model | str | Path,
     n_balls: BallCounts = None,
@@ -372,6 +397,7 @@ def continue_orbits(
     tests every step must pass (default ``StepGuards()``). Returns the branch as a Dataset
     (see ``branch_dataset``).
     """
+    check_steps(ds, ds_min, ds_max, max_points, tol)
     system = as_system(system, n_balls, **parameters)
     mdl = system.model
     if param not in mdl.parameter_names:
@@ -712,6 +738,7 @@ def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, st
     period when the range needs them (default the spec's step). Other arguments as in
     ``continue_orbits``.
     """
+    check_steps(ds, ds_min, ds_max, max_points, tol)
     source = ""
     if not isinstance(branch, xr.Dataset):
         from analysis.io import open_result

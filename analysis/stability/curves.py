@@ -63,7 +63,13 @@ from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate
 from analysis.integrate.simulate import run_attrs
 from analysis.model import Model, Structure
-from analysis.stability.continuation import _correct, _Problem, _tangent, orbit_scale
+from analysis.stability.continuation import (
+    _correct,
+    _Problem,
+    _tangent,
+    check_steps,
+    orbit_scale,
+)
 from analysis.stability.periodic import system_of_attrs
 
 KINDS = ("LP", "PD", "NS")
@@ -442,6 +448,9 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     branch parameter by its range on the branch). The RK4 step count per period is the
     branch's. Returns the curve as a Dataset (``curve_dataset``).
     """
+    check_steps(ds, ds_min, ds_max, max_points, tol)
+    if not math.isfinite(stop):
+        raise InputError(f"stop: must be a finite number, got {stop!r}")
     source = "" if isinstance(branch, xr.Dataset) else str(branch)
     if not isinstance(branch, xr.Dataset):
         from analysis.io import open_result

@@ -141,6 +141,26 @@ def renorm_counts(dt: float, renorm_every: int, duration: float,
     return BLOCKS * max(0, calls), averaged - averaged % BLOCKS
 
 
+def _check_lengths(dt: float, renorm_every: int, transient: float, duration: float,
+                   tangent_transient: float) -> None:
+    """The step, the renormalisation interval and the lengths fit together."""
+    from analysis.integrate.checks import MAX_STEPS
+
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
+    if not (math.isfinite(transient) and transient >= 0):
+        raise InputError(f"transient: must be a finite number >= 0 s, got {transient!r}")
+    interval = dt * renorm_every
+    if interval * BLOCKS > duration:
+        raise InputError(f"renorm_every: {BLOCKS} renormalisations of {renorm_every} steps "
+                         f"({interval * BLOCKS:g} s) must fit in the averaging duration "
+                         f"{duration:g} s; at most {max(1, int(duration / (dt * BLOCKS)))}")
+    total = (transient + tangent_transient + duration) / dt
+    if total > MAX_STEPS:
+        raise InputError(f"duration: {total:.3g} RK4 steps in all (transient, tangent "
+                         f"transient and averaging at dt = {dt:g} s); at most {MAX_STEPS:.0e}")
+
+
 def _check_options(n: int, n_exponents, renorm_every, duration: float,
                    tangent_transient: float) -> int:
     if isinstance(n_exponents, bool) or not isinstance(n_exponents, (int, np.integer)) or \
@@ -206,6 +226,7 @@ def lyapunov(
     dt = float(model.simulation_defaults["dt"] if dt is None else dt)
     n_exponents = _check_options(n, n if n_exponents is None else n_exponents,
                                  renorm_every, duration, tangent_transient)
+    _check_lengths(dt, renorm_every, transient, duration, tangent_transient)
     discarded, averaged = renorm_counts(dt, renorm_every, duration, tangent_transient)
     start = max(0, round(transient / dt) - discarded * renorm_every)
     z0 = _state_after(system, start, dt)
