@@ -91,21 +91,35 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
 
 
 def open_result(path: str | Path) -> xr.Dataset:
-    """Read any bearingdyn result file (run, branch, diagram, chart) into memory."""
+    """Read any bearingdyn result file (run, branch, diagram, chart) into memory: netCDF-4
+    (what bearingdyn writes) or netCDF-3 (classic, 64-bit offset)."""
     path = Path(path)
-    if not path.is_file():
+    if path.is_dir():
+        raise InputError(f"result file: '{path}' is a folder, not a result file")
+    if not path.exists():
         raise InputError(f"result file: '{path}' does not exist")
+    if not path.is_file():
+        raise InputError(f"result file: '{path}' is not a plain file (a pipe or device)")
+    with open(path, "rb") as handle:
+        magic = handle.read(4)
+    engine = "scipy" if magic[:3] == b"CDF" else "h5netcdf"
     try:
-        with xr.open_dataset(path, engine="h5netcdf") as ds:
+        with xr.open_dataset(path, engine=engine) as ds:
             return ds.load()
-    except Exception as exc:  # h5py/h5netcdf raise many types for a damaged file
-        raise InputError(f"result file: '{path}' is not a readable netCDF file ({exc})") from None
+    except Exception as exc:  # h5py/h5netcdf/scipy raise many types for a damaged file
+        text = " ".join(str(exc).split())[:200]
+        raise InputError(f"result file: '{path}' is not a readable netCDF file ({text})") from None
+
+
+RUN_ATTRS_NONNEGATIVE = ("shaft_hz", "speed_rpm")
+"""Attributes of a run that must be finite numbers >= 0 when present."""
 
 
 def load_dataset(path: str | Path) -> xr.Dataset:
     """Read a simulation run of any model written by bearingdyn, or raise ``InputError``
     saying why not: it must have ``t`` and every state variable its ``state_names`` attr
-    names (``x``, ``y``, ``vx``, ``vy`` for files written before that attr)."""
+    names (``x``, ``y``, ``vx``, ``vy`` for files written before that attr), and pass
+    ``check_run``."""
     from analysis.signal import run_state_names
 
     data = open_result(path)
@@ -113,4 +127,48 @@ def load_dataset(path: str | Path) -> xr.Dataset:
     if "t" not in data.coords or missing:
         raise InputError(f"result file: '{path}' is not a bearingdyn run "
                          f"(missing {', '.join(missing) or 't'})")
+    check_run(data, path)
     return data
+
+
+def check_run(ds: xr.Dataset, path: str | Path = "the run") -> None:
+    """Raise ``InputError`` when a run cannot be analysed as it is: its times not strictly
+    increasing at the step its attributes give, a state variable not finite or not over
+    ``t``, or an attribute the analyses read (``dt``, frequencies, speed) not a finite
+    number in its range (a damaged or edited file)."""
+    import numpy as np
+
+    from analysis.signal import run_state_names
+
+    where = f"result file: '{path}'"
+    t = np.asarray(ds["t"].values, dtype=float)
+    if t.ndim != 1 or len(t) < 2:
+        raise InputError(f"{where}: holds {t.size} sample(s); a run needs at least 2")
+    for name in ("dt", *RUN_ATTRS_NONNEGATIVE, *(k for k in ds.attrs if
+                                                 str(k).startswith(("vc_hz", "cage_hz")))):
+        if name not in ds.attrs:
+            continue
+        try:
+            value = float(ds.attrs[name])
+        except (TypeError, ValueError):
+            value = float("nan")
+        if not (np.isfinite(value) and (value > 0 if name == "dt" else value >= 0)):
+            raise InputError(f"{where}: attribute {name} must be a finite number "
+                             f"{'> 0' if name == 'dt' else '>= 0'}, got {ds.attrs[name]} "
+                             "(a damaged or edited file)")
+    step = np.diff(t)
+    if not np.all(np.isfinite(t)) or not np.all(step > 0):
+        raise InputError(f"{where}: its times are not strictly increasing")
+    if "dt" in ds.attrs:
+        spacing = float(ds.attrs["dt"]) * float(ds.attrs.get("save_every", 1))
+        if not np.allclose(step, spacing, rtol=1e-6, atol=0.0):
+            raise InputError(f"{where}: its samples are not {spacing:g} s apart as its "
+                             "attributes dt and save_every say (a damaged or edited file)")
+    for name in run_state_names(ds):
+        if ds[name].dims != ("t",):
+            raise InputError(f"{where}: variable {name} is not a series over t")
+        bad = ~np.isfinite(ds[name].values)
+        if bad.any():
+            raise InputError(f"{where}: variable {name} is not finite at t = "
+                             f"{t[int(np.argmax(bad))]:g} s (NaN or inf); it cannot be "
+                             "analysed")

@@ -421,6 +421,8 @@ def model_origin(name: str) -> str:
 
 
 def _is_shipped_name(name: str) -> bool:
+    if not name or "/" in name or "\\" in name or name.startswith((".", "_")):
+        return False
     return (shipped_spec_dir() / f"{name}.toml").exists()
 
 
@@ -447,8 +449,9 @@ def load_model(name: str | Path) -> Model:
 
 def _generated_exists(name: str) -> bool:
     module = name.replace("-", "_")
-    return importlib.util.find_spec(f"generated.{module}") is not None \
-        if module.isidentifier() else False
+    if not module.isidentifier() or module.startswith("_"):  # _runtime, __init__: not models
+        return False
+    return importlib.util.find_spec(f"generated.{module}") is not None
 
 
 def _load_shipped(name: str) -> Model:

@@ -140,6 +140,11 @@ def classify(
     """
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
+    least = 2 * max_period + 2
+    if pts.sizes["t"] < least:
+        raise InputError(f"run: {pts.sizes['t']} point(s) on the {section} section; a verdict "
+                         f"needs at least {least} (periods up to {max_period} must repeat "
+                         "twice): simulate longer")
     ptp = {v: float(np.ptp(ds[v].values)) for v in state_names(ds)}
 
     def largest() -> tuple[float, float]:
