@@ -269,6 +269,7 @@ def main(args: list[str] | None = None) -> None:
     """Run the command line (``bearingdyn``): usage errors that the parser finds before a
     command runs (``--n-balls six``, an unknown option) end in one line and exit code 2,
     with the command's ``--help`` named; ``--help`` and everything else as typer does."""
+    import signal
     import sys
     import warnings
 
@@ -276,6 +277,7 @@ def main(args: list[str] | None = None) -> None:
         typer.echo(f"warning: {' '.join(str(message).split())}", err=True)
 
     warnings.showwarning = one_line
+    signal.signal(signal.SIGTERM, _terminated)
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:
@@ -287,13 +289,31 @@ def main(args: list[str] | None = None) -> None:
         sys.exit(2)
     except (typer.Abort, KeyboardInterrupt):
         typer.echo("interrupted", err=True)
-        sys.exit(130)
+        _leave(130)
     except typer.Exit as exc:
-        sys.exit(exc.exit_code)
+        _leave(exc.exit_code)
     except Exception as exc:  # raised while the options were read: still one line
         if "--debug" in (args if args is not None else sys.argv):
             raise
         typer.echo(f"internal error: {type(exc).__name__}: {exc} (run with --debug for the "
                    "traceback)", err=True)
         sys.exit(1)
-    sys.exit(code if isinstance(code, int) else 0)
+    _leave(code if isinstance(code, int) else 0)
+
+
+def _terminated(signum, frame) -> None:
+    """SIGTERM: end as Ctrl-C does (finally blocks run, the output's lock is released)."""
+    raise KeyboardInterrupt
+
+
+def _leave(code: int) -> None:
+    """Exit with ``code``; after an interruption at once, without waiting for worker
+    processes to finish their tasks (they end with this process: ``die_with_parent``)."""
+    import os
+    import sys
+
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)

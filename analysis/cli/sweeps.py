@@ -67,7 +67,8 @@ def sweep(
     try:
         ds = bifurcation_diagram(setting, axis, output,
                                  direction=direction, follow=follow, executor=ex,
-                                 progress=ProgressReporter(f"sweep {param}", quiet))
+                                 progress=ProgressReporter(f"sweep {param}", quiet),
+                                 on_damaged=_recomputing)
     finally:
         ex.close()
     typer.echo(f"wrote {output}: {ds.sizes[param]} values × {ds.sizes['direction']} "
@@ -122,10 +123,15 @@ def chart(
     ex = _executor(executor, workers, scheduler)
     try:
         ds = stability_chart(setting, *axes, output, executor=ex,
-                             progress=ProgressReporter("chart", quiet))
+                             progress=ProgressReporter("chart", quiet),
+                             on_damaged=_recomputing)
     finally:
         ex.close()
     typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
                f"points ({ex.name})")
     if table:
         typer.echo(chart_table(ds))
+
+
+def _recomputing(key: str) -> None:
+    typer.echo(f"warning: stored point {key} could not be read; computing it again", err=True)

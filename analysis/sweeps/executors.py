@@ -41,9 +41,36 @@ class SerialExecutor:
         pass
 
 
+def die_with_parent(parent: int) -> None:
+    """Worker initializer: end this process when its parent ends, however it ends (SIGTERM,
+    SIGKILL, a crash). Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; elsewhere a thread that
+    watches the parent's pid."""
+    import signal
+    import sys
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+    else:  # pragma: no cover
+        import threading
+        import time
+
+        def watch() -> None:
+            while os.getppid() == parent:
+                time.sleep(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent:  # the parent ended before the flag was set
+        os._exit(1)
+
+
 class ProcessExecutor:
     """Local worker processes (``concurrent.futures``); a broken pool is rebuilt and the
-    unfinished tasks resubmitted (up to ``retries`` times each)."""
+    unfinished tasks resubmitted (up to ``retries`` times each). Workers end with the
+    process that started them (``die_with_parent``)."""
 
     def __init__(self, workers: int | None = None, retries: int = 2):
         self.workers = workers or os.cpu_count() or 1
@@ -55,7 +82,8 @@ class ProcessExecutor:
         todo, attempts = list(range(len(tasks))), [0] * len(tasks)
         while todo:
             broken = []
-            with cf.ProcessPoolExecutor(self.workers) as pool:
+            with cf.ProcessPoolExecutor(self.workers, initializer=die_with_parent,
+                                        initargs=(os.getpid(),)) as pool:
                 futures = {pool.submit(fn, tasks[i]): i for i in todo}
                 for future in cf.as_completed(futures):
                     i = futures[future]

@@ -1,18 +1,31 @@
 """Sweep results stored point by point, so an interrupted sweep resumes where it stopped.
 
 Each finished point is one ``.npz`` file in ``<output>.parts/``, written to a temporary name
-and renamed: a point is either complete or absent, whichever process wrote it, with no lock
-and no shared file. ``sweep.json`` records the sweep's definition; resuming with a different
+and renamed: a point is either complete or absent, whichever process wrote it, with no
+shared file. ``sweep.json`` records the sweep's definition; resuming with a different
 definition is refused. When every point is done the sweep assembles the final netCDF file
 (atomically) and removes the folder.
+
+- **One process per output.** The process that runs a sweep holds an exclusive lock
+  (``flock``) on ``<output>.parts/lock`` for the whole sweep; a second process on the same
+  output is refused with one line. The kernel releases the lock when the holder ends, even by
+  SIGKILL, so a killed sweep resumes at once.
+- **Damaged points are recomputed.** On opening, every stored point is read back; one that
+  cannot be read (truncated, zero bytes, not an ``.npz``) is removed, reported to
+  ``on_damaged`` and computed again. An unreadable ``sweep.json`` is rewritten only when
+  no point is stored; otherwise the folder is refused (its points cannot be matched to a
+  definition).
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
 import tempfile
+import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -21,24 +34,74 @@ import numpy as np
 from analysis.errors import InputError
 
 MANIFEST = "sweep.json"
+LOCK = "lock"
 
 
 class PointStore:
-    def __init__(self, output: str | Path, definition: dict[str, Any]):
+    """The stored points of one sweep output. ``lock=True`` (the process running the
+    sweep): take the output's lock and check the stored points; workers open it unlocked."""
+
+    def __init__(self, output: str | Path, definition: dict[str, Any], *, lock: bool = False,
+                 on_damaged: Callable[[str], None] | None = None):
         self.output = Path(output)
         self.folder = self.output.with_name(self.output.name + ".parts")
+        self._lock_fd: int | None = None
         manifest = self.folder / MANIFEST
         text = json.dumps(definition, sort_keys=True, indent=1, default=float)
-        if manifest.exists():
-            if json.loads(manifest.read_text()) != json.loads(text):
-                raise InputError(
-                    f"output: {self.folder} holds an unfinished sweep with a different "
-                    "definition; finish it with the same command, or delete the folder")
-        else:
+        if lock:
             if not self.output.parent.exists():
                 raise InputError(f"output: folder '{self.output.parent}' does not exist")
             self.folder.mkdir(parents=True, exist_ok=True)
+            self._lock()
+        try:
+            stored = json.loads(manifest.read_text()) if manifest.exists() else None
+        except (OSError, ValueError):
+            if any(self.folder.glob("*.npz")):
+                self.close()
+                raise InputError(f"output: {self.folder / MANIFEST} is damaged and points are "
+                                 "stored beside it; delete the folder to start again") from None
+            stored = None
+        if stored is not None and stored != json.loads(text):
+            self.close()
+            raise InputError(
+                f"output: {self.folder} holds an unfinished sweep with a different "
+                "definition; finish it with the same command, or delete the folder")
+        if stored is None:
+            self.folder.mkdir(parents=True, exist_ok=True)
             _atomic_bytes(manifest, text.encode())
+        if lock:
+            self.check(on_damaged)
+
+    def _lock(self) -> None:
+        import fcntl
+
+        fd = os.open(self.folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise InputError(f"output: another bearingdyn process is writing "
+                                 f"'{self.output}' (it holds {self.folder / LOCK}); wait for "
+                                 "it to finish, or choose another output") from None
+            raise
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._lock_fd = fd
+
+    def check(self, on_damaged: Callable[[str], None] | None = None) -> list[str]:
+        """Read every stored point back; remove (and return the keys of) those that cannot
+        be read, so they are computed again."""
+        damaged = []
+        for path in sorted(self.folder.glob("*.npz")):
+            try:
+                self.load(path.stem)
+            except (OSError, ValueError, EOFError, zipfile.BadZipFile):
+                path.unlink(missing_ok=True)
+                damaged.append(path.stem)
+                if on_damaged:
+                    on_damaged(path.stem)
+        return damaged
 
     def done(self) -> set[str]:
         """Keys of the points already stored."""
@@ -52,6 +115,8 @@ class PointStore:
         try:
             with os.fdopen(fd, "wb") as handle:
                 write(handle)
+                handle.flush()
+                os.fsync(handle.fileno())
             os.replace(tmp, self.folder / f"{key}.npz")
         finally:
             if os.path.exists(tmp):
@@ -61,8 +126,16 @@ class PointStore:
         with np.load(self.folder / f"{key}.npz", allow_pickle=False) as data:
             return {k: data[k] for k in data.files}
 
+    def close(self) -> None:
+        """Release the output's lock (also done by the kernel when the process ends)."""
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
     def remove(self) -> None:
+        """Delete the stored points (the sweep is assembled) and release the lock."""
         shutil.rmtree(self.folder, ignore_errors=True)
+        self.close()
 
 
 def _atomic_bytes(path: Path, data: bytes) -> None:

@@ -65,9 +65,21 @@ from analysis.sweeps.executors import Executor, SerialExecutor
 from analysis.sweeps.points import chart_point  # one pass; chart_point_two_pass below
 from analysis.sweeps.store import PointStore
 
-NATURE_CODES = {"periodic-1": 1, "periodic-2": 2, "periodic-n": 3, "quasi-periodic": 4,
-                "chaotic": 5}
-"""Integer codes of the chart classes (periodic-n: n >= 3)."""
+NATURE_CODES = {"failed": 0, "periodic-1": 1, "periodic-2": 2, "periodic-n": 3,
+                "quasi-periodic": 4, "chaotic": 5}
+"""Integer codes of the chart classes (periodic-n: n >= 3; failed: the point's run blew up
+or its solver failed, its ``nature`` says how: ``failed: blew up at t = 0.52 s``)."""
+
+
+def failure_text(exc: SimulationError) -> str:
+    """``failed: <what happened>``: the class recorded for a point whose run failed."""
+    return "failed: " + str(exc).split(";")[0].replace("the motion ", "")
+
+
+def _displacement_fields(model_name: str) -> list[str]:
+    model = load_model(model_name)
+    names = displacement_names(xr.Dataset(attrs={"state_names": " ".join(model.state_names)}))
+    return [f"amplitude_{v}" for v in names]
 
 
 STRUCTURE_AXIS = "n_balls"
@@ -394,25 +406,46 @@ def run_chain(chain: Chain) -> int:
         else:
             start = follow_start(chain.setting, previous, point, n_balls, values) \
                 if chain.follow and point is not None else None
-            point = diagram_point(chain.setting, n_balls, values, start)
+            point = safe_diagram_point(chain.setting, n_balls, values, start)
             store.save(key, point)
             computed += 1
+        if str(point.get("status", "")):
+            point = None  # a failed value: the next one starts from the initial state
         previous = (n_balls, values)
     return computed
+
+
+def safe_diagram_point(setting: Setting, n_balls: BallCounts, values: dict[str, float],
+                       start: Start | None = None) -> dict:
+    """``diagram_point``, or for a value whose run fails a record of it (``status``
+    ``failed: …``, no section points, NaN amplitudes) so the diagram goes on."""
+    try:
+        return {**diagram_point(setting, n_balls, values, start), "status": ""}
+    except SimulationError as exc:
+        model = load_model(setting.model)
+        return {**{v: np.zeros(0) for v in model.state_names},
+                "final": np.full(model.n_state, np.nan), "t_start": np.nan,
+                "t_final": np.nan, "status": failure_text(exc),
+                **dict.fromkeys(_displacement_fields(setting.model), np.nan)}
 
 
 def _point_task(args: tuple) -> tuple[str, dict]:
     """A diagram point without state following (parallel over the grid)."""
     chain, i = args
     n_balls, values = chain.setting.at(**{chain.axis.name: chain.axis.values[i]})
-    return f"{chain.direction}-{i:05d}", diagram_point(chain.setting, n_balls, values)
+    return f"{chain.direction}-{i:05d}", safe_diagram_point(chain.setting, n_balls, values)
 
 
 def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
                         direction: str = "up", follow: bool = True,
                         executor: Executor | None = None,
-                        progress: Callable[[int, int], None] | None = None) -> xr.Dataset:
-    """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset."""
+                        progress: Callable[[int, int], None] | None = None,
+                        on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset.
+
+    Resumable (``analysis.sweeps.store``): a stored point that cannot be read is removed,
+    reported to ``on_damaged(key)`` and computed again. A value whose run fails is recorded
+    (``status``: ``failed: …``) and the diagram goes on."""
     if direction not in ("up", "down", "both"):
         raise InputError(f"direction: must be up, down or both, got {direction!r}")
     directions = ["up", "down"] if direction == "both" else [direction]
@@ -422,20 +455,23 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
                   "follow": follow}
     if follow:  # stores of the former restarts at t = 0 are not resumed with these
         definition["restart"] = FOLLOW_RESTART
-    store = PointStore(output, definition)
-    chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
-    total = len(chains) * len(axis.values)
-    executor = executor or SerialExecutor()
-    if follow:
-        _run_with_progress(executor, run_chain, chains, store, total, progress, None)
-    else:
-        todo = [(c, i) for c in chains for i in range(len(axis.values))
-                if f"{c.direction}-{i:05d}" not in store.done()]
-        _run_with_progress(executor, _point_task, todo, store, total, progress,
-                           lambda task, result: store.save(*result))
-    ds = _assemble_diagram(store, setting, axis, directions, follow)
-    save_dataset(ds, output)
-    store.remove()
+    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
+    try:
+        chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
+        total = len(chains) * len(axis.values)
+        executor = executor or SerialExecutor()
+        if follow:
+            _run_with_progress(executor, run_chain, chains, store, total, progress, None)
+        else:
+            todo = [(c, i) for c in chains for i in range(len(axis.values))
+                    if f"{c.direction}-{i:05d}" not in store.done()]
+            _run_with_progress(executor, _point_task, todo, store, total, progress,
+                               lambda task, result: store.save(*result))
+        ds = _assemble_diagram(store, setting, axis, directions, follow)
+        save_dataset(ds, output)
+        store.remove()
+    finally:
+        store.close()
     return ds
 
 
@@ -460,6 +496,7 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
               for v in model.state_names}
     amplitudes = [v for v in first if v.startswith("amplitude_")]
     per_value = {v: np.full((len(directions), n), np.nan) for v in [*amplitudes, "t_start"]}
+    status = np.full((len(directions), n), "", dtype=object)
     for d, direction in enumerate(directions):
         for i in range(n):
             point = store.load(f"{direction}-{i:05d}")
@@ -467,11 +504,14 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
                 arrays[v][d, i, :len(point[v])] = point[v]
             for v in per_value:
                 per_value[v][d, i] = point[v]
+            status[d, i] = str(point.get("status", ""))
     data = {v: (("direction", axis.name, "k"), arrays[v],
                 {"units": units[v], "long_name": f"{v} on the {setting.section} section"})
             for v in arrays}
     data.update({v: (("direction", axis.name), per_value[v],
                      {"units": units.get(v[len("amplitude_"):], "m")}) for v in amplitudes})
+    data["status"] = (("direction", axis.name), status.astype(str),
+                      {"long_name": "empty, or why the value's run failed (failed: …)"})
     data["t_start"] = (("direction", axis.name), per_value["t_start"],
                        {"units": "s", "long_name": "time at which the value's run starts"})
     attrs = _attrs(setting, "diagram")
@@ -487,27 +527,39 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
 def _chart_task(args: tuple) -> tuple[str, dict]:
     setting, xname, xval, yname, yval, key = args
     n_balls, values = setting.at(**{xname: xval, yname: yval})
-    return key, chart_point(setting, n_balls, values)
+    try:
+        return key, chart_point(setting, n_balls, values)
+    except SimulationError as exc:  # recorded as the point's class; the chart goes on
+        return key, {"nature": failure_text(exc), "nature_code": NATURE_CODES["failed"],
+                     "period": 0, "lyapunov": np.nan, "ci95": np.nan, "graph_ratio": np.nan,
+                     **dict.fromkeys(_displacement_fields(setting.model), np.nan)}
 
 
 def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                     executor: Executor | None = None,
-                    progress: Callable[[int, int], None] | None = None) -> xr.Dataset:
-    """Classify every point of the grid y × x; writes and returns the netCDF Dataset."""
+                    progress: Callable[[int, int], None] | None = None,
+                    on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """Classify every point of the grid y × x; writes and returns the netCDF Dataset.
+
+    Resumable as ``bifurcation_diagram``; a point whose run fails is classed ``failed: …``
+    (``nature_code`` 0) and the chart goes on."""
     check_grid(setting, x, y)
     definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
                   "structure": _structure(setting)}
-    store = PointStore(output, definition)
-    done = store.done()
-    tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
-             for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
-             if f"{iy:04d}-{ix:04d}" not in done]
-    _run_with_progress(executor or SerialExecutor(), _chart_task, tasks, store,
-                       len(x.values) * len(y.values), progress,
-                       lambda task, result: store.save(*result))
-    ds = _assemble_chart(store, setting, x, y)
-    save_dataset(ds, output)
-    store.remove()
+    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
+    try:
+        done = store.done()
+        tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
+                 for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
+                 if f"{iy:04d}-{ix:04d}" not in done]
+        _run_with_progress(executor or SerialExecutor(), _chart_task, tasks, store,
+                           len(x.values) * len(y.values), progress,
+                           lambda task, result: store.save(*result))
+        ds = _assemble_chart(store, setting, x, y)
+        save_dataset(ds, output)
+        store.remove()
+    finally:
+        store.close()
     return ds
 
 
