@@ -283,6 +283,14 @@ def _finite_real(expr: sp.Expr, text: str) -> sp.Expr:
         raise ExpressionError("division by zero or an infinite value", text)
     if expr.has(sp.I):
         raise ExpressionError("complex value (e.g. sqrt of a negative number)", text)
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, sp.Pow) and node.exp.is_number and \
+                not abs(_as_float(node.exp)) <= MAX_EXPONENT:
+            raise ExpressionError(f"exponent out of range [-{MAX_EXPONENT}, {MAX_EXPONENT}] "
+                                  f"once the powers are combined ({node.exp})", text)
+        if node.is_number and not isinstance(node, sp.Number) and \
+                not math.isfinite(_as_float(node)):
+            raise ExpressionError("number outside the floating-point range", text)
     replace = {}
     for number in expr.atoms(sp.Number):
         if not math.isfinite(_as_float(number)):
@@ -294,9 +302,9 @@ def _finite_real(expr: sp.Expr, text: str) -> sp.Expr:
 
 def _as_float(number: sp.Expr) -> float:
     """``float(number)``, or inf when it is not a real number in the double range."""
-    if not number.is_real:
-        return math.inf
     try:
+        if not number.is_real:
+            return math.inf
         return float(number)
-    except (OverflowError, TypeError, ValueError):
+    except (OverflowError, TypeError, ValueError, RecursionError):  # mpmath overflows too
         return math.inf

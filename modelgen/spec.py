@@ -797,15 +797,27 @@ def spec_hash(path: Path) -> str:
     return spec_digest(path)
 
 
+MAX_SPEC_BYTES = 1_000_000
+"""Largest spec file read (a spec is a page of TOML)."""
+
+
 def load_spec(name_or_path: str | Path) -> tuple[Spec, Path]:
     """Read and validate a spec by shipped name or path; returns the spec and its file."""
     path = spec_path(name_or_path)
     if not path.exists():
         raise SpecError(str(path), ["file not found"])
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    if path.is_dir() or not path.is_file():
+        raise SpecError(str(path), ["not a plain file (a folder, a pipe or a device)"])
+    size = path.stat().st_size
+    if size > MAX_SPEC_BYTES:
+        raise SpecError(str(path), [f"{size} bytes; a spec may have at most {MAX_SPEC_BYTES}"])
+    try:  # a byte-order mark (some editors write one) is read as nothing
+        data = tomllib.loads(path.read_bytes().decode("utf-8-sig"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SpecError(str(path), [f"not valid TOML: {exc}"]) from None
+    except RecursionError:
+        raise SpecError(str(path), ["not valid TOML: arrays or tables nested too deeply"]) \
+            from None
     spec = parse_spec(data, str(path))
     if spec.model.name != path.stem:
         raise SpecError(str(path), [f"model.name: must equal the file name '{path.stem}', "
