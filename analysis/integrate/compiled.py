@@ -318,23 +318,34 @@ class Runner:
 
 def run_rk4(lib: Library, p: np.ndarray, z0: np.ndarray, h: float, n_steps: int,
             save_every: int = 1, t0: float = 0.0,
-            check: Callable[[np.ndarray], None] | None = None) -> np.ndarray:
+            check: Callable[[np.ndarray], None] | None = None,
+            sink: Callable[[int, np.ndarray], None] | None = None) -> np.ndarray | None:
     """``n_steps`` RK4 steps of ``h`` seconds from ``z0`` at ``t0``; the states after every
     ``save_every``-th step, shape (n, 1 + n_steps // save_every), ``z0`` first.
 
     ``check(states)`` sees every block as it is done (rows ``[z…, k]``, ``k`` the step after
-    which the row holds) and may raise to stop the run.
+    which the row holds) and may raise to stop the run. With ``sink``, nothing is kept:
+    ``sink(start, kept)`` receives the kept states of each block (``kept`` n × m, columns
+    ``start … start + m − 1`` of the array that would be returned; ``z0`` as column 0 first)
+    after ``check`` passed, and None is returned: a run of any length in constant memory.
     """
     runner = Runner(lib, p, h, t0)
-    out = np.empty((runner.n, 1 + n_steps // save_every))
-    out[:, 0] = z0
+    out = None
+    if sink is None:
+        out = np.empty((runner.n, 1 + n_steps // save_every))
+        out[:, 0] = z0
+
+        def sink(start: int, kept: np.ndarray) -> None:
+            out[:, start:start + kept.shape[1]] = kept
+    else:
+        sink(0, np.asarray(z0, dtype=float).reshape(-1, 1))
     for done, block in runner.blocks(z0, n_steps):
-        first = -(done + 1) % save_every  # row of the first step to keep
-        kept = block[first::save_every, :runner.n]
-        start = (done + first + 1) // save_every
-        out[:, start:start + len(kept)] = kept.T
         if check is not None:
             check(block)
+        first = -(done + 1) % save_every  # row of the first step to keep
+        kept = block[first::save_every, :runner.n]
+        if len(kept):
+            sink((done + first + 1) // save_every, kept.T)
     return out
 
 

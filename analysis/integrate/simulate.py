@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Literal
@@ -89,6 +90,40 @@ def simulate(
     Returns an ``xarray.Dataset`` with one variable per state (units and meaning in its
     attributes) over ``t`` (s) and the run's provenance in ``attrs``.
     """
+    run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
+                   method, save_every, rtol, atol, in_memory=True)
+    if method == "rk4":
+        states = _run_rk4(run.system, run.system.p, run.z0, run.dt, save_every, run.n_saved,
+                          run.limit, compiled)
+    else:
+        states = _run_cvodes(run.system, run.system.p, run.z0, run.times(), rtol, atol,
+                             run.limit)
+    times = run.times()
+    return to_dataset(times[run.first:], states[:, run.first:], run.attrs, run.system.model)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """A checked run: its system, step, lengths, limit, provenance and first kept sample."""
+
+    system: System
+    z0: np.ndarray
+    dt: float
+    save_every: int
+    n_saved: int
+    first: int
+    limit: float
+    attrs: dict
+
+    def times(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Times (s) of the saved samples ``start … stop − 1`` (all: 0 … n_saved)."""
+        stop = self.n_saved + 1 if stop is None else stop
+        return np.arange(start, stop) * (self.save_every * self.dt)
+
+
+def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt, method,
+             save_every, rtol, atol, in_memory: bool) -> _Run:
+    """Every check of a run, before any step is taken."""
     system = as_system(system, n_balls, initial_state, **parameters)
     model, n, values = system.model, system.structure, dict(system.parameters)
     sim = model.simulation_defaults
@@ -96,35 +131,101 @@ def simulate(
     transient = float(sim["transient"] if transient is None else transient)
     dt = float(sim["dt"] if dt is None else dt)
     _check_times(duration, transient, dt)
-    if not (isinstance(save_every, int) and save_every >= 1):
-        raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
-    check_resolution(model, n, values, dt, duration)
-    _check_memory(model.n_state, round(duration / dt) // save_every, save_every)
-    check_rk4_step(model, n, values, dt, method)
-    z0 = system.state
-    n_steps = round(duration / dt)
-    n_saved = n_steps // save_every
-    times = np.arange(n_saved + 1) * (save_every * dt)
-    p = system.p
-    limit = blow_up_limit(values)
-    if method == "rk4":
-        states = _run_rk4(system, p, z0, dt, save_every, n_saved, limit, compiled)
-    elif method == "cvodes":
+    if method not in ("rk4", "cvodes"):
+        raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
+    if method == "cvodes":
         if not (math.isfinite(rtol) and 0 < rtol < 1):
             raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
         if not (math.isfinite(atol) and 0 <= atol < 1):
             raise InputError(f"atol: must be in [0, 1), got {atol!r}")
-        states = _run_cvodes(system, p, z0, times, rtol, atol, limit)
-    else:
-        raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
-    keep = times >= transient - 1e-12 * duration
+    if not (isinstance(save_every, int) and save_every >= 1):
+        raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
+    check_resolution(model, n, values, dt, duration)
+    n_saved = round(duration / dt) // save_every
+    if in_memory:
+        _check_memory(model.n_state, n_saved, save_every)
+    check_rk4_step(model, n, values, dt, method)
+    z0 = system.state
+    first = _first_kept(transient - 1e-12 * duration, save_every * dt)
     attrs = run_attrs(model, n, values)
     attrs.update(method=method, dt=dt, save_every=save_every, duration=duration,
                  transient=transient)
     attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, z0, strict=True)})
     if method == "cvodes":
         attrs.update(rtol=rtol, atol=atol)
-    return to_dataset(times[keep], states[:, keep], attrs, model)
+    return _Run(system, z0, dt, save_every, n_saved, max(0, first), blow_up_limit(values),
+                attrs)
+
+
+def _first_kept(threshold: float, step: float) -> int:
+    """Smallest k with k·step >= threshold, computed as ``np.arange(…) * step`` computes the
+    times (so the first kept sample is the same whichever way the run is stored)."""
+    k = max(0, math.ceil(threshold / step))
+    while k > 0 and float(np.float64(k - 1) * step) >= threshold:
+        k -= 1
+    while float(np.float64(k) * step) < threshold:
+        k += 1
+    return k
+
+
+def simulate_to_file(
+    system: System | Model | str | Path,
+    path: str | Path,
+    n_balls: BallCounts = None,
+    *,
+    duration: float | None = None,
+    transient: float | None = None,
+    dt: float | None = None,
+    save_every: int = 1,
+    initial_state: Sequence[float] | None = None,
+    compiled: bool = True,
+    chunk: int = 100_000,
+    **parameters: float,
+) -> Path:
+    """``simulate`` with fixed-step RK4, streamed to the netCDF file ``path`` block by block:
+    a run of any length in constant memory (the states are never held whole). The file
+    holds what ``save_dataset(simulate(...), path)`` writes (the same variables,
+    coordinates, attributes and values); it is written atomically, so a run that blows up,
+    a full disk or Ctrl-C leave no file (and a file already at ``path`` as it was).
+    ``chunk``: samples per HDF5 chunk. Other arguments as in ``simulate``."""
+    from analysis.io import atomic_write
+
+    run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
+                   "rk4", save_every, 1e-10, 1e-16, in_memory=False)
+    model = run.system.model
+    size = run.n_saved + 1 - run.first
+
+    def write(tmp: Path) -> None:
+        import h5netcdf
+
+        with h5netcdf.File(tmp, "w") as f:
+            f.dimensions = {"t": size}
+            rows = min(chunk, max(size, 1))
+            t_var = f.create_variable("t", ("t",), "f8", chunks=(rows,))
+            t_var.attrs.update({"_FillValue": np.nan, "units": "s", "long_name": "time"})
+            variables = []
+            for name in model.state_names:
+                var = f.create_variable(name, ("t",), "f8", chunks=(rows,),
+                                        fillvalue=np.nan)
+                var.attrs.update({"units": model.state_units[name],
+                                  "long_name": state_meaning(model, name)})
+                variables.append(var)
+            f.attrs.update(run.attrs)
+
+            def sink(start: int, kept: np.ndarray) -> None:
+                stop = start + kept.shape[1]
+                lo = max(start, run.first)
+                if lo >= stop:
+                    return
+                out = slice(lo - run.first, stop - run.first)
+                t_var[out] = run.times(lo, stop)
+                for i, var in enumerate(variables):
+                    var[out] = kept[i, lo - start:]
+
+            _run_rk4(run.system, run.system.p, run.z0, run.dt, run.save_every, run.n_saved,
+                     run.limit, compiled, sink=sink)
+
+    return atomic_write(path, write)
 
 
 MEMORY_BUDGET = 8 * 2**30
@@ -141,12 +242,23 @@ def _check_memory(n_state: int, n_saved: int, save_every: int) -> None:
                          "or shorten the run")
 
 
+BALL_FRACTION = 0.1
+"""... or beyond this fraction of the largest ball diameter: Hertz contact describes
+deflections far smaller than the ball, so a displacement of a tenth of it is no longer a
+motion of the bearing the model describes."""
+
+
 def blow_up_limit(values: dict[str, float]) -> float:
     """Displacement (m) beyond which a run has blown up: ``BLOW_UP_FACTOR`` times the largest
-    radial clearance of the model's bearings (inf without one: non-finite values only)."""
+    radial clearance of the model's bearings, or ``BALL_FRACTION`` of the largest ball
+    diameter, whichever is smaller (inf without either: non-finite values only)."""
     clearance = max((abs(v) for k, v in values.items() if k.startswith("radial_clearance")),
                     default=0.0)
-    return BLOW_UP_FACTOR * clearance if clearance > 0 else np.inf
+    ball = max((abs(v) for k, v in values.items() if k.startswith("ball_diameter")),
+               default=0.0)
+    limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
+    limits += [BALL_FRACTION * ball] if ball > 0 else []
+    return min(limits, default=np.inf)
 
 
 def run_attrs(model: Model, structure: Structure, values: dict[str, float]) -> dict:
@@ -216,22 +328,20 @@ def _blow_up(states: np.ndarray, times: np.ndarray, limit: float,
 
 
 def _run_rk4(system: System, p: np.ndarray, z0: np.ndarray, dt: float,
-             save_every: int, n_saved: int, limit: float, compiled: bool = True) -> np.ndarray:
+             save_every: int, n_saved: int, limit: float, compiled: bool = True,
+             sink=None) -> np.ndarray | None:
     """RK4 in blocks of up to 1e4 steps (``analysis.integrate.compiled``: compiled C, or the VM).
 
-    A blow-up is looked for at the end of every block (non-finite values propagate), then
-    reported with the time of the first bad state of that block."""
+    Every kept state of every block is checked against the blow-up limit before the next
+    block runs, and a blow-up is reported with the time of the first bad state: no run that
+    leaves the limit is returned."""
     n, pairs = system.n_state, system.model.centre_indices()
 
     def check(block: np.ndarray) -> None:
-        try:
-            _blow_up(block[-1:, :n].T, block[-1:, n] * dt, limit, pairs)
-        except SimulationError:
-            _blow_up(block[:, :n].T, block[:, n] * dt, limit, pairs)
-            raise
+        _blow_up(block[:, :n].T, block[:, n] * dt, limit, pairs)
 
     return run_rk4(library(system.model, system.structure, compiled), p, z0, dt,
-                   n_saved * save_every, save_every, check=check)
+                   n_saved * save_every, save_every, check=check, sink=sink)
 
 
 def _run_cvodes(system: System, p: np.ndarray, z0: np.ndarray,
