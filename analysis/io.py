@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -46,6 +47,15 @@ def check_output(path: str | Path, suffixes: tuple[str, ...] | None = None,
     return path
 
 
+def _reason(exc: OSError) -> str:
+    """Why a write failed, in a few words: 'File too large', 'No space left on device'."""
+    if exc.errno:
+        return os.strerror(exc.errno)
+    text = " ".join(str(exc).split())
+    found = re.search(r"errno = (\d+)", text)  # HDF5 names the errno inside its message
+    return os.strerror(int(found.group(1))) if found else text[:120]
+
+
 def _name_max(folder: Path) -> int:
     try:
         return os.pathconf(folder, "PC_NAME_MAX")
@@ -53,14 +63,36 @@ def _name_max(folder: Path) -> int:
         return 255
 
 
-def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
+def check_space(folder: Path, size: int, path: Path) -> None:
+    """``WriteError`` when a file of about ``size`` bytes cannot be written in ``folder``:
+    less free space on its file system, or a smaller file-size limit (``ulimit -f``), than
+    ``size`` plus a margin. Checked before the write starts: HDF5 does not recover well from
+    a disk that fills up under it."""
+    import resource
+    import shutil
+
+    need = int(size * 1.05) + 2**20
+    free = shutil.disk_usage(folder).free
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    room = min(free, limit if limit != resource.RLIM_INFINITY else free)
+    if need > room:
+        what = "free on its disk" if room == free else "allowed per file (ulimit -f)"
+        raise WriteError(f"output: '{path}' needs about {need / 2**20:.1f} MiB and "
+                         f"{room / 2**20:.1f} MiB are {what}; nothing was written")
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], None],
+                 size: int | None = None) -> Path:
     """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it to ``path``.
 
     A crash, a full disk or Ctrl-C mid-write leaves at most nothing: the temporary file is
-    removed and a file already at ``path`` is kept as it was.
+    removed and a file already at ``path`` is kept as it was. ``size``: the expected bytes,
+    checked against the free space first (``check_space``).
     """
     path = check_output(path)
     folder = path.parent if str(path.parent) else Path(".")
+    if size is not None:
+        check_space(folder, size, path)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as exc:
@@ -70,8 +102,8 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
         try:
             write(Path(tmp))
         except OSError as exc:
-            raise WriteError(f"output: could not write '{path}' "
-                             f"({exc.strerror or exc}); nothing was changed there") from None
+            raise WriteError(f"output: could not write '{path}' ({_reason(exc)}); nothing "
+                             "was changed there") from None
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # as an ordinary open() would have made it
@@ -87,7 +119,8 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
 
 def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     """Write ``ds`` to netCDF-4 at ``path`` atomically."""
-    return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"))
+    return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"),
+                        size=ds.nbytes)
 
 
 def open_result(path: str | Path) -> xr.Dataset:

@@ -277,6 +277,8 @@ def main(args: list[str] | None = None) -> None:
         typer.echo(f"warning: {' '.join(str(message).split())}", err=True)
 
     warnings.showwarning = one_line
+    if "--debug" not in (args if args is not None else sys.argv):
+        sys.unraisablehook = lambda unraisable: None  # errors in finalisers: reported above
     signal.signal(signal.SIGTERM, _terminated)
     try:
         code = app(args=args, standalone_mode=False)
@@ -307,13 +309,15 @@ def _terminated(signum, frame) -> None:
 
 
 def _leave(code: int) -> None:
-    """Exit with ``code``; after an interruption at once, without waiting for worker
-    processes to finish their tasks (they end with this process: ``die_with_parent``)."""
+    """Exit with ``code``; after an interruption or an error at once: without waiting for
+    worker processes to finish their tasks (they end with this process:
+    ``die_with_parent``), and without the finalisers of files left half-written by a full
+    disk (HDF5 would report them again, or crash, while Python shuts down)."""
     import os
     import sys
 
-    if code == 130:
+    if code:  # after a failure, at once: no finaliser of a half-closed file runs
         sys.stdout.flush()
         sys.stderr.flush()
-        os._exit(130)
+        os._exit(code)
     sys.exit(code)

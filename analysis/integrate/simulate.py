@@ -225,7 +225,7 @@ def simulate_to_file(
             _run_rk4(run.system, run.system.p, run.z0, run.dt, run.save_every, run.n_saved,
                      run.limit, compiled, sink=sink)
 
-    return atomic_write(path, write)
+    return atomic_write(path, write, size=8 * (model.n_state + 1) * size)
 
 
 MEMORY_BUDGET = 8 * 2**30
