@@ -246,10 +246,12 @@ class Model:
         return self.structure(n_balls)
 
     def structure_attrs(self, structure: Structure) -> dict[str, int]:
-        """Result-file attributes: ``n_balls`` with one bearing (or 0 without), else
-        ``n_balls_<bearing>``."""
-        if len(structure) <= 1:
-            return {"n_balls": structure[0] if structure else 0}
+        """Result-file attributes: ``n_balls`` and ``bearing_name`` with one bearing (``n_balls``
+        0 without), else ``n_balls_<bearing>``."""
+        if len(structure) == 1:
+            return {"n_balls": structure[0], "bearing_name": self.bearing_names[0]}
+        if not structure:
+            return {"n_balls": 0}
         return {f"n_balls_{b}": n for b, n in zip(self.bearing_names, structure, strict=True)}
 
     def structure_label(self, structure: Structure) -> str:

@@ -199,6 +199,21 @@ def any_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
     return _check_output_option(param, value, None)
 
 
+def check_out_dir(path: Path, option: str = "--out-dir") -> Path:
+    """Raise ``InputError`` unless ``path`` is a folder or can be made one (its parent an
+    existing, writable folder): checked before a job writes its first file."""
+    import os
+
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{option}: '{path}' exists and is not a folder; give a folder")
+    parent = path if path.exists() else (path.parent if str(path.parent) else Path("."))
+    if not parent.is_dir():
+        raise InputError(f"{option}: folder '{parent}' does not exist")
+    if not os.access(parent, os.W_OK):
+        raise InputError(f"{option}: folder '{parent}' is not writable")
+    return path
+
+
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""

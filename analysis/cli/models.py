@@ -9,6 +9,7 @@ import typer
 
 from analysis.cli.common import (
     app,
+    check_out_dir,
     reports_errors,
 )
 from analysis.errors import BearingdynError
@@ -38,6 +39,8 @@ def generate(
     from modelgen.spec import load_spec, shipped_spec_names
 
     names = specs or shipped_spec_names()
+    if out is not None:
+        check_out_dir(out, "--out")
     changed = run_generate(names, root=out, check=check)
     targets: dict[Path, list[str]] = {}
     for name in names:

@@ -16,6 +16,7 @@ from analysis.cli.common import (
     WorkersOption,
     _executor,
     app,
+    check_out_dir,
     parse_sets,
     reports_errors,
 )
@@ -43,6 +44,7 @@ def reproduce(
     from analysis.reports.report import write_reproduction
     from analysis.reports.reproduce import reproduce as run_reproduce
 
+    check_out_dir(out_dir)
     kwargs = {}
     if quick:
         kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
@@ -72,11 +74,16 @@ def run(
     sets: SetOption = None,
 ):
     """The default job: the paper's case for N_b = 6…10 (netCDF + figure per N_b, peak table)."""
+    from analysis.integrate.simulate import check_run
     from analysis.reports.paper import PAPER_N_BALLS
     from analysis.reports.report import peak_table_markdown, run_paper_case
 
+    params = parse_sets(sets)
+    check_out_dir(out_dir)
+    for nb in n_balls or PAPER_N_BALLS:  # every run checked before the first file is written
+        check_run(model, nb, duration=duration, transient=transient, **params)
     results = run_paper_case(out_dir, model, n_balls or PAPER_N_BALLS, duration, transient,
-                             progress=typer.echo, **parse_sets(sets))
+                             progress=typer.echo, **params)
     typer.echo("\n" + peak_table_markdown(results))
     typer.echo(f"results in {out_dir}/ (nb<N>.nc, nb<N>.png, peaks.md, peaks.json)")
 

@@ -149,8 +149,9 @@ def check_resolution(model: Model, structure, values: dict[str, float], dt: floa
     warning). Also refuses runs of more than ``MAX_STEPS`` steps. Returns the steps per
     period (inf without forcing)."""
     if duration is not None and duration / dt > MAX_STEPS:
-        raise InputError(f"duration: {duration:g} s at dt = {dt:g} s is {duration / dt:.3g} "
-                         f"RK4 steps; at most {MAX_STEPS:.0e} per run (shorten it or raise dt)")
+        raise InputError(f"duration / dt: {duration:g} s at dt = {dt:g} s is "
+                         f"{duration / dt:.3g} RK4 steps; at most {MAX_STEPS:.0e} per run "
+                         "(shorten the run or raise dt)")
     name, freq = fastest_forcing(model, structure, values)
     if not freq > 0:
         return math.inf

@@ -157,6 +157,16 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
                 attrs)
 
 
+def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
+              duration: float | None = None, transient: float | None = None,
+              dt: float | None = None, method: Method = "rk4", save_every: int = 1,
+              **parameters: float) -> None:
+    """Every check ``simulate`` makes before a step is taken, and nothing else: a job of
+    several runs (``bearingdyn run``) validates all of them before it writes anything."""
+    _prepare(system, n_balls, None, parameters, duration, transient, dt, method, save_every,
+             1e-10, 1e-16, in_memory=False)
+
+
 def _first_kept(threshold: float, step: float) -> int:
     """Smallest k with k·step >= threshold, computed as ``np.arange(…) * step`` computes the
     times (so the first kept sample is the same whichever way the run is stored)."""

@@ -91,7 +91,7 @@ def _section_frequency(attrs: Mapping, section: str) -> tuple[str, float]:
             if key in attrs:
                 frequency = float(attrs[key])
             elif not several and f"{kind}_hz" in attrs and (
-                    f"n_balls_{bearing}" in attrs or len(table) == 1):
+                    f"n_balls_{bearing}" in attrs or attrs.get("bearing_name") == bearing):
                 key = f"{kind}_hz"  # the only bearing, named
                 frequency = float(attrs[key])
             else:

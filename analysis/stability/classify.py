@@ -141,8 +141,9 @@ def classify(
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
     least = 2 * max_period + 2
-    if pts.sizes["t"] < least:
-        raise InputError(f"run: {pts.sizes['t']} point(s) on the {section} section; a verdict "
+    found = pts.sizes.get("t", 0)
+    if found < least:
+        raise InputError(f"run: {found} point(s) on the {section} section; a verdict "
                          f"needs at least {least} (periods up to {max_period} must repeat "
                          "twice): simulate longer")
     ptp = {v: float(np.ptp(ds[v].values)) for v in state_names(ds)}

@@ -202,10 +202,13 @@ def check_grid(setting: Setting, *axes: Axis) -> None:
         if axis.name in setting.values:
             raise InputError(f"--set {axis.name}: also an axis; drop the --set (the axis "
                              "gives its values)")
-        if axis_bearing(axis.name) is not None and isinstance(setting.n_balls, Mapping) \
-                and axis_bearing(axis.name) in setting.n_balls:
-            raise InputError(f"--n-balls {axis_bearing(axis.name)}: also an axis "
-                             f"({axis.name}); drop it from --n-balls")
+        bearing = axis_bearing(axis.name)
+        if bearing == "" and setting.n_balls is not None and \
+                not isinstance(setting.n_balls, Mapping):
+            raise InputError(f"--n-balls: also an axis ({axis.name}); drop --n-balls")
+        if bearing and isinstance(setting.n_balls, Mapping) and bearing in setting.n_balls:
+            raise InputError(f"--n-balls {bearing}: also an axis ({axis.name}); drop it "
+                             "from --n-balls")
         bearing = axis_bearing(axis.name)
         if bearing == "" and len(model.bearings) > 1:
             raise InputError(f"axis {axis.name}: model '{model.name}' has bearings "
