@@ -159,11 +159,26 @@ def test_a_refused_sweep_writes_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
-def test_workers_end_with_their_parent_and_the_sweep_resumes(tmp_path, how):
-    proc = _popen((*CHART, "--workers", "2"), tmp_path)
-    assert _wait_for(lambda: len(_children(proc.pid)) >= 2, 60), "no workers started"
-    workers = _children(proc.pid)
+def _descendants(pid: int) -> list[int]:
+    found, todo = [], [pid]
+    while todo:
+        for child in _children(todo.pop()):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+@pytest.mark.parametrize("how, executor", [(signal.SIGTERM, "processes"),
+                                           (signal.SIGKILL, "processes"),
+                                           (signal.SIGKILL, "dask")],
+                         ids=["SIGTERM", "SIGKILL", "SIGKILL-dask"])
+def test_workers_end_with_their_parent_and_the_sweep_resumes(tmp_path, how, executor):
+    """Processes: the pool's workers. Dask: the LocalCluster's nannies and workers (they
+    notice the lost scheduler and stop; given 60 s here)."""
+    proc = _popen((*CHART, "--workers", "2", "--executor", executor), tmp_path)
+    assert _wait_for(lambda: len(_descendants(proc.pid)) >= 2, 90), "no workers started"
+    time.sleep(3.0 if executor == "dask" else 0.0)
+    workers = _descendants(proc.pid)
     time.sleep(1.0)
     proc.send_signal(how)
     proc.wait(timeout=30)
@@ -171,7 +186,9 @@ def test_workers_end_with_their_parent_and_the_sweep_resumes(tmp_path, how):
         assert proc.returncode == 130 and "interrupted" in proc.stderr.read()
     else:
         assert proc.returncode == -signal.SIGKILL
-    assert _wait_for(lambda: not any(_alive(w) for w in workers), 10), "workers outlived it"
+    patience = 60 if executor == "dask" else 10
+    assert _wait_for(lambda: not any(_alive(w) for w in workers), patience), \
+        "workers outlived their parent"
     assert not (tmp_path / "c.nc").exists()
     stored = len(list((tmp_path / "c.nc.parts").glob("*.npz")))
     assert stored < 60
