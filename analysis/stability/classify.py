@@ -141,7 +141,7 @@ def classify(
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
     least = 2 * max_period + 2
-    found = pts.sizes.get("t", 0)
+    found = pts.sizes.get("k", 0)  # section points along k (their times in coordinate t)
     if found < least:
         raise InputError(f"run: {found} point(s) on the {section} section; a verdict "
                          f"needs at least {least} (periods up to {max_period} must repeat "
