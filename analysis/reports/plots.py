@@ -344,6 +344,33 @@ def lyapunov_figure(result: xr.Dataset) -> Figure:
     return fig
 
 
+def stiffness_figure(ds: xr.Dataset) -> Figure:
+    """Linearised coefficients over one cage pitch (``analysis.stability.statics``): the
+    direct stiffnesses (MN/m, N·m/rad on tilts) and the equilibrium (µm, µrad) against the
+    cage angle (degrees), with the cage-angle means dashed."""
+    coords = [str(c) for c in ds.row.values]
+    units = dict(zip(coords, ds.position.attrs.get("units", "").split(", "), strict=False))
+    angle = np.degrees(ds.cage_angle.values)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
+    for i, c in enumerate(coords):
+        unit = "MN·m/rad" if units.get(c) == "rad" else "MN/m"
+        line, = axes[0].plot(angle, ds.stiffness.values[:, i, i] / 1e6, ".-", lw=1,
+                             label=f"k{c}{c} ({unit})")
+        axes[0].axhline(float(ds.stiffness_mean.values[i, i]) / 1e6, ls="--", lw=0.8,
+                        color=line.get_color())
+        factor, unit = _SCALES.get(units.get(c, "m"), (1.0, units.get(c, "")))
+        axes[1].plot(angle, ds.position.values[:, i] * factor, ".-", lw=1,
+                     label=f"{c} ({unit})")
+    axes[0].set_ylabel("direct stiffness (dashed: mean over the pitch)")
+    axes[1].set_ylabel("static equilibrium")
+    for ax in axes:
+        ax.set_xlabel("cage angle ψ (degrees; one ball pitch)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(_title(ds) + ": static equilibrium and stiffness", fontsize=10)
+    return fig
+
+
 __all__ = [
     "branch_figure",
     "display_label",
@@ -355,4 +382,5 @@ __all__ = [
     "save_figure",
     "scale_of",
     "spectrum_figure",
+    "stiffness_figure",
 ]
