@@ -6,7 +6,7 @@ them: models, runs, stability, continuation, sweeps, reports.
 
 # isort: off
 from analysis.cli.common import app
-from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, stiffness  # noqa: F401, E501
+from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, stiffness  # noqa: F401
 # isort: on
 
 __all__ = ["app"]
