@@ -154,8 +154,11 @@ def _echo(data: dict) -> None:
     typer.echo("equilibrium at cage angle 0: " + ", ".join(
         f"{c} = {v:.6g}" for c, v in zip(coords, zero["position"], strict=True))
         + f" ({data['units']['position']})")
+    tilts = "rad" in data["units"]["position"]
+    units = (data["units"]["stiffness"], data["units"]["damping"]) if tilts else \
+        ("N/m", "N*s/m")
     for title, block in (("at cage angle 0", zero), ("averaged over the pitch", mean)):
-        for name, unit in (("stiffness", "N/m"), ("damping", "N*s/m")):
+        for name, unit in zip(("stiffness", "damping"), units, strict=True):
             typer.echo(f"{name} {title} ({unit}; rows/columns {', '.join(coords)}):")
             for row in block[name]:
                 typer.echo("  " + "  ".join(f"{v + 0.0:13.6g}" for v in row))
