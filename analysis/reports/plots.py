@@ -264,6 +264,41 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     return fig
 
 
+def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
+    """A chart over a short list of parameter values (the reproduction's sensitivity): one
+    equal cell per value tried, ticks at the values themselves with ``unit`` (so the axis
+    shows only values that were run, none beyond them), N_b as whole numbers."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    xname, yname = ds.attrs["x"], ds.attrs["y"]
+    xs, ys = ds[xname].values, ds[yname].values
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
+    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
+    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    codes = ds.nature_code.transpose(yname, xname).values
+    axes[0].imshow(codes, cmap=cmap, norm=norm, origin="lower", aspect="auto")
+    present = sorted(set(np.unique(codes).tolist()))
+    axes[0].legend(handles=[Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k])
+                            for k in present], fontsize=8, loc="upper right")
+    axes[0].set_title("nature of the response", fontsize=9)
+    lam = ds.lyapunov.transpose(yname, xname).values
+    top = float(np.nanmax(np.abs(lam))) if np.isfinite(lam).any() else 1.0
+    image = axes[1].imshow(lam, cmap="RdBu_r", vmin=-top, vmax=top, origin="lower",
+                           aspect="auto")
+    fig.colorbar(image, ax=axes[1], label="largest Lyapunov exponent (1/s)")
+    axes[1].set_title("largest Lyapunov exponent", fontsize=9)
+    for ax in axes:
+        ax.set_xticks(range(len(xs)), [f"{v:g}" for v in xs])
+        ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
+        ax.set_xlabel(f"{xname} ({unit})" if unit else xname)
+        ax.set_ylabel(_grid_label(ds, yname) if not yname.startswith("n_balls")
+                      else "$N_b$ (balls)")
+    fig.suptitle(f"{ds.attrs['model']}: sensitivity to {xname}"
+                 + (f" ({unit}), values tried" if unit else ", values tried"), fontsize=10)
+    return fig
+
+
 def any_figure(ds: xr.Dataset, variables: list[str] | None = None) -> Figure:
     """The natural figure of any bearingdyn result file (``variables``: the state variables
     of a diagram or of a run's spectra and maps; default: the first body's
@@ -381,6 +416,7 @@ __all__ = [
     "poincare_figure",
     "save_figure",
     "scale_of",
+    "sensitivity_figure",
     "spectrum_figure",
     "stiffness_figure",
 ]
