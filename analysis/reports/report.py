@@ -19,6 +19,7 @@ from analysis.reports.paper import (
     SENSITIVITY,
     major_name,
     peak_name,
+    series_f_max,
     simulate_case,
 )
 from analysis.reports.reproduce import Reproduction
@@ -61,12 +62,13 @@ def run_paper_case(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
+    f_max = series_f_max(mdl, n_balls, **parameters)  # one frequency range for the series
     results = []
     for i, nb in enumerate(n_balls):
         start = time.perf_counter()
         nc, png = out / f"nb{nb}.nc", out / f"nb{nb}.png"
-        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient,
-                                  **parameters)
+        ds, peaks = simulate_case(mdl, nb, nc, png, f_max, duration=duration,
+                                  transient=transient, **parameters)
         results.append(CaseResult(nb, nc, png, peaks, time.perf_counter() - start,
                                   {k: ds.attrs[k] for k in ("shaft_hz", "cage_hz", "vc_hz")}))
         if progress:
@@ -92,15 +94,18 @@ def peak_table_markdown(results: Sequence[CaseResult]) -> str:
 
 # --- the reproduction report --------------------------------------------------------------
 
-def _mark(ok: bool | None, diff: tuple[list[str], list[str]] | None = None) -> str:
+def _mark(ok: bool | None, diff: tuple[list[str], list[str]] | None = None,
+          peaks: bool = True) -> str:
     """✓, or ✗ naming what is missing (the paper's, not ours) and what is extra (ours, not
-    the paper's); nothing for a cell that is not counted."""
+    the paper's); nothing for a cell that is not counted. ``peaks``: the names are peak
+    labels (printed with a unicode minus), else words (classes)."""
     if ok is None:
         return ""
     if ok:
         return " ✓"
     missing, extra = diff or ([], [])
-    return f" ✗ (missing: {_labels(missing)}; extra: {_labels(extra)})"
+    show = _labels if peaks else (lambda names: ", ".join(names) or "–")
+    return f" ✗ (missing: {show(missing)}; extra: {show(extra)})"
 
 
 def _labels(names) -> str:
@@ -138,7 +143,7 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
         total += sum(1 for v in m.values() if v is not None)
 
         def cell(paper_value, ours, key, m=m, d=d):
-            return f"{paper_value} / {ours}{_mark(m.get(key), d.get(key))}"
+            return f"{paper_value} / {ours}{_mark(m.get(key), d.get(key), key != 'nature')}"
 
         if p is None:
             paper_nature = PAPER_NATURE.get(r.n_balls, "–")
@@ -146,7 +151,7 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
                         f"{_labels([r.major('y')])} | – / "
                         f"{_labels(r.others('x'))} | – / {_labels(r.others('y'))} | "
                         f"{paper_nature} (conclusions) / {r.nature}"
-                        f"{_mark(m['nature'], d.get('nature'))} | "
+                        f"{_mark(m['nature'], d.get('nature'), peaks=False)} | "
                         f"{r.lyapunov:.3g} ± {r.ci95:.2g} |")
         else:
             rows.append(
@@ -174,7 +179,8 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
     gen = model.module.GENERATOR
     files = ", ".join(f"`generated/{model.name.replace('-', '_')}/{f}`" for f in
                       ("__init__.py", f"{model.name.replace('-', '_')}.c", "MODEL.md"))
-    default_ranges = ", ".join(f"{k} {min(v):g}–{max(v):g}" for k, v in SENSITIVITY.items())
+    default_ranges = ", ".join(f"{k} {min(v):g}–{max(v):g} {model.units.get(k, '')}".rstrip()
+                               for k, v in SENSITIVITY.items())
     smoke = SMOKE_TEST.format(**rep.settings) if rep.settings.get("quick") else ""
     return f"""# Reproduction of Vakharia, Gupta, Kankar: Table 2 and Figs. 2–6
 {smoke}

@@ -25,6 +25,7 @@ from analysis.reports.paper import (
     major_name,
     nature_matches,
     peak_name,
+    series_f_max,
     simulate_case,
 )
 from analysis.signal.spectrum import Peak
@@ -141,10 +142,12 @@ def reproduce(
     out = Path(out_dir)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
+    f_max = series_f_max(mdl, n_balls)  # one frequency range for every N_b's figure
     rows = []
     for nb in n_balls:
         nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
-        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient)
+        ds, peaks = simulate_case(mdl, nb, nc, png, f_max, duration=duration,
+                                  transient=transient)
         exps = lyapunov(mdl, nb, duration=duration - transient, transient=0.0,
                         n_exponents=1, initial_state=tuple(state_at(ds, 0)))
         verdict = classify(ds, exponents=exps)
