@@ -39,6 +39,7 @@ def _assert_disjoint_and_inside(fig) -> int:
         legend = ax.get_legend()
         for note, box in items:
             assert ax.bbox.y0 <= box.y0 and box.y1 <= ax.bbox.y1, note.get_text()
+            assert ax.bbox.x0 <= box.x0 and box.x1 <= ax.bbox.x1, note.get_text()
             if legend is not None:
                 assert not box.overlaps(legend.get_window_extent()), note.get_text()
             moved += note.xyann[1] > 4.0

@@ -158,7 +158,8 @@ def label_box(note, renderer):
 def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> None:
     """Move peak labels up (in steps of ``LABEL_STEP_PT``, a leader line to the peak) until
     no two labels of an axes overlap each other or the legend, the larger peaks' labels
-    placed first; raise the top of the axes until every label fits inside it. Draws the
+    placed first; a label at an edge is aligned to stay inside the axes, whose top is raised
+    until every label fits below it. Draws the
     figure once to fix the layout, then freezes it (so that the saved figure keeps the
     positions the labels were checked at)."""
     fig.canvas.draw()
@@ -173,6 +174,12 @@ def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> N
             placed = [legend.get_window_extent(renderer).padded(pad_px)] if legend else []
             for note in notes:
                 note.xyann = (0.0, 4.0)
+                note.set_horizontalalignment("center")
+                box = label_box(note, renderer)
+                if box.x0 < ax.bbox.x0:  # a peak near an edge: its label inside the axes
+                    note.set_horizontalalignment("left")
+                elif box.x1 > ax.bbox.x1:
+                    note.set_horizontalalignment("right")
                 for _ in range(tries):
                     box = label_box(note, renderer).padded(pad_px)
                     if not any(box.overlaps(other) for other in placed):
