@@ -295,8 +295,24 @@ def _grid_label(ds: xr.Dataset, name: str) -> str:
     long_name = ds[name].attrs.get("long_name", "")
     if name.startswith("n_balls[") and long_name:
         return f"{name} ({long_name})"
-    unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", ""))
+    unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", "")) or \
+        _model_unit(ds.attrs, name)
     return name + (f" ({unit})" if unit else "")
+
+
+def _model_unit(attrs, name: str) -> str:
+    """The unit of parameter ``name`` in the model a result names ('' when unknown)."""
+    from analysis.errors import BearingdynError
+    from analysis.model import load_model
+
+    for where in (attrs.get("model"), attrs.get("spec_file")):
+        if not where:
+            continue
+        try:
+            return load_model(str(where)).units.get(name, "")
+        except (BearingdynError, OSError):
+            continue
+    return ""
 
 
 def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None
