@@ -6,7 +6,8 @@ them: models, runs, stability, continuation, sweeps, reports.
 
 # isort: off
 from analysis.cli.common import app
-from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, stiffness  # noqa: F401
+from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
+from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
 # isort: on
 
 __all__ = ["app"]
