@@ -110,13 +110,20 @@ def stiffness(
     """Static equilibrium under the constant loads (velocities 0, cage held), and the
     stiffness K = -dF/dq and damping C = -dF/dq' matrices: at cage angle 0, over one ball
     pitch and averaged over it."""
-    from analysis.stability.statics import coefficients, ross_coefficients
+    from analysis.model import as_system
+    from analysis.stability.statics import check_planar, coefficients, ross_coefficients
 
     if not 1 <= angles <= 3600:
         raise InputError(f"--angles: must be an integer in [1, 3600], got {angles}")
     balls = parse_n_balls(n_balls)
     params = _parameters(speed_rpm, sets)
-    ds = coefficients(model, balls, n_angles=angles, **params)
+    system = as_system(model, balls, **params)
+    rpm = None
+    if ross:  # checked before any work
+        check_planar(system.state_names[:system.n_state // 2])
+        base = float(system.parameters.get("speed_rpm", 0.0))
+        rpm = parse_speeds(speeds) if speeds else np.linspace(0.1 * base, 2 * base, 10).tolist()
+    ds = coefficients(system, n_angles=angles)
     data = stiffness_json(ds)
     if as_json:
         typer.echo(json.dumps(data, indent=2))
@@ -125,10 +132,7 @@ def stiffness(
     if ross:
         from analysis.io import atomic_write
 
-        base = float(ds.attrs.get("speed_rpm", 0.0))
-        rpm = parse_speeds(speeds) if speeds else np.linspace(0.1 * base, 2 * base, 10).tolist()
-        params.pop("speed_rpm", None)
-        element = ross_coefficients(model, rpm, balls, n_angles=angles, **params)
+        element = ross_coefficients(system, rpm, n_angles=angles)
         payload = {"bearing_element": element,
                    "speeds_rpm": rpm,
                    "units": {"k": "N/m", "c": "N*s/m", "frequency": "rad/s"},

@@ -170,6 +170,8 @@ def equilibrium(target: System | Model | str, n_balls: BallCounts = None,
                 **parameters: float) -> Equilibrium:
     """The static equilibrium with every cage at ``cage_angle`` (rad) and its stiffness and
     damping matrices (see the module's notes). ``guess``: starting positions (default 0)."""
+    if not math.isfinite(float(cage_angle)):
+        raise InputError(f"cage_angle: must be a finite angle in rad, got {cage_angle!r}")
     system = as_system(target, n_balls, **parameters)
     fun, coordinates = _force_function(system)
     q0 = np.zeros(len(coordinates)) if guess is None else np.asarray(guess, dtype=float)
@@ -230,13 +232,18 @@ def _dataset(system: System, results: list[Equilibrium], angles: np.ndarray,
     return ds
 
 
+def check_planar(coordinates: Sequence[str]) -> None:
+    """Raise InputError unless the coordinates are a one-body planar model's (x, y)."""
+    if list(coordinates) != ["x", "y"]:
+        raise InputError(f"model: bearing coefficients kxx … kyy need a one-body planar "
+                         f"model (coordinates x, y); this one has {', '.join(coordinates)}")
+
+
 def bearing_coefficients(matrix: np.ndarray, coordinates: Sequence[str],
                          letter: str) -> dict[str, float]:
     """``{"kxx": …, "kxy": …, "kyx": …, "kyy": …}`` (``letter`` "k" or "c") of a one-body
     model's 2×2 matrix over (x, y); kxy = −∂F_x/∂y as ROSS's BearingElement defines it."""
-    if list(coordinates) != ["x", "y"]:
-        raise InputError(f"model: bearing coefficients kxx … kyy need a one-body planar "
-                         f"model (coordinates x, y); this one has {', '.join(coordinates)}")
+    check_planar(coordinates)
     m = np.asarray(matrix, dtype=float)
     return {f"{letter}{a}{b}": float(m[i, j])
             for i, a in enumerate("xy") for j, b in enumerate("xy")}
@@ -252,6 +259,7 @@ def ross_coefficients(target: System | Model | str, speeds_rpm: Sequence[float],
     if not speeds or any(not math.isfinite(s) or s < 0 for s in speeds):
         raise InputError(f"speeds: must be one or more finite speeds ≥ 0 rpm, got {speeds_rpm!r}")
     system = as_system(target, n_balls, **parameters)
+    check_planar(system.state_names[:system.n_state // 2])
     out: dict[str, list[float]] = {}
     for speed in speeds:
         ds = coefficients(system.replace(speed_rpm=speed), n_angles=n_angles)
