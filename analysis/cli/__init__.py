@@ -9,6 +9,7 @@ one line and exit code 2, as every other bad input.
 # isort: off
 from analysis.cli.common import app, main
 from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
+from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
 # isort: on
 
 __all__ = ["app", "main"]

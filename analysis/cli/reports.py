@@ -48,7 +48,8 @@ def reproduce(
     kwargs = {}
     if quick:
         kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
-                      sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()})
+                      sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()},
+                      quick=True)
     ex = _executor(executor, workers, scheduler)
     try:
         rep = run_reproduce(out_dir, model, executor=ex, log=None if quiet else typer.echo,

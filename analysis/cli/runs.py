@@ -106,7 +106,9 @@ def spectrum(
         for p in peaks:
             unit = ds[p.direction].attrs.get("units", "")
             typer.echo(f"{p.direction:>{width}} {p.frequency_hz:15.2f} "
-                       f"{p.amplitude:10.3e} {unit:<4} {p.label or '?'}")
+                       f"{p.amplitude:10.3e} {unit:<4} {p.name}"
+                       + (f" (ambiguous: also {', '.join(p.alternatives)})" if p.ambiguous
+                          else ""))
     if output:
         from analysis.reports.plots import save_figure, spectrum_figure
 

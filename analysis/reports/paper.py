@@ -58,7 +58,8 @@ def nature_matches(paper: str, ours: str) -> bool:
 
 
 def peak_name(peak: Peak) -> str:
-    return peak.label if peak.label else f"{peak.frequency_hz:.0f} Hz"
+    """A peak's label, or an unnamed peak's frequency (``Peak.name``)."""
+    return peak.name
 
 
 def major_name(peaks: Sequence[Peak]) -> str:
@@ -66,13 +67,23 @@ def major_name(peaks: Sequence[Peak]) -> str:
     return peak_name(peaks[0]) if peaks else "-"
 
 
-def simulate_case(model, n_balls: int, netcdf: Path, figure: Path, **kwargs):
-    """Simulate one N_b, write its run and its paper figure (spectra and Poincaré maps, x
-    and y), and return the run and its labelled peaks per direction."""
+def series_f_max(model, n_balls: Sequence[int], **parameters: float) -> float | None:
+    """One upper frequency (Hz) for the spectra of a series of N_b: the largest of the
+    runs' own ranges (2.5 (VC + X) of the largest VC), known before any run."""
+    from analysis.reports.plots import series_f_max as largest
+
+    values = model.parameters(parameters)
+    return largest([model.frequencies(nb, values).as_dict() for nb in n_balls])
+
+
+def simulate_case(model, n_balls: int, netcdf: Path, figure: Path,
+                  f_max: float | None = None, **kwargs):
+    """Simulate one N_b, write its run and its paper figure (spectra up to ``f_max`` Hz and
+    Poincaré maps, x and y), and return the run and its labelled peaks per direction."""
     # matplotlib is imported only when a figure is drawn (it costs the CLI a second)
     from analysis.reports.plots import paper_figure, save_figure
 
     ds = simulate(model, n_balls, **kwargs)
     save_dataset(ds, netcdf)
-    save_figure(paper_figure(ds), figure)
+    save_figure(paper_figure(ds, f_max=f_max), figure)
     return ds, {var: find_peaks(ds, var) for var in ("x", "y")}

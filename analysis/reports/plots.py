@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -59,10 +61,15 @@ def _title(ds: xr.Dataset) -> str:
 
 
 def _f_max(ds: xr.Dataset) -> float | None:
-    """Upper frequency of a spectrum plot: 2.5 (largest VC + X), or 10 base frequencies
-    without bearings (None: the whole spectrum)."""
+    return f_max_of(ds.attrs)
+
+
+def f_max_of(attrs) -> float | None:
+    """Upper frequency of a spectrum plot from a run's attrs (Hz): 2.5 (largest VC + X), or
+    10 base frequencies without bearings (None: the whole spectrum). A series of runs
+    (N_b = 6 … 10) shares the largest of theirs (``series_f_max``)."""
     try:
-        base, vcs, _ = label_frequencies(ds.attrs)
+        base, vcs, _ = label_frequencies(attrs)
     except InputError:  # no frequencies at all: draw everything
         return None
     top = max(vcs.values(), default=0.0)
@@ -71,29 +78,121 @@ def _f_max(ds: xr.Dataset) -> float | None:
     return 10.0 * base if base > 0 else None
 
 
+def series_f_max(attrs_list) -> float | None:
+    """One frequency range for a series of runs: the largest ``f_max_of`` of them."""
+    tops = [f for f in (f_max_of(a) for a in attrs_list) if f]
+    return max(tops) if tops else None
+
+
+AMBIGUOUS_MARK = "*"
+"""Appended to a label that another combination matches within the tolerance."""
+LABEL_STEP_PT = 7.0
+"""Vertical step (points) by which a peak label is moved up until it overlaps no other."""
+
+
 def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
                   f_max: float | None = None) -> None:
     """Amplitude spectrum of ``var`` (µm for metres, else scaled by ``scale_of``) on a log
-    scale, labelled peaks marked."""
+    scale, peaks marked: named peaks (red ▼, label m·X + n·VC; ``*`` when another
+    combination matches within the tolerance), unnamed peaks (grey ▽, their frequency in
+    grey italics); a legend says which is which. Labels are kept apart by
+    ``separate_peak_labels`` (called by the figure functions once the layout is fixed)."""
     spec = amplitude_spectrum(ds, var)
     peaks = find_peaks(ds, var) if peaks is None else peaks
     f_max = f_max or _f_max(ds) or float(spec.frequency[-1])
     factor, unit = scale_of(ds, var)
     sel = spec.sel(frequency=slice(0, f_max))
     ax.semilogy(sel.frequency, sel * factor, lw=0.8, color="C0")
-    for peak in peaks:
-        if peak.frequency_hz > f_max:
-            continue
-        if not peak.label:  # broadband or unnamed: marked, not labelled
-            ax.plot(peak.frequency_hz, peak.amplitude * factor, "v", color="0.5", ms=3)
-            continue
-        ax.plot(peak.frequency_hz, peak.amplitude * factor, "v", color="C3", ms=4)
-        ax.annotate(display_label(peak.label), (peak.frequency_hz, peak.amplitude * factor),
-                    xytext=(0, 4), textcoords="offset points", ha="center", fontsize=7)
+    shown = [p for p in peaks if p.frequency_hz <= f_max]
+    kinds = set()
+    for peak in shown:  # by descending amplitude: the larger peaks keep their place
+        point = (peak.frequency_hz, peak.amplitude * factor)
+        if peak.label:
+            ax.plot(*point, "v", color="C3", ms=4)
+            text = display_label(peak.label) + (AMBIGUOUS_MARK if peak.ambiguous else "")
+            style = dict(color="black", fontstyle="normal")
+            kinds.add("ambiguous" if peak.ambiguous else "named")
+        else:
+            ax.plot(*point, "v", color="0.45", ms=4, mfc="none")
+            text = peak.name
+            style = dict(color="0.35", fontstyle="italic")
+            kinds.add("unnamed")
+        note = ax.annotate(text, point, xytext=(0, 4), textcoords="offset points",
+                           ha="center", va="bottom", fontsize=7, **style,
+                           arrowprops=dict(arrowstyle="-", color="0.6", lw=0.5,
+                                           shrinkA=0, shrinkB=2))
+        note.peak_label = True  # found again by separate_peak_labels
+    handles = []
+    if kinds & {"named", "ambiguous"}:
+        handles.append(ax.plot([], [], "v", color="C3", ms=4, ls="none",
+                               label="named peak: m·X + n·VC")[0])
+    if "ambiguous" in kinds:
+        handles.append(ax.plot([], [], ls="none", marker="$*$", color="black", ms=5,
+                               label=f"{AMBIGUOUS_MARK}: ambiguous, another m·X + n·VC "
+                                     "within 1.5 bins")[0])
+    if "unnamed" in kinds:
+        handles.append(ax.plot([], [], "v", color="0.45", mfc="none", ms=4, ls="none",
+                               label="unnamed peak (no m·X + n·VC within 1.5 bins): "
+                                     "its frequency")[0])
+    if handles:
+        ax.legend(handles=handles, fontsize=6.5, loc="lower right", framealpha=0.85)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(f"amplitude of {var}" + (f" ({unit})" if unit else ""))
     ax.set_xlim(0, f_max)
     ax.grid(True, which="both", alpha=0.3)
+
+
+def peak_labels(ax) -> list:
+    """The peak-label annotations ``plot_spectrum`` drew on ``ax``, in drawing order."""
+    return [t for t in ax.texts if getattr(t, "peak_label", False)]
+
+
+def label_box(note, renderer):
+    """Display-space box of a label's text (without its leader line)."""
+    from matplotlib.text import Text
+
+    note.update_positions(renderer)
+    return Text.get_window_extent(note, renderer)
+
+
+def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> None:
+    """Move peak labels up (in steps of ``LABEL_STEP_PT``, a leader line to the peak) until
+    no two labels of an axes overlap each other or the legend, the larger peaks' labels
+    placed first; a label at an edge is aligned to stay inside the axes, whose top is raised
+    until every label fits below it. Draws the
+    figure once to fix the layout, then freezes it (so that the saved figure keeps the
+    positions the labels were checked at)."""
+    fig.canvas.draw()
+    fig.set_layout_engine("none")
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        notes = peak_labels(ax)
+        if not notes:
+            continue
+        for _ in range(6):
+            legend = ax.get_legend()
+            placed = [legend.get_window_extent(renderer).padded(pad_px)] if legend else []
+            for note in notes:
+                note.xyann = (0.0, 4.0)
+                note.set_horizontalalignment("center")
+                box = label_box(note, renderer)
+                if box.x0 < ax.bbox.x0:  # a peak near an edge: its label inside the axes
+                    note.set_horizontalalignment("left")
+                elif box.x1 > ax.bbox.x1:
+                    note.set_horizontalalignment("right")
+                for _ in range(tries):
+                    box = label_box(note, renderer).padded(pad_px)
+                    if not any(box.overlaps(other) for other in placed):
+                        break
+                    note.xyann = (0.0, note.xyann[1] + LABEL_STEP_PT)
+                placed.append(label_box(note, renderer).padded(pad_px))
+            overflow = max(b.y1 for b in placed) - ax.bbox.y1
+            if overflow <= 0:
+                break
+            low, high = ax.get_ylim()
+            span = math.log10(high / low)  # decades over the axes' height
+            grow = span * (overflow + 4 * pad_px) / max(ax.bbox.height - overflow, 1.0)
+            ax.set_ylim(low, high * 10 ** grow)
 
 
 def default_partner(ds: xr.Dataset, var: str) -> str:
@@ -129,31 +228,36 @@ def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft",
     ax.grid(True, alpha=0.3)
 
 
-def paper_figure(ds: xr.Dataset, section: str = "shaft") -> Figure:
+def paper_figure(ds: xr.Dataset, section: str = "shaft", f_max: float | None = None
+                 ) -> Figure:
     """The paper's Figs. 2-6: spectrum and Poincaré map per displacement of the first body,
-    X direction (a) and Y (b)."""
+    X direction (a) and Y (b); ``f_max`` (Hz): the spectra's upper frequency (default: the
+    run's own, ``f_max_of``; a series passes ``series_f_max``)."""
     variables = displacement_names(ds)
     fig, axes = plt.subplots(len(variables), 2, figsize=(11, 3.75 * len(variables) + 0.3),
                              layout="constrained", squeeze=False)
     for row, var in enumerate(variables):
-        plot_spectrum(axes[row, 0], ds, var)
+        plot_spectrum(axes[row, 0], ds, var, f_max=f_max)
         name = AXIS_NAMES[var][2] if var in AXIS_NAMES else var
         axes[row, 0].set_title(f"({'abcdefgh'[row % 8]}) {name}: FFT", fontsize=9)
         plot_poincare(axes[row, 1], ds, var, section)
     fig.suptitle(_title(ds), fontsize=10)
+    separate_peak_labels(fig)
     return fig
 
 
-def spectrum_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None
-                    ) -> Figure:
-    """Spectra of ``variables`` (default: the first body's displacements)."""
+def spectrum_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None,
+                    f_max: float | None = None) -> Figure:
+    """Spectra of ``variables`` (default: the first body's displacements) up to ``f_max``
+    (Hz; default: the run's own)."""
     variables = tuple(variables or displacement_names(ds))
     fig, axes = plt.subplots(len(variables), 1, figsize=(8, 3.25 * len(variables)),
                              layout="constrained", squeeze=False)
     for ax, var in zip(axes[:, 0], variables, strict=True):
-        plot_spectrum(ax, ds, var)
+        plot_spectrum(ax, ds, var, f_max=f_max)
         ax.set_title(AXIS_NAMES[var][2] if var in AXIS_NAMES else var, fontsize=9)
     fig.suptitle(_title(ds), fontsize=10)
+    separate_peak_labels(fig)
     return fig
 
 
@@ -191,8 +295,24 @@ def _grid_label(ds: xr.Dataset, name: str) -> str:
     long_name = ds[name].attrs.get("long_name", "")
     if name.startswith("n_balls[") and long_name:
         return f"{name} ({long_name})"
-    unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", ""))
+    unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", "")) or \
+        _model_unit(ds.attrs, name)
     return name + (f" ({unit})" if unit else "")
+
+
+def _model_unit(attrs, name: str) -> str:
+    """The unit of parameter ``name`` in the model a result names ('' when unknown)."""
+    from analysis.errors import BearingdynError
+    from analysis.model import load_model
+
+    for where in (attrs.get("model"), attrs.get("spec_file")):
+        if not where:
+            continue
+        try:
+            return load_model(str(where)).units.get(name, "")
+        except (BearingdynError, OSError):
+            continue
+    return ""
 
 
 def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None
@@ -261,6 +381,41 @@ def chart_figure(ds: xr.Dataset) -> Figure:
         if xname.startswith("n_balls"):
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
+    return fig
+
+
+def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
+    """A chart over a short list of parameter values (the reproduction's sensitivity): one
+    equal cell per value tried, ticks at the values themselves with ``unit`` (so the axis
+    shows only values that were run, none beyond them), N_b as whole numbers."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    xname, yname = ds.attrs["x"], ds.attrs["y"]
+    xs, ys = ds[xname].values, ds[yname].values
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
+    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
+    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    codes = ds.nature_code.transpose(yname, xname).values
+    axes[0].imshow(codes, cmap=cmap, norm=norm, origin="lower", aspect="auto")
+    present = sorted(set(np.unique(codes).tolist()))
+    axes[0].legend(handles=[Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k])
+                            for k in present], fontsize=8, loc="upper right")
+    axes[0].set_title("nature of the response", fontsize=9)
+    lam = ds.lyapunov.transpose(yname, xname).values
+    top = float(np.nanmax(np.abs(lam))) if np.isfinite(lam).any() else 1.0
+    image = axes[1].imshow(lam, cmap="RdBu_r", vmin=-top, vmax=top, origin="lower",
+                           aspect="auto")
+    fig.colorbar(image, ax=axes[1], label="largest Lyapunov exponent (1/s)")
+    axes[1].set_title("largest Lyapunov exponent", fontsize=9)
+    for ax in axes:
+        ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
+        ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
+        ax.set_xlabel(f"{xname} ({unit})" if unit else xname)
+        ax.set_ylabel(_grid_label(ds, yname) if not yname.startswith("n_balls")
+                      else "$N_b$ (balls)")
+    fig.suptitle(f"{ds.attrs['model']}: sensitivity to {xname}"
+                 + (f" ({unit}), values tried" if unit else ", values tried"), fontsize=10)
     return fig
 
 
@@ -344,6 +499,33 @@ def lyapunov_figure(result: xr.Dataset) -> Figure:
     return fig
 
 
+def stiffness_figure(ds: xr.Dataset) -> Figure:
+    """Linearised coefficients over one cage pitch (``analysis.stability.statics``): the
+    direct stiffnesses (MN/m, N·m/rad on tilts) and the equilibrium (µm, µrad) against the
+    cage angle (degrees), with the cage-angle means dashed."""
+    coords = [str(c) for c in ds.row.values]
+    units = dict(zip(coords, ds.position.attrs.get("units", "").split(", "), strict=False))
+    angle = np.degrees(ds.cage_angle.values)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
+    for i, c in enumerate(coords):
+        unit = "MN·m/rad" if units.get(c) == "rad" else "MN/m"
+        line, = axes[0].plot(angle, ds.stiffness.values[:, i, i] / 1e6, ".-", lw=1,
+                             label=f"k{c}{c} ({unit})")
+        axes[0].axhline(float(ds.stiffness_mean.values[i, i]) / 1e6, ls="--", lw=0.8,
+                        color=line.get_color())
+        factor, unit = _SCALES.get(units.get(c, "m"), (1.0, units.get(c, "")))
+        axes[1].plot(angle, ds.position.values[:, i] * factor, ".-", lw=1,
+                     label=f"{c} ({unit})")
+    axes[0].set_ylabel("direct stiffness (dashed: mean over the pitch)")
+    axes[1].set_ylabel("static equilibrium")
+    for ax in axes:
+        ax.set_xlabel("cage angle ψ (degrees; one ball pitch)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(_title(ds) + ": static equilibrium and stiffness", fontsize=10)
+    return fig
+
+
 __all__ = [
     "branch_figure",
     "display_label",
@@ -354,5 +536,9 @@ __all__ = [
     "poincare_figure",
     "save_figure",
     "scale_of",
+    "sensitivity_figure",
+    "separate_peak_labels",
+    "series_f_max",
     "spectrum_figure",
+    "stiffness_figure",
 ]

@@ -19,6 +19,7 @@ from analysis.reports.paper import (
     SENSITIVITY,
     major_name,
     peak_name,
+    series_f_max,
     simulate_case,
 )
 from analysis.reports.reproduce import Reproduction
@@ -61,12 +62,13 @@ def run_paper_case(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
+    f_max = series_f_max(mdl, n_balls, **parameters)  # one frequency range for the series
     results = []
     for i, nb in enumerate(n_balls):
         start = time.perf_counter()
         nc, png = out / f"nb{nb}.nc", out / f"nb{nb}.png"
-        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient,
-                                  **parameters)
+        ds, peaks = simulate_case(mdl, nb, nc, png, f_max, duration=duration,
+                                  transient=transient, **parameters)
         results.append(CaseResult(nb, nc, png, peaks, time.perf_counter() - start,
                                   {k: ds.attrs[k] for k in ("shaft_hz", "cage_hz", "vc_hz")}))
         if progress:
@@ -92,13 +94,39 @@ def peak_table_markdown(results: Sequence[CaseResult]) -> str:
 
 # --- the reproduction report --------------------------------------------------------------
 
-def _mark(ok: bool | None) -> str:
-    return "" if ok is None else (" ✓" if ok else " ✗")
+def _mark(ok: bool | None, diff: tuple[list[str], list[str]] | None = None,
+          peaks: bool = True) -> str:
+    """✓, or ✗ naming what is missing (the paper's, not ours) and what is extra (ours, not
+    the paper's); nothing for a cell that is not counted. ``peaks``: the names are peak
+    labels (printed with a unicode minus), else words (classes)."""
+    if ok is None:
+        return ""
+    if ok:
+        return " ✓"
+    missing, extra = diff or ([], [])
+    show = _labels if peaks else (lambda names: ", ".join(names) or "–")
+    return f" ✗ (missing: {show(missing)}; extra: {show(extra)})"
 
 
 def _labels(names) -> str:
     return ", ".join(n.replace("-", "−") for n in names) or "–"
 
+
+SMOKE_TEST = """
+> **Smoke test (`--quick`), not a reproduction.** {duration:g} s simulated ({transient:g} s
+> dropped), {revolutions} revolutions per sensitivity point and two values per parameter:
+> the verdicts below are not reliable. Run `bearingdyn reproduce` without `--quick` for the
+> report.
+"""
+
+MULTI_ORBIT = """
+The paper's "multi-orbit periodic" (N_b = 10) is not one of the classes this tool gives
+(periodic-1, periodic-2, periodic-n for n ≥ 3, quasi-periodic, chaotic). It is counted as
+agreeing with periodic-n for n ≥ 2 (an orbit that closes after several shaft revolutions:
+several points on the shaft section). A two-frequency torus (quasi-periodic, locked to X
+and VC) also draws several closed curves on that section, and the paper may have meant
+that; the table does not count it as agreeing, and says so here rather than choose.
+"""
 
 TABLE_HEAD = ("| N_b | major peak, x | major peak, y | other peaks, x | other peaks, y | nature | "
               "largest Lyapunov exponent (1/s, 95 %) |\n|---|---|---|---|---|---|---|")
@@ -110,19 +138,20 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
     rows = []
     matched = total = 0
     for r in rep.rows:
-        m, p = r.marks(), r.paper
+        m, p, d = r.marks(), r.paper, r.differences()
         matched += sum(1 for v in m.values() if v)
         total += sum(1 for v in m.values() if v is not None)
 
-        def cell(paper_value, ours, key, m=m):
-            return f"{paper_value} / {ours}{_mark(m.get(key))}"
+        def cell(paper_value, ours, key, m=m, d=d):
+            return f"{paper_value} / {ours}{_mark(m.get(key), d.get(key), key != 'nature')}"
 
         if p is None:
             paper_nature = PAPER_NATURE.get(r.n_balls, "–")
             rows.append(f"| {r.n_balls} | – / {_labels([r.major('x')])} | – / "
                         f"{_labels([r.major('y')])} | – / "
                         f"{_labels(r.others('x'))} | – / {_labels(r.others('y'))} | "
-                        f"{paper_nature} (conclusions) / {r.nature}{_mark(m['nature'])} | "
+                        f"{paper_nature} (conclusions) / {r.nature}"
+                        f"{_mark(m['nature'], d.get('nature'), peaks=False)} | "
                         f"{r.lyapunov:.3g} ± {r.ci95:.2g} |")
         else:
             rows.append(
@@ -140,7 +169,7 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
         verdict = (f"the paper's classes for every N_b at {', '.join(f'{v:g}' for v in ok)} "
                    f"{unit}" if ok else "the paper's classes are reproduced at none of the "
                    "values tried")
-        sens.append(f"### {name}\n\nValues tried: "
+        sens.append(f"### {name} ({unit})\n\nValues tried: "
                     f"{', '.join(f'{v:g}' for v in chart[name].values)} {unit}. Result: "
                     f"{verdict}.\n\n![{name}]({figure_names['sens-' + name]})\n")
     figures = "\n".join(f"![N_b = {r.n_balls}]({figure_names[f'nb{r.n_balls}']})\n"
@@ -150,13 +179,16 @@ def reproduction_markdown(rep: Reproduction, figure_names: dict[str, str]) -> st
     gen = model.module.GENERATOR
     files = ", ".join(f"`generated/{model.name.replace('-', '_')}/{f}`" for f in
                       ("__init__.py", f"{model.name.replace('-', '_')}.c", "MODEL.md"))
-    default_ranges = ", ".join(f"{k} {min(v):g}–{max(v):g}" for k, v in SENSITIVITY.items())
+    default_ranges = ", ".join(f"{k} {min(v):g}–{max(v):g} {model.units.get(k, '')}".rstrip()
+                               for k, v in SENSITIVITY.items())
+    smoke = SMOKE_TEST.format(**rep.settings) if rep.settings.get("quick") else ""
     return f"""# Reproduction of Vakharia, Gupta, Kankar: Table 2 and Figs. 2–6
-
+{smoke}
 Model `{rep.model}` (the paper as written; mass, stiffness and damping are assumptions the
 paper does not state). {matched} of {total} comparable cells agree with the paper
-(✓ agree, ✗ differ). Each cell reads *paper / this model*; "other peaks" agree when every
-peak the paper lists is among ours.
+(✓ agree, ✗ differ, naming what is missing, the paper's, and what is extra, ours). Each
+cell reads *paper / this model*; "other peaks" agree when every peak the paper lists is
+among ours; cells where the paper gives nothing (–) are shown but not counted.
 
 ## Table 2
 
@@ -165,7 +197,9 @@ peak the paper lists is among ours.
 
 Nature: periodic-n, quasi-periodic (a two-frequency torus locked to X and VC, or a frequency
 of its own) or chaotic, from the shaft-synchronous Poincaré points and the largest Lyapunov
-exponent (`analysis.stability.classify`). Run: {rep.settings['duration']:g} s simulated, the first
+exponent (`analysis.stability.classify`).
+{MULTI_ORBIT}
+Run: {rep.settings['duration']:g} s simulated, the first
 {rep.settings['transient']:g} s dropped, fixed-step RK4 with Δt = 1e-5 s.
 
 ## Figures 2–6 redrawn
@@ -216,20 +250,23 @@ def write_reproduction(rep: Reproduction, out_dir: str | Path) -> dict[str, Path
 
     import markdown
 
-    from analysis.reports.plots import chart_figure, save_figure
+    from analysis.reports.plots import save_figure, sensitivity_figure
 
     out = Path(out_dir)
+    units = load_model(rep.model).units
     names = {f"nb{r.n_balls}": r.figure.name for r in rep.rows}
     for name, chart in rep.sensitivity.items():
         path = out / f"sensitivity-{name}.png"
-        save_figure(chart_figure(chart), path)
+        save_figure(sensitivity_figure(chart, units.get(name, "")), path)
         names[f"sens-{name}"] = path.name
     text = reproduction_markdown(rep, names)
     body = markdown.markdown(text, extensions=["tables"])
     for file in set(names.values()):
         data = base64.b64encode((out / file).read_bytes()).decode()
         body = body.replace(f'src="{file}"', f'src="data:image/png;base64,{data}"')
-    html = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>bearingdyn: reproduction"
+    title = "bearingdyn: reproduction" + (" (smoke test, --quick)"
+                                          if rep.settings.get("quick") else "")
+    html = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>" + title +
             "</title><style>body{font-family:sans-serif;max-width:1100px;margin:auto;"
             "padding:1em}table{border-collapse:collapse}td,th{border:1px solid #ccc;"
             "padding:4px 8px;font-size:90%}img{max-width:100%}</style></head><body>"
@@ -237,12 +274,15 @@ def write_reproduction(rep: Reproduction, out_dir: str | Path) -> dict[str, Path
     table = [{"n_balls": r.n_balls, "major_x": r.major("x"), "major_y": r.major("y"),
               "others_x": r.others("x"), "others_y": r.others("y"), "nature": r.nature,
               "lyapunov": r.lyapunov, "ci95": r.ci95, "marks": r.marks(),
+              "differences": {k: {"missing": m, "extra": e}
+                              for k, (m, e) in r.differences().items()},
               "paper": None if r.paper is None else r.paper.__dict__} for r in rep.rows]
     paths = {"markdown": out / "report.md", "html": out / "report.html",
              "json": out / "table2.json"}
     atomic_write(paths["markdown"], lambda tmp: tmp.write_text(text))
     atomic_write(paths["html"], lambda tmp: tmp.write_text(html))
     atomic_write(paths["json"], lambda tmp: tmp.write_text(json.dumps(
-        {"ranges_reproducing_table2": rep.reproduced_ranges(), "rows": table}, indent=2,
+        {"smoke_test": bool(rep.settings.get("quick")), "settings": rep.settings,
+         "ranges_reproducing_table2": rep.reproduced_ranges(), "rows": table}, indent=2,
         default=list)))
     return paths

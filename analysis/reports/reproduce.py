@@ -25,6 +25,7 @@ from analysis.reports.paper import (
     major_name,
     nature_matches,
     peak_name,
+    series_f_max,
     simulate_case,
 )
 from analysis.signal.spectrum import Peak
@@ -59,15 +60,42 @@ class Row:
         return names
 
     def marks(self) -> dict[str, bool | None]:
-        """Per column: True (matches the paper), False, or None (no paper value)."""
+        """Per column: True (matches the paper), False, or None (not counted: the paper has
+        no value there, i.e. no row for this N_b or an empty cell)."""
         if self.paper is None:
             nature = PAPER_NATURE.get(self.n_balls)
             return {"nature": None if nature is None else nature_matches(nature, self.nature)}
         p = self.paper
         return {"major_x": self.major("x") == p.major_x, "major_y": self.major("y") == p.major_y,
-                "others_x": set(p.others_x) <= set(self.others("x")) | {self.major("x")},
-                "others_y": set(p.others_y) <= set(self.others("y")) | {self.major("y")},
+                "others_x": _listed(p.others_x, [*self.others("x"), self.major("x")]),
+                "others_y": _listed(p.others_y, [*self.others("y"), self.major("y")]),
                 "nature": nature_matches(p.nature, self.nature)}
+
+    def differences(self) -> dict[str, tuple[list[str], list[str]]]:
+        """Per column that differs from the paper (a ✗): (what the paper has that we have
+        not, what we have that the paper has not)."""
+        p, marks, out = self.paper, self.marks(), {}
+        for key, ok in marks.items():
+            if ok is not False:
+                continue
+            if key == "nature":
+                paper = PAPER_NATURE[self.n_balls] if p is None else p.nature
+                out[key] = ([paper], [self.nature])
+            elif key.startswith("major"):
+                var = key[-1]
+                out[key] = ([getattr(p, key)], [self.major(var)])
+            else:
+                var = key[-1]
+                ours = [self.major(var), *self.others(var)]
+                theirs = list(getattr(p, key))
+                out[key] = ([n for n in theirs if n not in ours],
+                            [n for n in self.others(var) if n not in theirs])
+        return out
+
+
+def _listed(paper: Sequence[str], ours: Sequence[str]) -> bool | None:
+    """Every peak the paper lists is among ours (None: the paper lists none, not counted)."""
+    return None if not paper else set(paper) <= set(ours)
 
 
 @dataclass
@@ -101,21 +129,25 @@ def reproduce(
     transient: float = 1.0,
     revolutions: int = 200,
     sensitivity: dict[str, Sequence[float]] | None = None,
+    quick: bool = False,
     executor: Executor | None = None,
     log: Callable[[str], None] | None = None,
     progress_factory: Callable[[str], Callable[[int, int], None]] | None = None,
 ) -> Reproduction:
     """Simulate the paper's case for each N_b (``duration`` s, the first ``transient`` s
     dropped), classify it with its largest Lyapunov exponent, and chart the verdicts over
-    the ``sensitivity`` ranges (default ``SENSITIVITY``). Results go to ``out_dir``."""
+    the ``sensitivity`` ranges (default ``SENSITIVITY``). Results go to ``out_dir``.
+    ``quick`` marks the result as a smoke test (the report says so at the top)."""
     start = time.perf_counter()
     out = Path(out_dir)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
+    f_max = series_f_max(mdl, n_balls)  # one frequency range for every N_b's figure
     rows = []
     for nb in n_balls:
         nc, png = out / "runs" / f"nb{nb}.nc", out / f"fig-nb{nb}.png"
-        ds, peaks = simulate_case(mdl, nb, nc, png, duration=duration, transient=transient)
+        ds, peaks = simulate_case(mdl, nb, nc, png, f_max, duration=duration,
+                                  transient=transient)
         exps = lyapunov(mdl, nb, duration=duration - transient, transient=0.0,
                         n_exponents=1, initial_state=tuple(state_at(ds, 0)))
         verdict = classify(ds, exponents=exps)
@@ -135,6 +167,7 @@ def reproduce(
                                        executor=executor, progress=progress)
     return Reproduction(model, rows, charts,
                         {"duration": duration, "transient": transient,
-                         "revolutions": revolutions, "n_balls": list(n_balls)},
+                         "revolutions": revolutions, "n_balls": list(n_balls),
+                         "quick": bool(quick)},
                         time.perf_counter() - start)
 

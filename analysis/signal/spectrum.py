@@ -114,9 +114,19 @@ def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float]
     forcing period). Returns ``(label, m, n, bearing)`` (bearing None for a pure shaft
     harmonic or the only bearing) or None when no candidate is within the tolerance.
     """
+    candidates = _candidates(f_hz, shaft_hz, vc_hz, tol_hz, max_shaft_order, max_vc_order,
+                             base)
+    return None if not candidates else candidates[0][1:]
+
+
+def _candidates(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float], tol_hz: float,
+                max_shaft_order: int, max_vc_order: int, base: str
+                ) -> list[tuple[tuple, str, int, int, str | None]]:
+    """Every combination m·X + n·VC within ``tol_hz`` of ``f_hz``, best first (the order of
+    :func:`name_frequency`): (sort key, label, m, n, bearing)."""
     vcs = vc_hz if isinstance(vc_hz, dict) else ({"": float(vc_hz)} if vc_hz else {})
     vcs = {name: float(f) for name, f in vcs.items() if f > 0}
-    best: tuple[tuple, str, int, int, str | None] | None = None
+    found = []
     for rank, (bearing, vc) in enumerate(vcs.items() or [("", 0.0)]):
         for n in range(max_vc_order + 1 if vc > 0 else 1):
             for m in range(-max_shaft_order, max_shaft_order + 1):
@@ -126,11 +136,10 @@ def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float]
                 distance = abs(f_hz - combination)
                 if distance > tol_hz:
                     continue
-                key = (abs(m) + n, distance, n, abs(m), rank if n else 0)
-                if best is None or key < best[0]:
-                    best = (key, _combination_label(m, n, bearing, base), m, n,
-                            (bearing or None) if n else None)
-    return None if best is None else best[1:]
+                found.append(((abs(m) + n, distance, n, abs(m), rank if n else 0),
+                              _combination_label(m, n, bearing, base), m, n,
+                              (bearing or None) if n else None))
+    return sorted(found, key=lambda c: c[0])
 
 
 def label_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
@@ -152,7 +161,9 @@ class Peak:
     ``frequency_hz`` in Hz, ``amplitude`` in the variable's unit (m for x, y), and its
     combination label m·X + n·VC (``shaft_order`` m, ``vc_order`` n; all None when
     unlabelled); ``bearing`` names the bearing whose VC the label uses, when the model has
-    several (else None)."""
+    several (else None). ``alternatives``: the other combinations within the label
+    tolerance (near-commensurate X and VC, e.g. 2X and VC−2X when VC ≈ 4X): the label is
+    then ambiguous."""
 
     direction: str
     frequency_hz: float
@@ -161,12 +172,28 @@ class Peak:
     shaft_order: int | None
     vc_order: int | None
     bearing: str | None = None
+    alternatives: tuple[str, ...] = ()
+
+    @property
+    def ambiguous(self) -> bool:
+        """Another combination names this frequency within the tolerance as well."""
+        return bool(self.alternatives)
+
+    @property
+    def name(self) -> str:
+        """The label, or for an unnamed peak its frequency (``140.2 Hz``): how every table,
+        text and figure shows a peak."""
+        return self.label if self.label else f"{self.frequency_hz:.1f} Hz"
 
     def as_dict(self) -> dict[str, Any]:
-        """The fields as a dict (``bearing`` only when set)."""
+        """The fields as a dict (``bearing`` and ``alternatives`` only when set)."""
         out = dataclasses.asdict(self)
         if out["bearing"] is None:
             del out["bearing"]
+        if out["alternatives"]:
+            out["alternatives"] = list(out["alternatives"])
+        else:
+            del out["alternatives"]
         return out
 
 
@@ -197,7 +224,8 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     window-corrected magnitude of the windowed record's Fourier transform evaluated at that
     refined frequency, so it is free of the window's scalloping loss between bins.
     Peaks are labelled with :func:`name_frequency` (``shaft_hz`` and each bearing's VC from
-    ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins) and returned by
+    ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins), the other combinations
+    within the tolerance kept as ``alternatives`` (an ambiguous label), and returned by
     descending amplitude.
     """
     var = displacement_names(ds)[0] if var is None else var
@@ -236,12 +264,13 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     order = np.argsort(-refined, kind="stable")[:max_peaks]
     peaks = []
     for i in order:
-        named = name_frequency(float(frequency[i]), base_hz, vcs,
-                               tol_hz=_LABEL_TOLERANCE_BINS * df, base=base)
-        label, m, n, bearing = named if named is not None else (None, None, None, None)
+        named = _candidates(float(frequency[i]), base_hz, vcs, _LABEL_TOLERANCE_BINS * df,
+                            4, 3, base)
+        label, m, n, bearing = named[0][1:] if named else (None, None, None, None)
         peaks.append(Peak(direction=var, frequency_hz=float(frequency[i]),
                           amplitude=float(refined[i]), label=label, shaft_order=m,
-                          vc_order=n, bearing=bearing))
+                          vc_order=n, bearing=bearing,
+                          alternatives=tuple(c[1] for c in named[1:])))
     return peaks
 
 
