@@ -9,7 +9,11 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
-from analysis.reports.plots import NATURE_COLORS, NATURE_NAMES  # also selects Agg
+from analysis.reports.plots import (  # also selects Agg
+    NATURE_COLORS,
+    NATURE_NAMES,
+    nature_colormap,
+)
 
 CURVE_STYLES = {"LP": ("C0", "-"), "PD": ("k", "-"), "NS": ("C3", "-")}
 CODIM2_MARKERS = {"CP": "v", "R1": "s", "R2": "D", "R3": "^", "R4": "p", "LPPD": "X",
@@ -43,11 +47,9 @@ def curve_axes(curves: list[xr.Dataset], chart: xr.Dataset | None) -> tuple[str,
 
 def draw_chart(ax, chart: xr.Dataset, x: str, y: str) -> None:
     """The chart's classes (periodic-1, periodic-2, …) as coloured cells with a legend."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
-    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
-    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    cmap, norm = nature_colormap()
     codes = chart.nature_code.transpose(y, x)
     ax.pcolormesh(chart[x], chart[y], codes, cmap=cmap, norm=norm, shading="nearest",
                   alpha=0.75)

@@ -282,9 +282,20 @@ def save_figure(fig: Figure, path) -> None:
     plt.close(fig)
 
 
-NATURE_COLORS = {1: "#2a9d8f", 2: "#8ab17d", 3: "#e9c46a", 4: "#5e7fd6", 5: "#e76f51"}
-NATURE_NAMES = {1: "periodic-1", 2: "periodic-2", 3: "periodic-n (n ≥ 3)",
-                4: "quasi-periodic", 5: "chaotic"}
+NATURE_COLORS = {0: "#9e9e9e", 1: "#2a9d8f", 2: "#8ab17d", 3: "#e9c46a", 4: "#5e7fd6",
+                 5: "#e76f51"}
+NATURE_NAMES = {0: "failed (the run blew up)", 1: "periodic-1", 2: "periodic-2",
+                3: "periodic-n (n ≥ 3)", 4: "quasi-periodic", 5: "chaotic"}
+
+
+def nature_colormap():
+    """(colormap, norm) that colour the chart codes 0 … 5 (``sweep.NATURE_CODES``) as
+    ``NATURE_COLORS``."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    codes = sorted(NATURE_COLORS)
+    cmap = ListedColormap([NATURE_COLORS[k] for k in codes])
+    return cmap, BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)
 
 
 def _grid_label(ds: xr.Dataset, name: str) -> str:
@@ -352,13 +363,11 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
 def chart_figure(ds: xr.Dataset) -> Figure:
     """Stability chart: the class of the motion on the grid (colours with a legend), and
     the largest Lyapunov exponent."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
     xname, yname = ds.attrs["x"], ds.attrs["y"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
-    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
-    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    cmap, norm = nature_colormap()
     axes[0].pcolormesh(ds[xname], ds[yname], ds.nature_code, cmap=cmap, norm=norm,
                        shading="nearest")
     present = sorted(set(np.unique(ds.nature_code.values).tolist()))
@@ -388,14 +397,12 @@ def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
     """A chart over a short list of parameter values (the reproduction's sensitivity): one
     equal cell per value tried, ticks at the values themselves with ``unit`` (so the axis
     shows only values that were run, none beyond them), N_b as whole numbers."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
     xname, yname = ds.attrs["x"], ds.attrs["y"]
     xs, ys = ds[xname].values, ds[yname].values
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
-    cmap = ListedColormap([NATURE_COLORS[k] for k in sorted(NATURE_COLORS)])
-    norm = BoundaryNorm(np.arange(0.5, 6.5), cmap.N)
+    cmap, norm = nature_colormap()
     codes = ds.nature_code.transpose(yname, xname).values
     axes[0].imshow(codes, cmap=cmap, norm=norm, origin="lower", aspect="auto")
     present = sorted(set(np.unique(codes).tolist()))
