@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
@@ -75,3 +77,37 @@ def load_dataset(path: str | Path) -> xr.Dataset:
         raise InputError(f"result file: '{path}' is not a bearingdyn run "
                          f"(missing {', '.join(missing) or 't'})")
     return data
+
+
+def provenance(source: Any) -> dict[str, Any]:
+    """The provenance of a result in plain JSON types, the same content as its netCDF attrs:
+    ``source`` is a result (``xarray`` object: its attrs), a mapping of attrs, or a
+    ``System`` (then ``analysis.integrate.simulate.run_attrs`` of it: the model, spec path
+    and sha256, balls per bearing, every parameter value, the frequencies and the versions,
+    exactly what ``simulate`` writes for that system before the run's own settings), or the
+    path of a result file (its attrs, read without its data)."""
+    from analysis.model import System
+
+    if isinstance(source, (str, Path)):
+        if not Path(source).is_file():
+            raise InputError(f"result file: '{source}' does not exist")
+        with xr.open_dataset(source, engine="h5netcdf") as ds:
+            attrs: Mapping = dict(ds.attrs)
+    elif isinstance(source, System):
+        from analysis.integrate.simulate import run_attrs
+
+        attrs = run_attrs(source.model, source.structure, dict(source.parameters))
+    else:
+        attrs = getattr(source, "attrs", source)
+    return {str(key): _plain(value) for key, value in attrs.items()}
+
+
+def _plain(value: Any) -> Any:
+    """A netCDF attribute value as a JSON value (numpy scalars and arrays to Python)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, bytes):
+        return value.decode()
+    return value
