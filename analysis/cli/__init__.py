@@ -6,7 +6,7 @@ them: models, runs, stability, continuation, sweeps, reports.
 
 # isort: off
 from analysis.cli.common import app
-from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, cite  # noqa: F401
+from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, cite, explore  # noqa: F401
 # isort: on
 
 __all__ = ["app"]
