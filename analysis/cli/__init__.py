@@ -6,7 +6,8 @@ them: models, runs, stability, continuation, sweeps, reports.
 
 # isort: off
 from analysis.cli.common import app
-from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves, cite, explore  # noqa: F401
+from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
+from analysis.cli import explore, cite  # noqa: F401
 # isort: on
 
 __all__ = ["app"]

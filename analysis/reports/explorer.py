@@ -291,7 +291,7 @@ function drawMap() {
 }
 
 function plot(container, title, xs, ys, xlabel, ylabel, kind) {
-  const W = 340, H = 230, L = 58, R = 10, T = 22, B = 38;
+  const W = 300, H = 220, L = 58, R = 10, T = 22, B = 38;
   const div = document.createElement("div");
   div.className = "plot";
   container.appendChild(div);

@@ -1,5 +1,14 @@
+"""Write the example notebooks docs/notebooks/*.ipynb (without outputs) from this source, so
+that a change to them is a readable diff: ``python docs/scripts/make_notebooks.py``.
+tests/test_notebooks.py executes them."""
+
+from pathlib import Path
+
 import nbformat as nbf
-from nbformat.v4 import new_notebook, new_markdown_cell as md, new_code_cell as code
+from nbformat.v4 import new_code_cell as code
+from nbformat.v4 import new_markdown_cell as md
+from nbformat.v4 import new_notebook
+
 
 def save(cells, path):
     nb = new_notebook(cells=cells, metadata={
@@ -15,7 +24,7 @@ save([
     "with fixed-step RK4 (dt = 10 µs) as in the paper. SI units throughout (m, s, N); "
     "speeds in rpm. Runs in about 20 s."),
  code("%matplotlib inline\n"
-      "from analysis import load_model, simulate, find_peaks, poincare_section\n"
+      "from analysis import find_peaks, load_model, poincare_section, simulate\n"
       "from analysis.reports.plots import paper_figure\n\n"
       "model = load_model(\"vakharia2015\")\nmodel  # the model card: spec, hash, parameters"),
  md("Simulate 3 s and keep the last 2 s (the spec's defaults); the Dataset carries the "
@@ -33,10 +42,10 @@ save([
  md("Spectra and shaft-synchronous Poincaré maps (paper Figs. 2 and 6)."),
  code("fig = paper_figure(runs[6], section=\"shaft\")\nfig"),
  code("section = poincare_section(runs[10], \"shaft\")\n"
-      "print(f\"{section.sizes['k']} section points, x from {float(section.x.min()):.3e} to "
-      "{float(section.x.max()):.3e} m\")\n"
+      "low, high = float(section.x.min()), float(section.x.max())\n"
+      "print(f\"{section.sizes['k']} section points, x from {low:.3e} to {high:.3e} m\")\n"
       "fig = paper_figure(runs[10], section=\"shaft\")\nfig"),
-], "docs/notebooks/paper-case.ipynb")
+], Path(__file__).resolve().parents[1] / "notebooks" / "paper-case.ipynb")
 
 save([
  md("# A stability study: Floquet multipliers, Lyapunov exponents, classification\n\n"
@@ -46,18 +55,18 @@ save([
     "Poincaré section and its largest Lyapunov exponent. SI units; speeds in rpm. Runs in "
     "about 30 s."),
  code("%matplotlib inline\n"
-      "import numpy as np\nimport matplotlib.pyplot as plt\n"
+      "import matplotlib.pyplot as plt\nimport numpy as np\n\n"
       "from analysis import load_model, simulate\n"
-      "from analysis.stability.periodic import shoot\n"
+      "from analysis.stability.classify import classify\n"
       "from analysis.stability.lyapunov import lyapunov\n"
-      "from analysis.stability.classify import classify\n\n"
+      "from analysis.stability.periodic import shoot\n\n"
       "load_model(\"balanced-rotor\")"),
  md("Shoot the period-1/VC orbit at each radial load and keep the spectral radius of its "
     "monodromy matrix (below 1: stable)."),
  code("loads = np.linspace(10.0, 200.0, 12)  # N\n"
       "orbits = [shoot(\"balanced-rotor\", 8, radial_load=float(p)) for p in loads]\n"
       "radius = np.array([o.spectral_radius for o in orbits])\n"
-      "for p, o in zip(loads, orbits):\n"
+      "for p, o in zip(loads, orbits, strict=True):\n"
       "    print(f\"P_r = {p:6.1f} N: {o.stability:8s} spectral radius {o.spectral_radius:.4f}\")"),
  code("fig, ax = plt.subplots(figsize=(6, 3.5))\n"
       "ax.plot(loads, radius, \"o-\")\nax.axhline(1.0, color=\"0.5\", ls=\"--\", "
@@ -73,4 +82,4 @@ save([
       "    nature = classify(simulate(\"vakharia2015\", n_balls=n, speed_rpm=5000))\n"
       "    print(f\"N_b = {n}: λ = {np.array2string(lam, precision=1)} 1/s; \"\n"
       "          f\"{nature.nature} ({nature.detail})\")"),
-], "docs/notebooks/stability-study.ipynb")
+], Path(__file__).resolve().parents[1] / "notebooks" / "stability-study.ipynb")
