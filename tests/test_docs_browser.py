@@ -117,3 +117,15 @@ def test_search_finds_pages_from_disk(site, browser):
     assert first.is_file(), first
     _open(browser, first)
     assert "floquet" in browser.find_element("css selector", "article").text.lower()
+
+
+@pytest.mark.parametrize(("ci", "outcome"), [("true", pytest.fail.Exception),
+                                             ("", pytest.skip.Exception)])
+def test_without_chromium_ci_fails_and_a_developer_skips(monkeypatch, ci, outcome):
+    import tests.browser
+
+    monkeypatch.setenv("CI", ci)
+    monkeypatch.setattr(tests.browser.shutil, "which", lambda name: None)
+    monkeypatch.setattr(tests.browser, "Path", lambda p: Path("/nonexistent/chromedriver"))
+    with pytest.raises(outcome, match="apt-get install -y --no-install-recommends chromium"):
+        require_chromium()
