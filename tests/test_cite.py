@@ -1,6 +1,7 @@
 """`bearingdyn cite` and ``analysis.cite.citation``: the BibTeX parses back with a real
 parser (bibtexparser), the CFF validates against the Citation File Format 1.2.0 JSON schema
-(tests/data/cff-schema-1.2.0.json, the schema cffconvert ships), and both state the sha256
+(tests/data/cff-schema-1.2.0.json: the Citation File Format project's schema, CC-BY-4.0, as
+cffconvert ships it), and both state the sha256
 of the spec file's bytes (hashlib here, independent of the generator) and its real path."""
 
 from __future__ import annotations
