@@ -5,9 +5,11 @@ from __future__ import annotations
 import os
 import re
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, WriteError
@@ -133,15 +135,18 @@ def open_result(path: str | Path) -> xr.Dataset:
         raise InputError(f"result file: '{path}' does not exist")
     if not path.is_file():
         raise InputError(f"result file: '{path}' is not a plain file (a pipe or device)")
-    with open(path, "rb") as handle:
-        magic = handle.read(4)
-    engine = "scipy" if magic[:3] == b"CDF" else "h5netcdf"
     try:
-        with xr.open_dataset(path, engine=engine) as ds:
+        with xr.open_dataset(path, engine=_engine(path)) as ds:
             return ds.load()
     except Exception as exc:  # h5py/h5netcdf/scipy raise many types for a damaged file
         text = " ".join(str(exc).split())[:200]
         raise InputError(f"result file: '{path}' is not a readable netCDF file ({text})") from None
+
+
+def _engine(path: Path) -> str:
+    """The xarray engine of a netCDF file: scipy for netCDF-3 (classic), h5netcdf else."""
+    with open(path, "rb") as handle:
+        return "scipy" if handle.read(3) == b"CDF" else "h5netcdf"
 
 
 RUN_ATTRS_NONNEGATIVE = ("shaft_hz", "speed_rpm")
@@ -169,8 +174,6 @@ def check_run(ds: xr.Dataset, path: str | Path = "the run") -> None:
     increasing at the step its attributes give, a state variable not finite or not over
     ``t``, or an attribute the analyses read (``dt``, frequencies, speed) not a finite
     number in its range (a damaged or edited file)."""
-    import numpy as np
-
     from analysis.signal import run_state_names
 
     where = f"result file: '{path}'"
@@ -205,3 +208,37 @@ def check_run(ds: xr.Dataset, path: str | Path = "the run") -> None:
             raise InputError(f"{where}: variable {name} is not finite at t = "
                              f"{t[int(np.argmax(bad))]:g} s (NaN or inf); it cannot be "
                              "analysed")
+
+
+def provenance(source: Any) -> dict[str, Any]:
+    """The provenance of a result in plain JSON types, the same content as its netCDF attrs:
+    ``source`` is a result (``xarray`` object: its attrs), a mapping of attrs, or a
+    ``System`` (then ``analysis.integrate.simulate.run_attrs`` of it: the model, spec path
+    and sha256, balls per bearing, every parameter value, the frequencies and the versions,
+    exactly what ``simulate`` writes for that system before the run's own settings), or the
+    path of a result file (its attrs, read without its data)."""
+    from analysis.model import System
+
+    if isinstance(source, (str, Path)):
+        if not Path(source).is_file():
+            raise InputError(f"result file: '{source}' does not exist")
+        with xr.open_dataset(source, engine=_engine(Path(source))) as ds:
+            attrs: Mapping = dict(ds.attrs)
+    elif isinstance(source, System):
+        from analysis.integrate.simulate import run_attrs
+
+        attrs = run_attrs(source.model, source.structure, dict(source.parameters))
+    else:
+        attrs = getattr(source, "attrs", source)
+    return {str(key): _plain(value) for key, value in attrs.items()}
+
+
+def _plain(value: Any) -> Any:
+    """A netCDF attribute value as a JSON value (numpy scalars and arrays to Python)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, bytes):
+        return value.decode()
+    return value

@@ -317,6 +317,29 @@ class Model:
             pairs.append((names.index(f"x{suffix}"), names.index(y) if y in names else None))
         return pairs
 
+    def _repr_html_(self) -> str:
+        """The model card in a notebook: title, spec path and SHA-256, state, bearings and
+        every parameter with its default (SI units, speed in rpm), unit and source."""
+        from html import escape
+
+        bearings = ", ".join(f"{b.name}: {b.default_n_balls} balls ({b.fewest}…{b.most}), "
+                             f"{b.inner} in {b.outer}" for b in self.bearings) or "none"
+        rows = "".join(
+            f"<tr><td><code>{escape(name)}</code></td><td>{value:.6g}</td>"
+            f"<td>{escape(unit)}</td><td>{escape(source)}</td></tr>"
+            for name, value, unit, source in self.module.PARAMETERS)
+        facts = [("spec", f"<code>{escape(self.spec_file)}</code>"),
+                 ("spec sha256", f"<code>{escape(self.spec_sha256)}</code>"),
+                 ("state", ", ".join(f"<code>{escape(n)}</code> ({escape(u)})"
+                                     for n, u in self.state_units.items())),
+                 ("bearings", escape(bearings)),
+                 ("reference", escape(str(getattr(self.module, "REFERENCE", "")) or "–"))]
+        return (f'<div class="bearingdyn-model"><h4>{escape(self.name)}: '
+                f"{escape(self.module.TITLE)}</h4><table>"
+                + "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in facts)
+                + "</table><table><thead><tr><th>parameter</th><th>default</th><th>unit</th>"
+                "<th>source</th></tr></thead><tbody>" + rows + "</tbody></table></div>")
+
     def check_state(self, state: Any, what: str = "initial_state") -> np.ndarray:
         """``state`` as a float array of the model's state size, or one clear error."""
         try:

@@ -28,8 +28,10 @@
   page, and ``tests/test_spec_guide.py`` fails on a field that has no docstring.
 - **Included files.** ``<!-- bearingdyn:include PATH -->`` (PATH relative to ``docs/``)
   becomes the file in a code block, so a page shows the example spec as it is.
-- ``javascripts/mathjax.js``: MathJax's configuration for ``pymdownx.arithmatex`` (with
-  ``textmacros``, so that the model cards' ``\\text{speed\\_rpm}`` shows an underscore).
+- **Math.** The ``$…$`` and ``$$…$$`` of the pages become MathML at build time
+  (``latex2mathml``), which browsers render natively: the site needs no script and no network
+  to show an equation, opened from a server or from disk. A formula latex2mathml cannot
+  convert is a build warning (an error under ``--strict``).
 
 Nothing here writes into the repository.
 """
@@ -57,31 +59,10 @@ SUBMODULES_MARKER = re.compile(r"^<!-- bearingdyn:submodules ([\w.]+) -->[ \t]*$
 SPEC_REFERENCE_MARKER = re.compile(r"^<!-- bearingdyn:spec-reference -->[ \t]*$", re.M)
 INCLUDE_MARKER = re.compile(r"^<!-- bearingdyn:include (\S+) -->[ \t]*$", re.M)
 
-MATHJAX_CONFIG = """\
-window.MathJax = {
-  loader: {load: ["[tex]/textmacros"]},
-  tex: {
-    packages: {"[+]": ["textmacros"]},
-    inlineMath: [["\\\\(", "\\\\)"]],
-    displayMath: [["\\\\[", "\\\\]"]],
-    processEscapes: true,
-    processEnvironments: true
-  },
-  options: {
-    ignoreHtmlClass: ".*|",
-    processHtmlClass: "arithmatex"
-  }
-};
-
-document$.subscribe(() => {
-  if (window.MathJax.typesetPromise) {
-    MathJax.startup.output.clearCache();
-    MathJax.typesetClear();
-    MathJax.texReset();
-    MathJax.typesetPromise();
-  }
-});
-"""
+MATH = re.compile(r'<(span|div) class="arithmatex">(.*?)</\1>', re.S)
+"""What ``pymdownx.arithmatex`` (generic mode) makes of ``$…$`` (a span holding ``\\(…\\)``)
+and ``$$…$$`` (a div holding ``\\[…\\]``), TeX HTML-escaped."""
+TEX_DELIMITERS = {"span": (r"\(", r"\)"), "div": (r"\[", r"\]")}
 
 
 # --------------------------------------------------------------------------- the CLI
@@ -676,7 +657,6 @@ def on_files(files, config):
     for folder, name, text in cards:
         files.append(File.generated(config, f"models/{folder}.md",
                                     content=model_page(folder, name, text)))
-    files.append(File.generated(config, "javascripts/mathjax.js", content=MATHJAX_CONFIG))
     return files
 
 
@@ -697,6 +677,42 @@ def on_page_markdown(markdown, page, config, files):
         lambda m: include_markdown(m.group(1), Path(config.docs_dir)), markdown)
     markdown = OPTIONS_MARKER.sub(options, markdown)
     return COMMANDS_MARKER.sub(lambda _m: commands_markdown(), markdown)
+
+
+def tex_to_mathml(tex: str, display: bool) -> str:
+    """MathML for one formula (``\\_`` in ``\\text{…}`` shown as an underscore, as the model
+    cards' ``\\text{speed\\_rpm}`` mean it)."""
+    from latex2mathml.converter import convert
+
+    mathml = convert(tex.strip(), display="block" if display else "inline")
+    return re.sub(r"(<mtext>[^<]*)</mtext>",
+                  lambda m: m.group(1).replace("\\_", "_") + "</mtext>", mathml)
+
+
+def math_to_mathml(html: str, where: str = "") -> str:
+    """Every arithmatex span and div of a page's HTML as MathML (see ``MATH``)."""
+    import html as html_lib
+
+    def replace(match: re.Match) -> str:
+        tag, body = match.groups()
+        opening, closing = TEX_DELIMITERS[tag]
+        tex = html_lib.unescape(body).strip()
+        if not (tex.startswith(opening) and tex.endswith(closing)):
+            log.warning("%s: unexpected math markup %r", where, body[:80])
+            return match.group(0)
+        tex = tex[len(opening):-len(closing)]
+        try:
+            mathml = tex_to_mathml(tex, display=tag == "div")
+        except Exception as exc:  # latex2mathml raises its own types for TeX it cannot read
+            log.warning("%s: cannot convert the formula %r to MathML (%s)", where, tex, exc)
+            return match.group(0)
+        return f'<{tag} class="arithmatex">{mathml}</{tag}>'
+
+    return MATH.sub(replace, html)
+
+
+def on_page_content(html, page, config, files):
+    return math_to_mathml(html, page.file.src_uri)
 
 
 def on_serve(server, config, builder):

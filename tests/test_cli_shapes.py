@@ -85,7 +85,7 @@ def test_poincare_of_mathieu_at_its_forcing_period(cli, tmp_path):
               "-o", "m.png", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     points = json.loads(res.stdout)
-    assert set(points) == {"t", "x", "vx"}
+    assert set(points) == {"t", "x", "vx", "provenance"}
     period = 2 * np.pi
     np.testing.assert_allclose(points["t"], period * np.arange(len(points["t"])), rtol=1e-12)
     assert len(points["t"]) == int(40 // period) + 1

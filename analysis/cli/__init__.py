@@ -10,6 +10,7 @@ one line and exit code 2, as every other bad input.
 from analysis.cli.common import app, main
 from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
 from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
+from analysis.cli import explore, cite  # noqa: F401
 # isort: on
 
 __all__ = ["app", "main"]

@@ -96,10 +96,12 @@ def continue_(
 
         _save_figure(branch_figure(branches), plot, err=as_json)
     if as_json:
+        from analysis.io import provenance
         from analysis.stability.continuation import branch_summary
 
         typer.echo(json.dumps({
-            "branches": [{"file": str(path), **branch_summary(br)}
+            "branches": [{"file": str(path), **branch_summary(br),
+                          "provenance": provenance(path)}
                          for br, path in zip(branches, paths, strict=True)],
             "plot": str(plot) if plot else None}, indent=2))
 

@@ -94,11 +94,14 @@ def spectrum(
     variables = tuple(var) if var else displacement_names(ds)
     peaks = peak_table(ds, variables, max_peaks=max_peaks)
     if as_json:
+        from analysis.io import provenance
+
         typer.echo(json.dumps({"shaft_hz": ds.attrs.get("shaft_hz"),
                                "vc_hz": ds.attrs.get("vc_hz"),
                                "vc": vc_frequencies(ds.attrs),
                                "cage": cage_frequencies(ds.attrs),
-                               "peaks": [p.as_dict() for p in peaks]}, indent=2))
+                               "peaks": [p.as_dict() for p in peaks],
+                               "provenance": provenance(ds)}, indent=2))
     else:
         typer.echo(frequency_words(ds.attrs))
         width = max(3, *(len(v) for v in variables))
@@ -160,7 +163,10 @@ def poincare(
         raise
     shown = (x, y) if x else displacement_names(ds)
     if as_json:
-        typer.echo(json.dumps({v: pts[v].values.tolist() for v in ("t", *names)}))
+        from analysis.io import provenance
+
+        typer.echo(json.dumps({**{v: pts[v].values.tolist() for v in ("t", *names)},
+                               "provenance": provenance(ds)}))
     else:
         ranges = ", ".join(f"{v} in [{float(pts[v].min()):.4e}, {float(pts[v].max()):.4e}] "
                            f"{pts[v].attrs.get('units', '')}".rstrip()

@@ -69,7 +69,9 @@ def lyapunov(
             "transient_running": _running_json(res.transient_running, "t_transient"),
             **{k: int(v) for k, v in res.attrs.items() if str(k).startswith("n_balls")}}
     if as_json:
-        typer.echo(json.dumps(data, indent=2))
+        from analysis.io import provenance
+
+        typer.echo(json.dumps({**data, "provenance": provenance(res)}, indent=2))
     else:
         _echo_lyapunov(res, data)
     if output:
@@ -142,7 +144,10 @@ def floquet(
     orbit = shoot(model, parse_n_balls(n_balls), period, segments=segments,
                   **_given(dt=dt, settle=settle), **_parameters(speed_rpm, sets))
     if as_json:
-        typer.echo(json.dumps(orbit.as_dict(), indent=2))
+        from analysis.io import provenance
+
+        typer.echo(json.dumps({**orbit.as_dict(), "provenance": provenance(orbit.system)},
+                              indent=2))
         return
     typer.echo(f"{orbit.model}, {_orbit_structure(orbit)}, period {orbit.period} = "
                f"{orbit.period_s:.6g} s ({orbit.n_steps} RK4 steps): {orbit.message}")
@@ -171,7 +176,10 @@ def classify(
 
     result = run_classify(load_dataset(run_file), section)
     if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
+        from analysis.io import provenance
+
+        typer.echo(json.dumps({**result.as_dict(), "provenance": provenance(run_file)},
+                              indent=2))
     else:
         typer.echo(f"{result.nature}: {result.detail} ({result.n_points} points, "
                    f"{result.section} section)")
