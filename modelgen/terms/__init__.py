@@ -17,4 +17,5 @@ TERM_CLASSES: tuple[type[Term], ...] = (
 TERMS: dict[str, type[Term]] = {cls.model_fields["kind"].default: cls for cls in TERM_CLASSES}
 
 __all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "CubicSpring", "ExpressionTerm", "HarmonicForce",
-           "HertzContact", "LocalizedDefect", "RadialLoad", "Term", "TwoContact", "Unbalance", "ViscousDamping"]
+           "HertzContact", "LocalizedDefect", "RadialLoad", "Term", "TwoContact", "Unbalance",
+           "ViscousDamping"]
