@@ -9,13 +9,16 @@ from modelgen.terms.expression import ExpressionTerm
 from modelgen.terms.loads import HarmonicForce, RadialLoad, Unbalance
 from modelgen.terms.springs import CubicSpring
 from modelgen.terms.two_contact import TwoContact
+from modelgen.terms.waviness import BallWaviness, InnerRaceWaviness, OuterRaceWaviness
 
 TERM_CLASSES: tuple[type[Term], ...] = (
     HertzContact, Centrifugal, ViscousDamping, RadialLoad, Unbalance, CubicSpring,
-    HarmonicForce, ExpressionTerm, TwoContact, LocalizedDefect,
+    HarmonicForce, ExpressionTerm, TwoContact, LocalizedDefect, OuterRaceWaviness,
+    InnerRaceWaviness, BallWaviness,
 )
 TERMS: dict[str, type[Term]] = {cls.model_fields["kind"].default: cls for cls in TERM_CLASSES}
 
-__all__ = ["TERMS", "TERM_CLASSES", "Centrifugal", "CubicSpring", "ExpressionTerm", "HarmonicForce",
-           "HertzContact", "LocalizedDefect", "RadialLoad", "Term", "TwoContact", "Unbalance",
-           "ViscousDamping"]
+__all__ = ["TERMS", "TERM_CLASSES", "BallWaviness", "Centrifugal", "CubicSpring",
+           "ExpressionTerm", "HarmonicForce", "HertzContact", "InnerRaceWaviness",
+           "LocalizedDefect", "OuterRaceWaviness", "RadialLoad", "Term", "TwoContact",
+           "Unbalance", "ViscousDamping"]
