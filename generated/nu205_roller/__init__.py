@@ -100,7 +100,7 @@ def ball_load_bearing(c, s, i, n_balls, z, t, p):
     y = z[1]
     radial_clearance = p[3]
     roller_length = p[10]
-    return 20148311114.021194*2**((8/9))*roller_length**((8/9))*ca.fmax(0, c*x - radial_clearance + s*y)**((10/9))
+    return 37309623511.53841*roller_length**0.8888888888888888*ca.fmax(0, c*x - radial_clearance + s*y)**1.1111111111111112
 
 
 def cage_speed_bearing(p):

@@ -111,7 +111,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a07=cos(a06);
   a07=(a00*a07);
   a02=(a02+a07);
-  a07=3.7309623511538376e+10;
+  a07=3.7309623511538406e+10;
   a08=arg[2]? arg[2][10] : 0;
   a09=8.8888888888888884e-01;
   a08=pow(a08,a09);
@@ -487,7 +487,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=arg[0]? arg[0][0] : 0;
   a00=(a00*a02);
   a02=cos(a00);
-  a03=3.7309623511538376e+10;
+  a03=3.7309623511538406e+10;
   a04=arg[2]? arg[2][10] : 0;
   a05=8.8888888888888884e-01;
   a04=pow(a04,a05);
@@ -1050,7 +1050,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=cos(a011);
   a013=(a008*a013);
   a007=(a007+a013);
-  a013=3.7309623511538376e+10;
+  a013=3.7309623511538406e+10;
   a014=arg[2]? arg[2][10] : 0;
   a015=8.8888888888888884e-01;
   a014=pow(a014,a015);

@@ -31,7 +31,8 @@ from modelgen.terms.contact import CLEARANCE_PARAMETER, HertzContact, deflection
 
 PALMGREN_MM = 3.84e-5
 """Palmgren's coefficient: δ = 3.84e-5 Q^0.9 / l^0.8 with δ, l in mm and Q in N."""
-EXPONENT = sp.Rational(10, 9)
+EXPONENT = sp.Float(10 / 9, 17)
+"""10/9, as the double nearest to it (the generated code prints it as 1.1111111111111112)."""
 LINE_STIFFNESS: dict[str, tuple[str, ...]] = {
     "given": ("line_contact_stiffness",), "geometry": ("roller_length",),
 }
@@ -39,9 +40,8 @@ LINE_STIFFNESS: dict[str, tuple[str, ...]] = {
 
 def palmgren_constant(length: sp.Expr | float) -> sp.Expr:
     """K_c (N/m^(10/9)) of one roller–race line contact of ``length`` (m), SI form."""
-    coefficient = (sp.Float(PALMGREN_MM) * sp.Rational(1, 1000)
-                   * sp.Integer(10) ** sp.Rational(-12, 5))
-    return (length ** sp.Rational(4, 5) / coefficient) ** EXPONENT
+    coefficient = PALMGREN_MM * 1e-3 * 10.0 ** -2.4
+    return sp.Float(coefficient ** -(10 / 9), 17) * length ** sp.Float(8 / 9, 17)
 
 
 class LineContact(HertzContact):
@@ -65,7 +65,7 @@ class LineContact(HertzContact):
         """K of Q = K δ^{10/9} (N/m^(10/9)): given, or Palmgren's two contacts in series."""
         if self.stiffness == "given":
             return ctx.p("line_contact_stiffness")
-        return palmgren_constant(ctx.p("roller_length")) * sp.Integer(2) ** -EXPONENT
+        return palmgren_constant(ctx.p("roller_length")) * sp.Float(2.0 ** (-10 / 9), 17)
 
     def ball_load(self, ctx: Context) -> sp.Expr:
         delta = deflection(ctx, self.clearance)
