@@ -52,11 +52,11 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
             continue
         shared = shared or bool(peak.also)
         ax.plot(peak.frequency_hz, y, "v", color="C3", ms=4)
-        ax.annotate(peak_text(peak), (peak.frequency_hz, y), xytext=(0, 4),
-                    textcoords="offset points", ha="center", fontsize=7, rotation=90
-                    if len(peak_text(peak)) > 8 else 0, va="bottom")
+        ax.annotate(peak_text(peak), (peak.frequency_hz, y), xytext=(0, 5),
+                    textcoords="offset points", ha="center", va="bottom", fontsize=7,
+                    rotation=90)
     ax.set_xlim(0, f_max)
-    ax.set_ylim(0, 1.25 * float(sel.max()) * factor)
+    ax.set_ylim(0, 1.45 * float(sel.max()) * factor)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(f"envelope amplitude of {var}" + (f" ({unit})" if unit else ""))
     ax.grid(True, alpha=0.3)
@@ -68,24 +68,30 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
     return fig
 
 
-def impulse_figure(ds: xr.Dataset, var: str, passes: np.ndarray, window_s: float,
-                   what: str) -> Figure:
-    """``ds[var]`` over the first ``window_s`` seconds of the run, with the times ``passes``
-    (s) at which a ball meets the defect drawn as vertical lines (labelled ``what``)."""
+def impulse_figure(ds: xr.Dataset, passes: np.ndarray, window_s: float, what: str,
+                   variables: tuple[str, ...] = ("x", "vx")) -> Figure:
+    """``variables`` of the run over its first ``window_s`` seconds, and the acceleration
+    d(vx)/dt (m/s², where the impacts show as spikes), with the times ``passes`` (s) at which
+    a ball meets the defect drawn as dashed lines (labelled ``what``)."""
     t = ds["t"].values
     shown = t <= t[0] + window_s
-    factor, unit = scale_of(ds, var)
-    fig, ax = plt.subplots(figsize=(9, 3.5), layout="constrained")
-    ax.plot((t[shown] - t[0]) * 1e3, ds[var].values[shown] * factor, lw=0.8, color="C0")
+    ms = (t[shown] - t[0]) * 1e3
+    acceleration = np.gradient(ds["vx"].values, t)[shown]
+    fig, axes = plt.subplots(len(variables) + 1, 1, figsize=(9, 2.2 * (len(variables) + 1)),
+                             layout="constrained", sharex=True)
     marks = passes[(passes >= t[0]) & (passes <= t[0] + window_s)]
-    for k, tp in enumerate(marks):
-        ax.axvline((tp - t[0]) * 1e3, color="C3", lw=0.7, ls="--",
-                   label=what if k == 0 else None)
-    ax.set_xlabel(f"t − {t[0]:g} s (ms)")
-    ax.set_ylabel(var + (f" ({unit})" if unit else ""))
-    ax.grid(True, alpha=0.3)
+    rows = [(ds[v].values[shown], *scale_of(ds, v), v) for v in variables]
+    rows.append((acceleration, 1.0, "m/s²", "d(vx)/dt"))
+    for ax, (values, factor, unit, name) in zip(axes, rows, strict=True):
+        ax.plot(ms, values * factor, lw=0.7, color="C0")
+        for k, tp in enumerate(marks):
+            ax.axvline((tp - t[0]) * 1e3, color="C3", lw=0.6, ls="--",
+                       label=what if k == 0 else None)
+        ax.set_ylabel(name + (f" ({unit})" if unit else ""))
+        ax.grid(True, alpha=0.3)
     if len(marks):
-        ax.legend(fontsize=8, loc="upper right")
-    ax.set_title(fault_words(ds.attrs), fontsize=8)
+        axes[0].legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel(f"t − {t[0]:g} s (ms)")
+    axes[0].set_title(fault_words(ds.attrs), fontsize=8)
     fig.suptitle(_title(ds), fontsize=10)
     return fig
