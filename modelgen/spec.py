@@ -523,10 +523,13 @@ def _term_problems(spec: Spec) -> list[str]:
         for name in (body.support.stiffness, body.support.damping) if body.support else ():
             if name is not None:
                 needed.setdefault((name, ""), f"the support of body '{body.name}'")
+    by_expression: set[str] = set()
     for i, term in enumerate(spec.terms):
         scope = next(iter(spec.attachment(term).values()), "")
         names = (term.required_parameters(state) if isinstance(term, ExpressionTerm)
                  else term.required_parameters())
+        if isinstance(term, ExpressionTerm):
+            by_expression.update(names)
         for name in names:
             needed.setdefault((name, scope), f"terms[{i}] ({term.kind})")
     for (name, scope), user in needed.items():
@@ -535,7 +538,8 @@ def _term_problems(spec: Spec) -> list[str]:
         if name in QUANTITIES:
             problems.append(f"parameters.{name}: missing; {user} needs it "
                             f"(allowed range {QUANTITIES[name].range_text()})")
-        elif not user.startswith("terms"):  # expression names: _expression_problems
+        elif not user.startswith("terms") or name not in by_expression:
+            # names in expressions: _expression_problems; others (waviness amplitudes) here
             problems.append(f"parameters.{name}: missing; {user} needs it (declare it with "
                             "value, unit, source, low and high)")
     return problems

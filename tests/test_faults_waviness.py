@@ -115,3 +115,19 @@ def test_odd_ball_orders_do_nothing_and_zero_amplitude_is_bit_for_bit(wavy):
     outer = wavy("outer_race_waviness", [N_B + 1])
     zero = simulate(outer, duration=0.02, transient=0.0, **{f"waviness_{N_B + 1}": 0.0})
     assert np.array_equal(zero["x"].values, flat["x"].values)
+
+
+def test_waviness_spec_errors_are_one_line_each(tmp_path):
+    from modelgen.errors import SpecError
+    from modelgen.spec import parse_spec
+
+    data = tomllib.loads((SPECS / "6205-outer-defect.toml").read_text())
+    data["terms"].append({"kind": "outer_race_waviness", "orders": [10, 11],
+                          "amplitudes": ["wav_a"]})
+    with pytest.raises(SpecError, match="orders and amplitudes must be as long as each other"):
+        parse_spec(data)
+    data["terms"][-1] = {"kind": "outer_race_waviness", "orders": [10],
+                         "amplitudes": ["wav_a"]}
+    with pytest.raises(SpecError, match=r"parameters\.wav_a: missing; terms\[4\] "
+                                        r"\(outer_race_waviness\) needs it"):
+        parse_spec(data)
