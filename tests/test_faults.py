@@ -307,3 +307,20 @@ def test_spectrum_cli_names_faults_and_rejects_a_bad_band(tmp_path):
     figure = tmp_path / "env.png"
     done = run_cli("spectrum", str(run), "--envelope", "--var", "x", "-o", str(figure))
     assert done.returncode == 0 and figure.stat().st_size > 10_000, done.stderr
+
+
+def test_ball_defect_labels_follow_another_geometry_through_set(tmp_path):
+    run = tmp_path / "run.nc"
+    done = run_cli("simulate", "6205-ball-defect", "-o", str(run), "--n-balls", "10",
+                   "--duration", "0.6", "--transient", "0.1", "--save-every", "5",
+                   "--set", "ball_diameter=4.4e-3", "--set", "pitch_diameter=23.0e-3")
+    assert done.returncode == 0, done.stderr
+    done = run_cli("spectrum", str(run), "--envelope", "--var", "x", "--json",
+                   "--max-peaks", "14")
+    assert done.returncode == 0, done.stderr
+    table = textbook(FS, 4.4e-3, 23.0e-3, 10)
+    peaks = json.loads(done.stdout)["envelopes"][0]["peaks"]
+    labels = {name: p["frequency_hz"] for p in peaks for name in [p["label"], *p.get("also", [])]
+              if name}
+    for label in ("2BSF", "2BSF+FTF", "2BSF-FTF"):
+        assert abs(labels[label] - _formula(label, table)) <= 1.0 / 0.6, (label, labels)
