@@ -40,6 +40,7 @@ from modelgen.locations import (
     MODELS_ENV,
     cached_model_root,
     is_shipped,
+    module_name,
     shipped_spec_dir,
     spec_digest,
     user_specs,
@@ -93,13 +94,54 @@ class BearingInfo:
 
 
 @dataclass(frozen=True)
+class FaultFrequencies:
+    """The characteristic defect frequencies of one bearing (Hz), outer race stationary.
+
+    From the model's own kinematics: the shaft frequency f_s, the cage frequency
+    FTF = ω_cage/2π of the bearing's contact term, N_b and the contact angle α. For balls
+    rolling without slip on both races (contact radii R_i, R_o, ball radius ρ with
+    R_o − R_i = 2ρ cos α), FTF·R_o = (f_s − FTF)·R_i, so with k = R_o/R_i = f_s/FTF − 1
+
+        BPFO = N_b·FTF,   BPFI = N_b·(f_s − FTF),   BSF = FTF·R_o/ρ = FTF·2 cos α·k/(k − 1).
+
+    With the rolling-without-slip cage FTF = f_s/2·(1 − (d/D) cos α) these are the textbook
+    formulas BPFI = N_b f_s/2·(1 + (d/D) cos α), BSF = D/(2d)·f_s·(1 − ((d/D) cos α)²)
+    (R. B. Randall, J. Antoni, "Rolling element bearing diagnostics—A tutorial", MSSP 25
+    (2011) 485–520, Eqs. 1–4; T. A. Harris, Rolling Bearing Analysis); with the paper's cage
+    (Eq. 1, race diameters) they are the same relations for the ball of diameter
+    (D_o − D_i)/2 that that cage rolls (docs/faults.md).
+    """
+
+    ftf: float
+    bpfo: float
+    bpfi: float
+    bsf: float
+
+    @classmethod
+    def from_kinematics(cls, shaft_hz: float, cage_hz: float, n_balls: int,
+                        contact_angle: float = 0.0) -> FaultFrequencies:
+        """The four frequencies (Hz) from f_s, FTF (Hz), N_b and α (rad)."""
+        if not cage_hz > 0 or not shaft_hz > cage_hz:
+            return cls(ftf=cage_hz, bpfo=n_balls * cage_hz,
+                       bpfi=n_balls * (shaft_hz - cage_hz), bsf=0.0)
+        k = shaft_hz / cage_hz - 1.0
+        return cls(ftf=cage_hz, bpfo=n_balls * cage_hz, bpfi=n_balls * (shaft_hz - cage_hz),
+                   bsf=cage_hz * 2.0 * math.cos(contact_angle) * k / (k - 1.0))
+
+    def as_dict(self) -> dict[str, float]:
+        """``{"FTF": …, "BPFO": …, "BPFI": …, "BSF": …}`` in Hz."""
+        return {"FTF": self.ftf, "BPFO": self.bpfo, "BPFI": self.bpfi, "BSF": self.bsf}
+
+
+@dataclass(frozen=True)
 class Frequencies:
-    """Characteristic frequencies (Hz): shaft X, and per bearing its cage (FTF) and
-    varying compliance VC = N_b·cage."""
+    """Characteristic frequencies (Hz): shaft X, and per bearing its cage (FTF),
+    varying compliance VC = N_b·cage and defect frequencies (FTF, BPFO, BPFI, BSF)."""
 
     shaft_hz: float
     cage: dict[str, float] = field(default_factory=dict)
     vc: dict[str, float] = field(default_factory=dict)
+    faults: dict[str, FaultFrequencies] = field(default_factory=dict)
 
     @property
     def cage_hz(self) -> float:
@@ -121,6 +163,10 @@ class Frequencies:
             for name in self.vc:
                 out[f"cage_hz_{name}"] = self.cage[name]
                 out[f"vc_hz_{name}"] = self.vc[name]
+        for name, fault in self.faults.items():  # ftf_hz, bpfo_hz, … (…_<bearing>)
+            suffix = "" if len(self.faults) == 1 else f"_{name}"
+            out.update({f"{key.lower()}_hz{suffix}": value
+                        for key, value in fault.as_dict().items()})
         return out
 
 
@@ -299,13 +345,19 @@ class Model:
 
     def frequencies(self, n_balls: BallCounts = None,
                     values: dict[str, float] | None = None) -> Frequencies:
-        """Shaft frequency and each bearing's cage and VC frequencies, Hz."""
+        """Shaft frequency and each bearing's cage, VC and defect frequencies (FTF, BPFO,
+        BPFI, BSF: :class:`FaultFrequencies`), Hz."""
         s = self.structure(n_balls)
         p = self.parameter_vector(values or self.defaults)
         shaft = float(self.module.shaft_speed(p)) / (2 * math.pi)
         cage = {b: float(self.cage_speed(b, p)) / (2 * math.pi) for b in self.bearing_names}
         vc = {b: n * cage[b] for b, n in zip(self.bearing_names, s, strict=True)}
-        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc)
+        named = values or self.defaults
+        faults = {b: FaultFrequencies.from_kinematics(
+                      shaft, cage[b], n, named.get(f"contact_angle_{b}",
+                                                   named.get("contact_angle", 0.0)))
+                  for b, n in zip(self.bearing_names, s, strict=True)}
+        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults)
 
     def centre_indices(self) -> list[tuple[int, int | None]]:
         """State indices (x, y) of every body's centre (y None for a body moving along x)."""
@@ -473,14 +525,15 @@ def load_model(name: str | Path) -> Model:
 
 
 def _generated_exists(name: str) -> bool:
-    module = name.replace("-", "_")
-    if not module.isidentifier() or module.startswith("_"):  # _runtime, __init__: not models
+    if not name or name.startswith(("_", ".")):  # _runtime, __init__: not models
         return False
-    return importlib.util.find_spec(f"generated.{module}") is not None
+    module = module_name(name)
+    return importlib.util.find_spec(f"generated.{module}") is not None \
+        if module.isidentifier() else False
 
 
 def _load_shipped(name: str) -> Model:
-    module = importlib.import_module(f"generated.{name.replace('-', '_')}")
+    module = importlib.import_module(f"generated.{module_name(name)}")
     check_fresh(module, name)
     return Model(module=module)
 
@@ -582,7 +635,7 @@ def check_fresh(module: Any, name: str) -> None:
         return
     digest = spec_digest(spec)
     if digest != module.SPEC_SHA256:
-        where = f"generated/{name.replace('-', '_')}" if not cited.is_absolute() else \
+        where = f"generated/{module_name(name)}" if not cited.is_absolute() else \
             "the generated code"
         raise StaleModelError(
             f"model '{name}': {where} was generated from a different version of "

@@ -18,6 +18,7 @@ structural; everything else is a runtime parameter.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -116,6 +117,10 @@ class Equations:
         ctx = self.bearing_context(bearing)
         terms = [t for t in self.spec.terms
                  if self.spec.attachment(t).get("bearing") == bearing.name]
+        offsets = [t.deflection_offset(ctx, self.spec.contacts()[bearing.name])
+                   for t in terms if hasattr(t, "deflection_offset")]
+        if offsets:  # defects and waviness: δ_i → δ_i − h_i inside the contact law
+            ctx = dataclasses.replace(ctx, offset=sp.Add(*offsets))
         return ball_load(terms, ctx, skip)
 
     @cached_property

@@ -26,6 +26,13 @@ GENERATED_LAYOUT = "2"
 bearingdyn with another layout is never loaded."""
 
 
+def module_name(model: str) -> str:
+    """The Python module (and C file) name of a model: '-' as '_', and ``model_`` before a
+    name that starts with a digit (``6205-outer-defect`` -> ``model_6205_outer_defect``)."""
+    module = model.replace("-", "_")
+    return f"model_{module}" if module[:1].isdigit() else module
+
+
 def shipped_spec_dir() -> Path:
     return Path(str(resources.files("modelgen") / SPEC_DIR))
 

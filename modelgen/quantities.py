@@ -89,6 +89,22 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity("hunt_crossley_damping", "s/m", 0.0, 10.0, r"\alpha",
                  "Hunt-Crossley damping factor of the ball contacts (damping = hunt_crossley): "
                  "restitution e ≈ 1 − α v at impact speed v"),
+        Quantity("contact_angle", "rad", 0.0, 1.5, r"\alpha",
+                 "contact angle of the balls (kinematics: cage = pitch_diameter, ball spin)"),
+        Quantity("defect_depth", "m", 0.0, 1.0e-2, r"H_d",
+                 "depth of a localized defect (localized_defect term; 0: no defect)"),
+        Quantity("defect_length", "m", 0.0, 5.0e-2, r"L_d",
+                 "length of a localized defect along the rolling direction "
+                 "(localized_defect term)", low_inclusive=False),
+        Quantity("defect_angle", "rad", -7.0, 7.0, r"\phi_d",
+                 "angular position of a localized defect at t = 0 (outer race: from +x, the "
+                 "radial load; inner race: turning with the shaft; ball: spin angle)"),
+        Quantity("line_contact_stiffness", "N/m^1.111", 0.0, 1.0e13, r"K_l",
+                 "line-contact load-deflection constant of Q = K_l δ^(10/9), roller and both "
+                 "races combined (line_contact term)", low_inclusive=False),
+        Quantity("roller_length", "m", 0.0, 1.0, r"l",
+                 "effective length of a roller's line contact (line_contact term, "
+                 "stiffness = geometry)", low_inclusive=False),
     )
 }
 
@@ -99,6 +115,7 @@ TAKEN_NAMES = frozenset({
     "model", "spec_sha256", "n_balls", "bearingdyn_version", "generator", "casadi_version",
     "method", "dt", "save_every", "duration", "transient", "x0", "y0", "vx0", "vy0", "rtol",
     "atol", "shaft_hz", "cage_hz", "vc_hz", "spec_file", "state_names",
+    "ftf_hz", "bpfo_hz", "bpfi_hz", "bsf_hz",
 })
 """Names that are not quantities but already mean something where parameter names go (the
 generated code, result-file attributes): a user-declared parameter cannot take them."""

@@ -30,7 +30,13 @@ from pydantic import (
 
 from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
-from modelgen.locations import MODELS_ENV, shipped_spec_dir, spec_digest, user_specs
+from modelgen.locations import (
+    MODELS_ENV,
+    module_name,
+    shipped_spec_dir,
+    spec_digest,
+    user_specs,
+)
 from modelgen.quantities import QUANTITIES, TAKEN_NAMES, Quantity
 from modelgen.symbols import STATE_NAMES, Context, make_context
 from modelgen.terms import TERM_CLASSES, TERMS, Centrifugal, ExpressionTerm, HertzContact
@@ -65,9 +71,10 @@ class _Strict(BaseModel):
 
 
 class ModelInfo(_Strict):
-    name: str = Field(pattern=r"^[a-z][a-z0-9-]{0,62}$")
-    """The model's name (lower case, digits, '-'); must equal the spec file's name without
-    ``.toml``. The generated module is the name with '-' as '_'."""
+    name: str = Field(pattern=r"^[a-z0-9][a-z0-9-]{0,62}$")
+    """The model's name (lower case, digits, '-'; a bearing's designation may lead:
+    ``6205-outer-defect``); must equal the spec file's name without ``.toml``. The generated
+    module is the name with '-' as '_' (imported by path, so a leading digit is fine)."""
     title: str = Field(min_length=1, max_length=200)
     """One line for the model card, the generated headers and ``bearingdyn models``."""
     reference: str = ""
@@ -88,8 +95,9 @@ class ModelInfo(_Strict):
 
     @property
     def module(self) -> str:
-        """Python module name of the generated model (``-`` becomes ``_``)."""
-        return self.name.replace("-", "_")
+        """Python module name of the generated model (``-`` becomes ``_``; ``model_`` before
+        a leading digit: ``modelgen.locations.module_name``)."""
+        return module_name(self.name)
 
 
 class Structure(_Strict):
@@ -515,10 +523,13 @@ def _term_problems(spec: Spec) -> list[str]:
         for name in (body.support.stiffness, body.support.damping) if body.support else ():
             if name is not None:
                 needed.setdefault((name, ""), f"the support of body '{body.name}'")
+    by_expression: set[str] = set()
     for i, term in enumerate(spec.terms):
         scope = next(iter(spec.attachment(term).values()), "")
         names = (term.required_parameters(state) if isinstance(term, ExpressionTerm)
                  else term.required_parameters())
+        if isinstance(term, ExpressionTerm):
+            by_expression.update(names)
         for name in names:
             needed.setdefault((name, scope), f"terms[{i}] ({term.kind})")
     for (name, scope), user in needed.items():
@@ -527,7 +538,8 @@ def _term_problems(spec: Spec) -> list[str]:
         if name in QUANTITIES:
             problems.append(f"parameters.{name}: missing; {user} needs it "
                             f"(allowed range {QUANTITIES[name].range_text()})")
-        elif not user.startswith("terms"):  # expression names: _expression_problems
+        elif not user.startswith("terms") or name not in by_expression:
+            # names in expressions: _expression_problems; others (waviness amplitudes) here
             problems.append(f"parameters.{name}: missing; {user} needs it (declare it with "
                             "value, unit, source, low and high)")
     return problems
@@ -705,7 +717,7 @@ def _format_error(err: dict[str, Any]) -> str:
         return f"{loc}: must be {TYPE_ERRORS[kind]}, got {got}"
     if kind == "string_pattern_mismatch" and loc == "model.name":
         return (f"{loc}: must be lower case letters, digits and '-', starting with a letter "
-                f"(at most 63 characters), got {got}")
+                f"or digit (at most 63 characters), got {got}")
     if kind in ("too_short", "string_too_short"):
         return f"{loc}: must not be empty"
     return f"{loc}: {msg}" + (f", got {got}" if "input" in err else "")

@@ -60,6 +60,9 @@ class Context:
     """Cage angular speed (rad/s) of the bearing in scope."""
     scope: str = ""
     named: dict[str, sp.Symbol] = field(default_factory=dict)
+    offset: sp.Expr = field(default_factory=lambda: sp.Integer(0))
+    """Offset h_i (m) of the ball's deflection, δ_i → δ_i − h_i: the sum of the bearing's
+    defect and waviness terms (``modelgen/terms/defects.py``), 0 without them."""
 
     @property
     def state(self) -> tuple[sp.Symbol, ...]:

@@ -76,9 +76,9 @@ def test_an_ambiguous_label_is_flagged_in_the_data_and_the_figure():
     tol = 1.5 / 2.0  # 1.5 bins of a 2 s record, Hz
     assert abs(166.1 - 2 * X_HZ) < tol and abs(166.1 - (vc - 2 * X_HZ)) < tol
     ambiguous = peaks[166]
-    assert ambiguous.label == "2X" and ambiguous.alternatives == ("VC-2X",)
-    assert ambiguous.ambiguous and ambiguous.as_dict()["alternatives"] == ["VC-2X"]
-    assert not peaks[83].ambiguous and "alternatives" not in peaks[83].as_dict()
+    assert ambiguous.label == "2X" and ambiguous.also == ("VC-2X",)
+    assert ambiguous.ambiguous and ambiguous.as_dict()["also"] == ["VC-2X"]
+    assert not peaks[83].ambiguous and "also" not in peaks[83].as_dict()
     fig = spectrum_figure(ds, ["x"])
     texts = [n.get_text() for n in peak_labels(fig.axes[0])]
     assert "2X" + AMBIGUOUS_MARK in texts and "X" in texts

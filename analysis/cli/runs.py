@@ -83,40 +83,111 @@ def spectrum(
     var: Annotated[list[str] | None, typer.Option(
         "--var", help="State variable to analyse, repeatable (default: the first body's "
                       "displacements, x and y).")] = None,
+    envelope: Annotated[bool, typer.Option(
+        "--envelope", help="Envelope spectrum: band-pass, Hilbert envelope, peaks named by "
+                           "the defect frequencies (BPFO, BPFI, 2BSF, BPFI-X, …).")] = False,
+    band: Annotated[str | None, typer.Option(
+        "--band", help="Pass band LO:HI in Hz of --envelope (default: the band of largest "
+                       "spectral kurtosis).")] = None,
+    faults: Annotated[bool, typer.Option(
+        "--faults", help="Name the peaks by the defect frequencies (FTF, BPFO, BPFI, BSF, "
+                         "harmonics, sidebands) instead of X and VC.")] = False,
 ):
     """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
-    of a run's displacements or of any state variables."""
+    of a run's displacements or of any state variables; with --envelope the envelope
+    spectrum, named by the defect frequencies."""
     from analysis.io import load_dataset
     from analysis.signal import cage_frequencies, displacement_names, vc_frequencies
-    from analysis.signal.spectrum import peak_table
+    from analysis.signal.spectrum import fault_frequencies, peak_table
 
+    passband = None
+    if band is not None:
+        from analysis.signal.envelope import parse_band
+
+        if not envelope:
+            raise InputError("--band: only with --envelope")
+        passband = parse_band(band)
     ds = load_dataset(run_file)
     variables = tuple(var) if var else displacement_names(ds)
-    peaks = peak_table(ds, variables, max_peaks=max_peaks)
+    for name in variables:
+        if name not in ds.data_vars:
+            raise InputError(f"--var: no state variable {name!r} in this run; variables: "
+                             f"{', '.join(map(str, ds.data_vars))}")
+    if envelope:
+        _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output)
+        return
+    vocabulary = "fault" if faults else "shaft"
+    peaks = peak_table(ds, variables, max_peaks=max_peaks, vocabulary=vocabulary)
     if as_json:
         from analysis.io import provenance
 
-        typer.echo(json.dumps({"shaft_hz": ds.attrs.get("shaft_hz"),
-                               "vc_hz": ds.attrs.get("vc_hz"),
-                               "vc": vc_frequencies(ds.attrs),
-                               "cage": cage_frequencies(ds.attrs),
-                               "peaks": [p.as_dict() for p in peaks],
+        report = {"shaft_hz": ds.attrs.get("shaft_hz"), "vc_hz": ds.attrs.get("vc_hz"),
+                  "vc": vc_frequencies(ds.attrs), "cage": cage_frequencies(ds.attrs)}
+        if faults:
+            report["faults"] = fault_frequencies(ds.attrs)
+        typer.echo(json.dumps({**report, "peaks": [p.as_dict() for p in peaks],
                                "provenance": provenance(ds)}, indent=2))
     else:
         typer.echo(frequency_words(ds.attrs))
-        width = max(3, *(len(v) for v in variables))
-        typer.echo(f"{'var':>{width}} {'frequency (Hz)':>15} {'amplitude':>14}  label")
-        for p in peaks:
-            unit = ds[p.direction].attrs.get("units", "")
-            typer.echo(f"{p.direction:>{width}} {p.frequency_hz:15.2f} "
-                       f"{p.amplitude:10.3e} {unit:<4} {p.name}"
-                       + (f" (ambiguous: also {', '.join(p.alternatives)})" if p.ambiguous
-                          else ""))
+        _print_peaks(ds, variables, peaks)
     if output:
         from analysis.reports.plots import save_figure, spectrum_figure
 
         save_figure(spectrum_figure(ds, variables), output)
         typer.echo(f"wrote {output}", err=as_json)
+
+
+def _print_peaks(ds, variables, peaks) -> None:
+    width = max(3, *(len(v) for v in variables), *(len(p.direction) for p in peaks))
+    typer.echo(f"{'var':>{width}} {'frequency (Hz)':>15} {'amplitude':>14}  label")
+    for p in peaks:
+        source = p.direction.removesuffix("_envelope")
+        unit = ds[source].attrs.get("units", "") if source in ds else ""
+        also = f" (ambiguous: also {', '.join(p.also)}, within one bin)" if p.also else ""
+        typer.echo(f"{p.direction:>{width}} {p.frequency_hz:15.2f} "
+                   f"{p.amplitude:10.3e} {unit:<4} {p.name}{also}")
+
+
+def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> None:
+    """`spectrum --envelope`: per variable the band, then the named envelope peaks."""
+    from analysis.signal.envelope import envelope_peaks, envelope_spectrum
+    from analysis.signal.spectrum import fault_frequencies
+
+    faults = fault_frequencies(ds.attrs)
+    if not faults:
+        raise InputError(f"{ds.attrs.get('model', 'run')}: --envelope needs a bearing's defect "
+                         "frequencies (FTF, BPFO, BPFI, BSF); this run has no bearing")
+    results = []
+    for name in variables:
+        peaks, chosen = envelope_peaks(ds, name, passband, max_peaks=max_peaks)
+        results.append((name, peaks, chosen))
+    if as_json:
+        from analysis.io import provenance
+
+        typer.echo(json.dumps({
+            "shaft_hz": ds.attrs.get("shaft_hz"), "faults": faults,
+            "provenance": provenance(ds),
+            "envelopes": [{"var": name, "band_hz": [chosen.low_hz, chosen.high_hz],
+                           "band_chosen": chosen.chosen, "kurtosis": chosen.kurtosis,
+                           "peaks": [p.as_dict() for p in peaks]}
+                          for name, peaks, chosen in results]}, indent=2))
+    else:
+        from analysis.reports.fault_plots import fault_words
+
+        typer.echo(f"X = {float(ds.attrs['shaft_hz']):.2f} Hz, {fault_words(ds.attrs)}")
+        for name, peaks, chosen in results:
+            how = "spectral kurtosis" if chosen.chosen == "kurtosis" else "given"
+            typer.echo(f"envelope of {name}: band {chosen.low_hz:g}:{chosen.high_hz:g} Hz "
+                       f"({how}, kurtosis {chosen.kurtosis:.3g})")
+            _print_peaks(ds, variables, peaks)
+    if output:
+        from analysis.reports.fault_plots import envelope_figure
+        from analysis.reports.plots import save_figure
+
+        name, peaks, chosen = results[0]
+        spectrum = envelope_spectrum(ds, name, (chosen.low_hz, chosen.high_hz))
+        save_figure(envelope_figure(spectrum, peaks, chosen), output)
+        typer.echo(f"wrote {output} (envelope of {name})", err=as_json)
 
 
 @app.command()

@@ -11,7 +11,11 @@ Spectral peaks are named as combinations m·X + n·VC: "X", "VC-X", "2VC+X" for 
 of two bearings' VC are not tried). A model without bearings has no VC term: peaks are
 named by X only; a model that has no shaft either (``shaft_hz`` 0) but is forced at the
 period held by a parameter ``forcing_period`` (s) is labelled with F = 1/forcing_period in
-place of X ("F", "2F").
+place of X ("F", "2F"). In the defect vocabulary (``vocabulary = "fault"``, and in envelope
+spectra, ``analysis.signal.envelope``) peaks are named by the defect frequencies FTF, BPFO,
+BPFI, BSF of each bearing, their harmonics and their sidebands at ±X and ±FTF ("BPFO",
+"2BSF", "BPFI-X", "BSF+FTF"). A peak keeps every other name within its tolerance in
+``also`` (two lines in one bin).
 """
 
 from __future__ import annotations
@@ -99,6 +103,107 @@ def _combination_label(m: int, n: int, bearing: str = "", base: str = "X") -> st
     return f"{vc}{'+' if m > 0 else '-'}{shaft}"
 
 
+def frequency_names(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
+                    tol_hz: float, max_shaft_order: int = 4, max_vc_order: int = 3,
+                    base: str = "X") -> list[tuple[str, int, int, str | None]]:
+    """Every name m·X + n·VC of ``f_hz`` within ``tol_hz`` (Hz), best first: the candidates
+    and their order are those of :func:`name_frequency`, which returns the first."""
+    vcs = vc_hz if isinstance(vc_hz, dict) else ({"": float(vc_hz)} if vc_hz else {})
+    vcs = {name: float(f) for name, f in vcs.items() if f > 0}
+    found: list[tuple[tuple, str, int, int, str | None]] = []
+    for rank, (bearing, vc) in enumerate(vcs.items() or [("", 0.0)]):
+        for n in range(max_vc_order + 1 if vc > 0 else 1):
+            for m in range(-max_shaft_order, max_shaft_order + 1):
+                combination = m * shaft_hz + n * vc
+                if combination <= 0:
+                    continue
+                distance = abs(f_hz - combination)
+                if distance > tol_hz:
+                    continue
+                key = (abs(m) + n, distance, n, abs(m), rank if n else 0)
+                found.append((key, _combination_label(m, n, bearing, base), m, n,
+                              (bearing or None) if n else None))
+    found.sort(key=lambda item: item[0])
+    unique, seen = [], set()
+    for _, label, m, n, bearing in found:
+        if label not in seen:
+            seen.add(label)
+            unique.append((label, m, n, bearing))
+    return unique
+
+
+FAULT_NAMES = ("FTF", "BPFO", "BPFI", "BSF")
+"""The characteristic defect frequencies, as labelled (DESIGN.md): fundamental train (cage),
+ball pass outer race, ball pass inner race, ball spin."""
+
+
+def fault_frequencies(attrs: dict) -> dict[str, dict[str, float]]:
+    """Each bearing's defect frequencies (Hz) from a run's attrs (``ftf_hz``, ``bpfo_hz``,
+    ``bpfi_hz``, ``bsf_hz``; ``…_hz_<bearing>`` for several bearings), keyed like
+    :func:`analysis.signal.vc_frequencies` (``""`` for the only bearing). A one-bearing run
+    written before these attrs existed gets them from ``shaft_hz``, ``cage_hz``, ``n_balls``
+    (and ``contact_angle``) by the same relations; ``{}`` for a run without a bearing."""
+    out: dict[str, dict[str, float]] = {}
+    for key, value in attrs.items():
+        head, sep, bearing = str(key).partition("_hz")
+        if sep and head.upper() in FAULT_NAMES and (bearing == "" or bearing.startswith("_")):
+            out.setdefault(bearing[1:], {})[head.upper()] = float(value)
+    out = {b: f for b, f in out.items() if len(f) == len(FAULT_NAMES) and f["FTF"] > 0}
+    if out or "n_balls" not in attrs or float(attrs.get("cage_hz", 0.0)) <= 0:
+        return out
+    from analysis.model import FaultFrequencies  # a file written before the defect attrs
+
+    table = FaultFrequencies.from_kinematics(
+        float(attrs["shaft_hz"]), float(attrs["cage_hz"]), int(attrs["n_balls"]),
+        float(attrs.get("contact_angle", 0.0)))
+    return {"": table.as_dict()}
+
+
+def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]],
+                tol_hz: float, max_harmonic: int = 4,
+                max_sideband: int = 2) -> list[tuple[str, int | None]]:
+    """Every defect-vocabulary name of ``f_hz`` within ``tol_hz`` (Hz), best first.
+
+    Candidates: the shaft harmonics ``X`` … ``4X``; per bearing (``faults`` as from
+    :func:`fault_frequencies`) the harmonics ``FTF``, ``2FTF``, ``3FTF`` of the cage and
+    ``nF`` (n = 1 … ``max_harmonic``) of F in BPFO, BPFI, BSF with their sidebands
+    ``nF±mX`` and ``nF±mFTF`` (m = 1 … ``max_sideband``): ``BPFO``, ``2BPFO``, ``BPFI+X``,
+    ``BPFI-X``, ``2BSF``, ``BSF+FTF``, … With several bearings each name carries its bearing:
+    ``BPFO[left]``. Ranked by order (n + m; k for kX), then by the distance to ``f_hz``.
+    Returns (label, shaft order k for a pure shaft harmonic else None).
+    """
+    found: list[tuple[tuple, str, int | None]] = []
+
+    def consider(order: int, freq: float, label: str, shaft_order: int | None) -> None:
+        if freq > 0 and abs(f_hz - freq) <= tol_hz:
+            found.append(((order, abs(f_hz - freq)), label, shaft_order))
+
+    for k in range(1, 5):
+        consider(k, k * shaft_hz, "X" if k == 1 else f"{k}X", k)
+    for bearing, table in faults.items():
+        tag = f"[{bearing}]" if bearing else ""
+        ftf = table["FTF"]
+        for n in range(1, 4):
+            consider(n, n * ftf, f"{'' if n == 1 else n}FTF{tag}", None)
+        for name in ("BPFO", "BPFI", "BSF"):
+            for n in range(1, max_harmonic + 1):
+                centre = n * table[name]
+                head = f"{'' if n == 1 else n}{name}{tag}"
+                consider(n, centre, head, None)
+                for mod_name, mod in (("X", shaft_hz), ("FTF", ftf)):
+                    for m in range(1, max_sideband + 1):
+                        side = mod_name if m == 1 else f"{m}{mod_name}"
+                        consider(n + m, centre + m * mod, f"{head}+{side}", None)
+                        consider(n + m, centre - m * mod, f"{head}-{side}", None)
+    found.sort(key=lambda item: item[0])
+    unique, seen = [], set()
+    for _, label, k in found:
+        if label not in seen:
+            seen.add(label)
+            unique.append((label, k))
+    return unique
+
+
 def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
                    tol_hz: float, max_shaft_order: int = 4, max_vc_order: int = 3,
                    base: str = "X") -> tuple[str, int, int, str | None] | None:
@@ -114,32 +219,9 @@ def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float]
     forcing period). Returns ``(label, m, n, bearing)`` (bearing None for a pure shaft
     harmonic or the only bearing) or None when no candidate is within the tolerance.
     """
-    candidates = _candidates(f_hz, shaft_hz, vc_hz, tol_hz, max_shaft_order, max_vc_order,
-                             base)
-    return None if not candidates else candidates[0][1:]
-
-
-def _candidates(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float], tol_hz: float,
-                max_shaft_order: int, max_vc_order: int, base: str
-                ) -> list[tuple[tuple, str, int, int, str | None]]:
-    """Every combination m·X + n·VC within ``tol_hz`` of ``f_hz``, best first (the order of
-    :func:`name_frequency`): (sort key, label, m, n, bearing)."""
-    vcs = vc_hz if isinstance(vc_hz, dict) else ({"": float(vc_hz)} if vc_hz else {})
-    vcs = {name: float(f) for name, f in vcs.items() if f > 0}
-    found = []
-    for rank, (bearing, vc) in enumerate(vcs.items() or [("", 0.0)]):
-        for n in range(max_vc_order + 1 if vc > 0 else 1):
-            for m in range(-max_shaft_order, max_shaft_order + 1):
-                combination = m * shaft_hz + n * vc
-                if combination <= 0:
-                    continue
-                distance = abs(f_hz - combination)
-                if distance > tol_hz:
-                    continue
-                found.append(((abs(m) + n, distance, n, abs(m), rank if n else 0),
-                              _combination_label(m, n, bearing, base), m, n,
-                              (bearing or None) if n else None))
-    return sorted(found, key=lambda c: c[0])
+    names = frequency_names(f_hz, shaft_hz, vc_hz, tol_hz, max_shaft_order, max_vc_order,
+                            base)
+    return names[0] if names else None
 
 
 def label_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
@@ -161,7 +243,7 @@ class Peak:
     ``frequency_hz`` in Hz, ``amplitude`` in the variable's unit (m for x, y), and its
     combination label m·X + n·VC (``shaft_order`` m, ``vc_order`` n; all None when
     unlabelled); ``bearing`` names the bearing whose VC the label uses, when the model has
-    several (else None). ``alternatives``: the other combinations within the label
+    several (else None). ``also``: the other names within the label
     tolerance (near-commensurate X and VC, e.g. 2X and VC−2X when VC ≈ 4X): the label is
     then ambiguous."""
 
@@ -172,12 +254,14 @@ class Peak:
     shaft_order: int | None
     vc_order: int | None
     bearing: str | None = None
-    alternatives: tuple[str, ...] = ()
+    also: tuple[str, ...] = ()
+    """Other names within the label tolerance (one bin): frequencies that coincide, e.g.
+    ``VC`` and ``4X`` at N_b = 10, or ``BPFO`` and ``VC``."""
 
     @property
     def ambiguous(self) -> bool:
         """Another combination names this frequency within the tolerance as well."""
-        return bool(self.alternatives)
+        return bool(self.also)
 
     @property
     def name(self) -> str:
@@ -186,14 +270,14 @@ class Peak:
         return self.label if self.label else f"{self.frequency_hz:.1f} Hz"
 
     def as_dict(self) -> dict[str, Any]:
-        """The fields as a dict (``bearing`` and ``alternatives`` only when set)."""
+        """The fields as a dict (``bearing`` and ``also`` only when set)."""
         out = dataclasses.asdict(self)
         if out["bearing"] is None:
             del out["bearing"]
-        if out["alternatives"]:
-            out["alternatives"] = list(out["alternatives"])
+        if not out["also"]:
+            del out["also"]
         else:
-            del out["alternatives"]
+            out["also"] = list(out["also"])
         return out
 
 
@@ -211,7 +295,7 @@ def label_frequencies(attrs: dict) -> tuple[float, dict[str, float], str]:
 
 
 def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
-               min_relative_height: float = 0.02) -> list[Peak]:
+               min_relative_height: float = 0.02, vocabulary: str = "shaft") -> list[Peak]:
     """The ``max_peaks`` largest peaks of the Hann amplitude spectrum of ``ds[var]`` (any
     state variable; default: the run's first displacement, ``x`` or ``x_rotor``).
 
@@ -224,10 +308,14 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     window-corrected magnitude of the windowed record's Fourier transform evaluated at that
     refined frequency, so it is free of the window's scalloping loss between bins.
     Peaks are labelled with :func:`name_frequency` (``shaft_hz`` and each bearing's VC from
-    ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins), the other combinations
-    within the tolerance kept as ``alternatives`` (an ambiguous label), and returned by
-    descending amplitude.
+    ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins) and returned by
+    descending amplitude. With ``vocabulary = "fault"`` they are named by the defect
+    frequencies instead (:func:`fault_names`: ``BPFO``, ``2BSF``, ``BPFI+X``, …; the run needs
+    ``ftf_hz`` … in its attrs). Every other name within the tolerance is kept in ``also`` (an
+    ambiguous label: ``Peak.ambiguous``).
     """
+    if vocabulary not in ("shaft", "fault"):
+        raise InputError(f"vocabulary: must be 'shaft' or 'fault', got {vocabulary!r}")
     var = displacement_names(ds)[0] if var is None else var
     if isinstance(max_peaks, bool) or not isinstance(max_peaks, (int, np.integer)) \
             or max_peaks < 1:
@@ -262,15 +350,24 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     refined = _amplitude_at(ds, var, frequency)
 
     order = np.argsort(-refined, kind="stable")[:max_peaks]
+    faults = fault_frequencies(ds.attrs) if vocabulary == "fault" else {}
+    if vocabulary == "fault" and not faults:
+        raise InputError("vocabulary: 'fault' needs the defect frequencies (ftf_hz, bpfo_hz, "
+                         "bpfi_hz, bsf_hz) in the run's attrs; simulate the run again")
     peaks = []
     for i in order:
-        named = _candidates(float(frequency[i]), base_hz, vcs, _LABEL_TOLERANCE_BINS * df,
-                            4, 3, base)
-        label, m, n, bearing = named[0][1:] if named else (None, None, None, None)
-        peaks.append(Peak(direction=var, frequency_hz=float(frequency[i]),
-                          amplitude=float(refined[i]), label=label, shaft_order=m,
-                          vc_order=n, bearing=bearing,
-                          alternatives=tuple(c[1] for c in named[1:])))
+        f, tol = float(frequency[i]), _LABEL_TOLERANCE_BINS * df
+        if vocabulary == "fault":
+            names = fault_names(f, base_hz, faults, tol)
+            label, m = names[0] if names else (None, None)
+            n, bearing, also = None, None, tuple(name for name, _ in names[1:])
+        else:
+            shaft_names = frequency_names(f, base_hz, vcs, tol_hz=tol, base=base)
+            label, m, n, bearing = shaft_names[0] if shaft_names else (None, None, None, None)
+            also = tuple(name for name, *_ in shaft_names[1:])
+        peaks.append(Peak(direction=var, frequency_hz=f, amplitude=float(refined[i]),
+                          label=label, shaft_order=m, vc_order=n, bearing=bearing,
+                          also=also))
     return peaks
 
 

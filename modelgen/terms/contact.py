@@ -50,8 +50,16 @@ def clearance(ctx: Context, convention: Clearance = "radial") -> sp.Expr:
 
 
 def deflection(ctx: Context, convention: Clearance = "radial") -> sp.Expr:
-    """Contact deflection δ_i of one ball (m), paper Eq. 5."""
-    return ctx.x * ctx.c + ctx.y * ctx.s - clearance(ctx, convention)
+    """Contact deflection δ_i of one ball (m), paper Eq. 5, less the offset h_i of the
+    bearing's defects and waviness (``ctx.offset``, 0 without them)."""
+    return ctx.x * ctx.c + ctx.y * ctx.s - clearance(ctx, convention) - ctx.offset
+
+
+def contact_cosine(ctx: Context) -> sp.Expr:
+    """cos α of the contact angle α (``contact_angle``, rad) when the spec declares it, else 1.
+    α enters the kinematics only (cage and ball spin with ``cage = "pitch_diameter"``); the
+    loads stay radial."""
+    return sp.cos(ctx.p("contact_angle")) if ctx.has("contact_angle") else sp.Integer(1)
 
 
 def race_stiffnesses(ctx: Context) -> tuple[sp.Expr, sp.Expr]:
@@ -103,7 +111,25 @@ class HertzContact(Term):
             d_i, d_o = ctx.p("inner_race_diameter"), ctx.p("outer_race_diameter")
             return ctx.omega * d_i / (d_i + d_o)
         d_b, d_m = ctx.p("ball_diameter"), ctx.p("pitch_diameter")
-        return ctx.omega / 2 * (1 - d_b / d_m)
+        return ctx.omega / 2 * (1 - d_b * contact_cosine(ctx) / d_m)
+
+    def contact_radii(self, ctx: Context) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
+        """(R_i, R_o, ρ) in m: the radii of the inner and outer race contacts and of the ball
+        that this cage option's kinematics roll: (D_m ∓ D_b cos α)/2 and D_b/2 with
+        ``pitch_diameter``; D_i/2, D_o/2 and (D_o − D_i)/4 with ``race_diameters``."""
+        if self.cage == "race_diameters":
+            d_i, d_o = ctx.p("inner_race_diameter"), ctx.p("outer_race_diameter")
+            return d_i / 2, d_o / 2, (d_o - d_i) / 4
+        d_b, d_m = ctx.p("ball_diameter"), ctx.p("pitch_diameter")
+        lever = d_b * contact_cosine(ctx)
+        return (d_m - lever) / 2, (d_m + lever) / 2, d_b / 2
+
+    def spin_speed(self, ctx: Context) -> sp.Expr:
+        """The ball's spin relative to the cage (rad/s), rolling without slip on the outer
+        race: ω_cage R_o/ρ (its frequency is the BSF; with ``race_diameters`` the same ball
+        also rolls without slip on the inner race)."""
+        _, r_o, rho = self.contact_radii(ctx)
+        return self.cage_speed(ctx) * r_o / rho
 
     def stiffness_constant(self, ctx: Context) -> sp.Expr:
         """k of Q = k δ^{3/2} (N/m^1.5): given, or both races in series from the geometry."""

@@ -35,8 +35,15 @@ DAMPING_PARAMETERS: dict[str, tuple[str, ...]] = {
 
 def deflection_rate(ctx: Context) -> sp.Expr:
     """dδ_i/dt of one ball (m/s): rotor velocity and the ball moving with the cage."""
-    return (ctx.vx * ctx.c + ctx.vy * ctx.s
+    rate = (ctx.vx * ctx.c + ctx.vy * ctx.s
             + ctx.omega_cage * (-ctx.x * ctx.s + ctx.y * ctx.c))
+    h = ctx.offset  # a defect's or waviness' offset h_i(c, s, t) moves with the ball too
+    if h == 0:
+        return rate
+    h_rate = (sp.diff(h, ctx.t)
+              + ctx.omega_cage * (-ctx.s * sp.diff(h, ctx.c) + ctx.c * sp.diff(h, ctx.s)))
+    # the pit's edges (selects) count as fixed: their derivative is zero off the edge
+    return rate - h_rate.replace(sp.DiracDelta, lambda *args: sp.Integer(0))
 
 
 def damping_factor(ctx: Context, law: DampingLaw) -> sp.Expr:
