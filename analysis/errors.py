@@ -19,3 +19,18 @@ class SimulationError(BearingdynError):
 
 class WriteError(BearingdynError):
     """A result could not be written (full disk, quota, I/O error); nothing was replaced."""
+
+
+class Interrupt:
+    """Ctrl-C and SIGTERM as a flag as well as an exception: the command line's handler sets
+    ``requested`` and raises ``KeyboardInterrupt``; code that calls into libraries which may
+    swallow that exception (HDF5's writers) calls ``check()`` at its own safe points, so an
+    interruption is never lost."""
+
+    requested = False
+
+    @classmethod
+    def check(cls) -> None:
+        """Raise ``KeyboardInterrupt`` when an interruption was requested."""
+        if cls.requested:
+            raise KeyboardInterrupt

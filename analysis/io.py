@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError, WriteError
+from analysis.errors import InputError, Interrupt, WriteError
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff",
                    ".webp")
@@ -106,6 +106,7 @@ def atomic_write(path: str | Path, write: Callable[[Path], None],
         except OSError as exc:
             raise WriteError(f"output: could not write '{path}' ({_reason(exc)}); nothing "
                              "was changed there") from None
+        Interrupt.check()  # an interruption the writer swallowed: no rename
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # as an ordinary open() would have made it

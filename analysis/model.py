@@ -508,6 +508,9 @@ def load_model(name: str | Path) -> Model:
     """The model ``name``: a shipped model (``"vakharia2015"``), a spec in a
     ``BEARINGDYN_MODELS`` folder, the path of a ``.toml`` spec, or a generated folder."""
     text = str(name)
+    if not text.strip():
+        raise InputError("model: the name is empty; give a model name (see 'bearingdyn "
+                         "models') or the path of a .toml spec")
     path = Path(text).expanduser()
     if text.endswith(".toml") or path.is_dir() or path.exists():
         return _load_path(path)
@@ -590,7 +593,7 @@ def _only_model(root: Path) -> Path | None:
 
 def _load_folder(folder: Path) -> Model:
     """A folder of ``generate --out``: the root (holding ``_runtime.py``) or one model in it."""
-    folder = folder.resolve()
+    given, folder = folder, folder.resolve()
     if (folder / "_runtime.py").exists():
         models = [p for p in sorted(folder.iterdir()) if (p / "__init__.py").exists()]
         if len(models) != 1:
@@ -601,7 +604,7 @@ def _load_folder(folder: Path) -> Model:
     elif (folder.parent / "_runtime.py").exists() and (folder / "__init__.py").exists():
         root, module = folder.parent, folder.name
     else:
-        raise InputError(f"model: {folder} is not a generated model folder (written by "
+        raise InputError(f"model: {given} is not a generated model folder (written by "
                          "`bearingdyn generate SPEC --out DIR`)")
     loaded = _import_folder(root, module)
     check_fresh(loaded, loaded.NAME)

@@ -694,7 +694,7 @@ CLI_CASES += _cases("files", ("simulate", "vakharia2015", *SHORT, "-o"), [
 CLI_CASES += _cases("models and specs", ("simulate",), [
     ("model-private", "an internal module as a model", ("_runtime", "-o", "r.nc"),
      ["model: no model named '_runtime'"]),
-    ("model-empty", "an empty model name", ("", "-o", "r.nc"), ["model:"]),
+    ("model-empty", "an empty model name", ("", "-o", "r.nc"), ["model: the name is empty"]),
     ("model-traversal", "a model name that climbs out of the specs", ("../specs/x", "-o",
                                                                      "r.nc"), ["model:"]),
     ("model-spec-missing", "a .toml path that does not exist", ("mine.toml", "-o", "r.nc"),
@@ -1146,7 +1146,7 @@ Notes:
   writing is one line with exit code 1 (the old file, if any, is kept); Ctrl-C or SIGTERM
   ends with `interrupted`, exit code 130.
 - Numerical failures: a blow-up (non-finite state, or a displacement beyond 1000 clearances
-  or a tenth of the ball diameter) stops the run with its time and a suggestion; CVODES
+  or a quarter of the ball diameter) stops the run with its time and a suggestion; CVODES
   failures carry the solver's own return code; a shooting solve that does not converge is
   a result (`converged = false` and the reason), and a continuation whose first orbit does
   not converge stops with the reason (`start: …`).

@@ -225,6 +225,8 @@ def test_every_quoted_bearingdyn_command_exists():
     README) names a registered command, with options that command has."""
     errors, checked = [], 0
     for page in [*PAGES, ROOT / "README.md"]:
+        if page.name == "bad-inputs.md":  # wrong on purpose; each was run by its own test
+            continue
         text = page.read_text(encoding="utf-8")
         for lang, body, _ in _fences(text):
             if lang in SHELL_LANGUAGES:

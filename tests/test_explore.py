@@ -17,7 +17,7 @@ from analysis.reports.explorer import explorer_data
 from tests.browser import require_chromium, start_chromium
 from tests.conftest import run_cli
 
-CHART = ["balanced-rotor", "--n-balls", "8", "--set", "radial_load=50", "--section", "vc",
+CHART = ["balanced-rotor", "--n-balls", "8", "--section", "vc",
          "--x", "speed_rpm:7800:8300:3", "--y", "radial_load:45:50:2", "--transient", "0.5",
          "--revolutions", "40", "--executor", "serial", "--quiet"]
 """Six points of the balanced rotor near its period doublings: periodic-1, -2, -3, -4, -6."""

@@ -33,7 +33,7 @@ from analysis.sweeps.store import PointStore
 from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram, stability_chart
 from tests.conftest import run_cli
 
-TINY = Setting("vakharia2015", 8, {}, transient=0.02, samples=12, lyapunov=False)
+TINY = Setting("vakharia2015", None, {}, transient=0.02, samples=12, lyapunov=False)
 X = Axis.parse("speed_rpm:3000:6000:3")
 Y = Axis.parse("n_balls:7:8")
 CHART = ("chart", "vakharia2015", "--x", "speed_rpm:1000:6000:30", "--y", "n_balls:7:8",

@@ -295,6 +295,7 @@ def main(args: list[str] | None = None) -> None:
     if "--debug" not in (args if args is not None else sys.argv):
         sys.unraisablehook = lambda unraisable: None  # errors in finalisers: reported above
     signal.signal(signal.SIGTERM, _terminated)
+    signal.signal(signal.SIGINT, _terminated)
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:
@@ -319,7 +320,12 @@ def main(args: list[str] | None = None) -> None:
 
 
 def _terminated(signum, frame) -> None:
-    """SIGTERM: end as Ctrl-C does (finally blocks run, the output's lock is released)."""
+    """Ctrl-C and SIGTERM: end the command (finally blocks run, the output's lock is
+    released), and leave the flag ``Interrupt.requested`` for code whose library swallowed
+    the exception."""
+    from analysis.errors import Interrupt
+
+    Interrupt.requested = True
     raise KeyboardInterrupt
 
 
