@@ -709,10 +709,15 @@ CLI_CASES += _cases("models and specs", ("simulate",), [
     ("generate-out-is-file", "generate --out naming a file", ("vakharia2015",),
      []),
 ])
+def _spec_and_a_file(folder: Path) -> None:
+    (folder / "duffing.toml").write_text((SPECS / "duffing.toml").read_text())
+    (folder / "f.txt").write_text("not a folder")
+
+
 CLI_CASES[-1] = CliCase("generate-out-is-file", "models and specs", "generate --out naming a "
-                        "file", ("generate", str(SPECS / "duffing.toml"), "--out", "f.txt"),
+                        "file", ("generate", "duffing.toml", "--out", "f.txt"),
                         ("--out: 'f.txt' exists and is not a folder",),
-                        setup=_spec_file("f.txt", "not a folder"))
+                        setup=_spec_and_a_file)
 CLI_CASES += _cases("runs as input", ("spectrum",), [
     ("input-folder", "a folder as the run", ("sub",), ["'sub' is a folder, not a result file"],
      _folder("sub")),
