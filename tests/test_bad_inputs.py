@@ -706,18 +706,18 @@ CLI_CASES += _cases("models and specs", ("simulate",), [
      _spec_file("deep.toml", "a = " + "[" * 100_000 + "]" * 100_000 + "\n")),
     ("model-spec-binary", "a spec that is not text", ("bin.toml", "-o", "r.nc"),
      ["not valid TOML"], lambda folder: (folder / "bin.toml").write_bytes(b"\xff\xfe\x00")),
-    ("generate-out-is-file", "generate --out naming a file", ("vakharia2015",),
-     []),
 ])
+
+
 def _spec_and_a_file(folder: Path) -> None:
     (folder / "duffing.toml").write_text((SPECS / "duffing.toml").read_text())
     (folder / "f.txt").write_text("not a folder")
 
 
-CLI_CASES[-1] = CliCase("generate-out-is-file", "models and specs", "generate --out naming a "
-                        "file", ("generate", "duffing.toml", "--out", "f.txt"),
-                        ("--out: 'f.txt' exists and is not a folder",),
-                        setup=_spec_and_a_file)
+CLI_CASES += _cases("models and specs", ("generate", "duffing.toml", "--out"), [
+    ("generate-out-is-file", "generate --out naming a file", ("f.txt",),
+     ["--out: 'f.txt' exists and is not a folder"], _spec_and_a_file),
+])
 CLI_CASES += _cases("runs as input", ("spectrum",), [
     ("input-folder", "a folder as the run", ("sub",), ["'sub' is a folder, not a result file"],
      _folder("sub")),
