@@ -263,3 +263,37 @@ def test_a_blow_up_inside_a_block_is_found_at_its_first_sample(monkeypatch):
     with pytest.raises(SimulationError, match=rf"blew up at t = {run.t.values[first]:.6g} s"):
         simulate_module.simulate("vakharia2015", 8, duration=0.3, transient=0.0)
 
+
+
+def test_the_block_check_by_extremes_decides_as_the_state_by_state_one():
+    """``_blow_up`` passes a block at once when its extremes are within the limit, and
+    searches it state by state otherwise. On blocks with a NaN, an inf or one displacement
+    beyond the limit at a random row, and on blocks whose extremes (x large in one row, y in
+    another) exceed the limit while no state does, it raises exactly when a plain search of
+    every column finds a bad one, and names that column's time."""
+    from analysis.integrate.simulate import _blow_up
+
+    rng = np.random.default_rng(7)
+    limit, pairs = 1.0, [(0, 1)]
+    for trial in range(200):
+        rows = rng.uniform(-0.6, 0.6, size=(1000, 5))
+        rows[:, 4] = np.arange(1000)
+        kind = trial % 4
+        at = int(rng.integers(1000))
+        if kind == 0:
+            rows[at, int(rng.integers(4))] = np.nan
+        elif kind == 1:
+            rows[at, int(rng.integers(4))] = -np.inf
+        elif kind == 2:
+            rows[at, :2] = rng.choice([-1, 1], 2) * 0.75  # displacement 1.06
+        else:  # extremes hypot(0.9, 0.9) > 1, every state within
+            rows[at, :2] = (0.9, 0.1)
+            rows[(at + 1) % 1000, :2] = (0.1, -0.9)
+        states, times = rows[:, :4].T, rows[:, 4] * 1e-3
+        bad = ~np.all(np.isfinite(states), axis=0) | (np.hypot(states[0], states[1]) > limit)
+        if bad.any():
+            with pytest.raises(SimulationError, match=rf"t = {times[np.argmax(bad)]:.6g} s"):
+                _blow_up(states, times, limit, pairs)
+        else:
+            _blow_up(states, times, limit, pairs)
+        assert bad.any() == (kind != 3)

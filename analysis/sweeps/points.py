@@ -34,7 +34,13 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.checks import check_rk4_step
 from analysis.integrate.compiled import Runner, compiled_functions, library, test_state
-from analysis.integrate.simulate import _blow_up, blow_up_limit, run_attrs, to_dataset
+from analysis.integrate.simulate import (
+    _blow_up,
+    blow_up_limit,
+    extremes,
+    run_attrs,
+    to_dataset,
+)
 from analysis.model import BallCounts, Model, Structure, System, as_system
 from analysis.signal import displacement_names
 from analysis.signal.poincare import period_of, poincare_section
@@ -116,12 +122,14 @@ class _Record:
         """``rows[j] = [z…, k]``: the state (SI units) after step k."""
         n = len(self.low)
         k = rows[:, n].astype(np.int64)
-        _blow_up(rows[:, :n].T, k * self.dt, self.limit, self.pairs)  # every step's state
-        kept = rows[np.searchsorted(k, self.first):, :n]
-        if len(kept):  # one contiguous copy per variable: 10x faster than min(axis=0)
-            columns = np.ascontiguousarray(kept.T)
-            self.low = np.minimum(self.low, columns.min(axis=1))
-            self.high = np.maximum(self.high, columns.max(axis=1))
+        bounds = extremes(rows, n)
+        _blow_up(rows[:, :n].T, k * self.dt, self.limit, self.pairs, bounds)  # every step
+        if k[0] < self.first:  # the block starts before the record
+            kept = rows[np.searchsorted(k, self.first):, :n]
+            bounds = extremes(kept, n) if len(kept) else None
+        if bounds is not None:
+            self.low = np.minimum(self.low, bounds[0])
+            self.high = np.maximum(self.high, bounds[1])
         lo, hi = np.searchsorted(self.needed, (k[0], k[-1] + 1))
         for step in self.needed[lo:hi]:
             self.samples[int(step)] = rows[step - k[0], :n].copy()
