@@ -561,6 +561,11 @@ def _contact_problems(spec: Spec) -> list[str]:
                 f"terms[{i}] (centrifugal): 'two_contact' already holds the centrifugal force "
                 "of the balls (outer load = inner load + F_c); remove this term"
                 for i, t in terms if isinstance(t, Centrifugal))
+        high = n_balls_range(spec, bearing)[1]
+        problems.extend(
+            f"terms[{i}].ball: must be in [1, {min(bearing.n_balls, high)}] (a ball of "
+            f"bearing '{bearing.name}', {bearing.n_balls} by default), got {ball}"
+            for i, ball in _defect_balls(spec, bearing) if ball > min(bearing.n_balls, high))
     return problems
 
 
@@ -621,11 +626,20 @@ def fitting_balls(spec: Spec, bearing: Bearing) -> int | None:
     return math.floor(math.pi / math.asin(d_b / pitch))
 
 
+def _defect_balls(spec: Spec, bearing: Bearing) -> list[tuple[int, int]]:
+    """(term index, ball number) of every pit on a ball of ``bearing``."""
+    return [(i, t.ball) for i, t in enumerate(spec.terms)
+            if t.kind == "localized_defect" and t.race == "ball"
+            and spec.attachment(t).get("bearing") == bearing.name]
+
+
 def n_balls_range(spec: Spec, bearing: Bearing) -> tuple[int, int]:
-    """Allowed numbers of balls of ``bearing``: [3, 64] and no more than fit."""
+    """Allowed numbers of balls of ``bearing``: [3, 64], no more than fit, and at least the
+    number of a ball that carries a pit (``localized_defect`` with ``race = "ball"``)."""
     fit = fitting_balls(spec, bearing)
     high = N_BALLS_RANGE[1] if fit is None else min(N_BALLS_RANGE[1], fit)
-    return N_BALLS_RANGE[0], high
+    low = max([N_BALLS_RANGE[0], *(ball for _, ball in _defect_balls(spec, bearing))])
+    return low, high
 
 
 def _geometry_problems(spec: Spec) -> list[str]:

@@ -298,6 +298,10 @@ SPEC_CASES = [
                                  {"value": 1e-5, "unit": "mm", "source": "x"}),),
              base="two-bearing-rotor",
              expect=("parameters.radial_clearance_left.unit: must be 'm', got 'mm'",)),
+    SpecCase("defect-ball-beyond-balls", "bodies and bearings", "a pit on a ball the "
+             "bearing does not have", (("terms.1.ball", 12),), base="6205-ball-defect",
+             expect=("terms[1].ball: must be in [1, 9] (a ball of bearing 'bearing', 9 by "
+                     "default), got 12",)),
     # user-declared parameters
     SpecCase("user-parameter-without-range", "user parameters", "a new parameter without a "
              "range", ((f"{P}.k3", {"value": 1.0, "unit": "N/m^3", "source": "x"}),),

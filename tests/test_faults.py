@@ -324,3 +324,21 @@ def test_ball_defect_labels_follow_another_geometry_through_set(tmp_path):
               if name}
     for label in ("2BSF", "2BSF+FTF", "2BSF-FTF"):
         assert abs(labels[label] - _formula(label, table)) <= 1.0 / 0.6, (label, labels)
+
+
+def test_a_pit_on_ball_seven_needs_seven_balls(cache):
+    """A pit on ball 7 raises the bearing's fewest balls to 7: six balls are refused with the
+    allowed range (no ball would carry the pit), seven are built."""
+    from analysis.errors import InputError
+    from analysis.model import as_system
+
+    data = tomllib.loads((SPECS / "6205-ball-defect.toml").read_text())
+    data["model"]["name"] = "pit-on-ball-seven"
+    next(t for t in data["terms"] if t["kind"] == "localized_defect")["ball"] = 7
+    path = cache / "pit-on-ball-seven.toml"
+    path.write_text(tomli_w.dumps(data))
+    model = load_model(str(path))
+    assert model.module.BEARINGS[0][4] == (7, model.module.BEARINGS[0][4][1])
+    with pytest.raises(InputError, match=r"must be an integer in \[7, \d+\]"):
+        as_system(model, 6)
+    assert as_system(model, 7).structure == (7,)

@@ -31,6 +31,14 @@ PROBE_OFFSETS = 4
 """... each also at this many offsets within one ball spacing (ball on the line, between)."""
 
 
+def check_seconds(name: str, value: float, *, zero: bool = False) -> None:
+    """``InputError`` naming ``name`` unless ``value`` is a finite number of seconds > 0
+    (>= 0 with ``zero``): the one check of every step, duration and transient."""
+    if not (math.isfinite(value) and (value >= 0 if zero else value > 0)):
+        raise InputError(f"{name}: must be a finite number {'>=' if zero else '>'} 0 s, "
+                         f"got {value!r}")
+
+
 def rk4_radius(angle: float) -> float:
     """Largest r with |R(r·e^{i·angle})| <= 1, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 the RK4
     amplification factor; ``angle`` in [π/2, π] (the stable half plane)."""

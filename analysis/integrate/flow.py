@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from analysis.errors import InputError
+from analysis.integrate.checks import check_seconds
 from analysis.model import Model
 
 PERIOD_KINDS = ("vc", "shaft", "ratio", "param")
@@ -246,8 +247,7 @@ def steps_per_period(model: Model, n_balls: tuple[int, ...], period: Period, val
                      dt: float) -> int:
     """Number of RK4 steps so that the step is at most ``dt`` (s); ``InputError`` beyond
     ``MAX_PERIOD_STEPS`` (the flow map and its derivatives would not fit in memory)."""
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
+    check_seconds("dt", dt)
     seconds = period_seconds(model, n_balls, period, values)
     if not (math.isfinite(seconds) and seconds > 0):
         raise InputError(f"period {period}: must last a finite time > 0 s here, got "

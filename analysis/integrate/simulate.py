@@ -22,7 +22,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, Interrupt, SimulationError
-from analysis.integrate.checks import check_resolution, check_rk4_step
+from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
 from analysis.model import BallCounts, Model, Structure, System, as_system
 
@@ -43,9 +43,8 @@ def package_version() -> str:
 
 
 def _check_times(duration: float, transient: float, dt: float) -> None:
-    for name, value in (("duration", duration), ("dt", dt)):
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f"{name}: must be a finite number > 0 s, got {value!r}")
+    check_seconds("duration", duration)
+    check_seconds("dt", dt)
     if not (math.isfinite(transient) and 0 <= transient < duration):
         raise InputError(f"transient: must be in [0, duration) = [0, {duration:g}) s, "
                          f"got {transient!r}")

@@ -28,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
+from analysis.integrate.checks import MAX_STEPS, check_seconds
 from analysis.integrate.compiled import compiled_function
 from analysis.integrate.simulate import run_attrs, simulate, state_at
 from analysis.model import BallCounts, Model, Structure, System, as_system
@@ -144,12 +145,8 @@ def renorm_counts(dt: float, renorm_every: int, duration: float,
 def _check_lengths(dt: float, renorm_every: int, transient: float, duration: float,
                    tangent_transient: float) -> None:
     """The step, the renormalisation interval and the lengths fit together."""
-    from analysis.integrate.checks import MAX_STEPS
-
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
-    if not (math.isfinite(transient) and transient >= 0):
-        raise InputError(f"transient: must be a finite number >= 0 s, got {transient!r}")
+    check_seconds("dt", dt)
+    check_seconds("transient", transient, zero=True)
     interval = dt * renorm_every
     if interval * BLOCKS > duration:
         raise InputError(f"renorm_every: {BLOCKS} renormalisations of {renorm_every} steps "
@@ -168,11 +165,8 @@ def _check_options(n: int, n_exponents, renorm_every, duration: float,
         raise InputError(f"n_exponents: must be an integer in [1, {n}], got {n_exponents!r}")
     if not (isinstance(renorm_every, int) and renorm_every >= 1):
         raise InputError(f"renorm_every: must be an integer >= 1, got {renorm_every!r}")
-    if not (math.isfinite(duration) and duration > 0):
-        raise InputError(f"duration: must be a finite number > 0 s, got {duration!r}")
-    if not (math.isfinite(tangent_transient) and tangent_transient >= 0):
-        raise InputError(f"tangent_transient: must be a finite number >= 0 s, "
-                         f"got {tangent_transient!r}")
+    check_seconds("duration", duration)
+    check_seconds("tangent_transient", tangent_transient, zero=True)
     return int(n_exponents)
 
 

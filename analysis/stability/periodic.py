@@ -27,6 +27,7 @@ from typing import Literal
 import numpy as np
 
 from analysis.errors import InputError
+from analysis.integrate.checks import check_seconds
 from analysis.integrate.flow import (
     Period,
     evaluate,
@@ -279,8 +280,7 @@ def shoot(
     model, s, values = system.model, system.structure, dict(system.parameters)
     n = model.n_state
     dt = float(model.simulation_defaults["dt"] if dt is None else dt)
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"dt: must be a finite number > 0 s, got {dt!r}")
+    check_seconds("dt", dt)
     if guess is None:
         guess, t0 = default_guess(system, per, settle, dt)
     t0 = 0.0 if t0 is None else float(t0)

@@ -54,7 +54,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.checks import check_rk4_step
+from analysis.integrate.checks import check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.simulate import blow_up_limit, run_attrs, simulate, state_at, to_dataset
 from analysis.io import save_dataset
@@ -231,8 +231,7 @@ MAX_SAMPLES = 100_000
 
 def _check_setting_times(setting: Setting) -> None:
     """The times every point shares, each named as its option."""
-    if not (math.isfinite(setting.transient) and setting.transient >= 0):
-        raise InputError(f"transient: must be a finite number >= 0 s, got {setting.transient}")
+    check_seconds("transient", setting.transient, zero=True)
     if not (isinstance(setting.samples, int) and 1 <= setting.samples <= MAX_SAMPLES):
         raise InputError(f"samples: must be a whole number in [1, {MAX_SAMPLES}] (section "
                          f"periods recorded per value), got {setting.samples}")
