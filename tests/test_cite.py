@@ -79,7 +79,8 @@ def test_the_top_level_citation_file_is_valid_and_names_the_package_version():
     data = _validate_cff((ROOT / "CITATION.cff").read_text())
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert data["version"] == project["version"]
-    assert data["license"] == "MIT" == project["license"]["text"]
+    assert data["license"] == "MIT" == project["license"]
+    assert project["license-files"] == ["LICENSE"]
     assert "MIT License" in (ROOT / "LICENSE").read_text()
     assert data["references"][0]["title"] == SEED_PAPER_TITLE
 
