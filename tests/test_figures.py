@@ -130,3 +130,29 @@ def test_a_series_shares_one_frequency_range(monkeypatch, tmp_path):
     monkeypatch.setattr(plots, "paper_figure", spy)
     run_paper_case(tmp_path, "vakharia2015", (6, 10), duration=0.5, transient=0.2)
     assert seen == pytest.approx([expected, expected])
+
+
+@pytest.mark.parametrize("rows", [1, 3])
+def test_every_chart_point_is_a_cell_of_its_colour_also_on_one_row(rows):
+    """A chart over one number of balls (one row) draws every point, as a chart of several
+    rows does: the rendered pixel at each point's coordinates has the colour of its class.
+    (With matplotlib's "nearest" shading a row of one value had no height: an empty chart.)"""
+    from matplotlib.colors import to_rgba
+
+    from analysis.reports.plots import NATURE_COLORS, chart_figure
+
+    xs, ys = np.linspace(1000.0, 2000.0, 5), 8.0 + np.arange(rows)
+    codes = (np.arange(rows * 5).reshape(rows, 5) % 3) + 1
+    ds = xr.Dataset({"nature_code": (("n_balls", "speed_rpm"), codes),
+                     "lyapunov": (("n_balls", "speed_rpm"), np.zeros((rows, 5)))},
+                    coords={"speed_rpm": xs, "n_balls": ys},
+                    attrs={"x": "speed_rpm", "y": "n_balls", "model": "vakharia2015"})
+    fig = chart_figure(ds)
+    fig.canvas.draw()
+    pixels = np.asarray(fig.canvas.buffer_rgba())
+    ax = fig.axes[0]
+    for (i, y), (j, x) in itertools.product(enumerate(ys), enumerate(xs)):
+        px, py = ax.transData.transform((x, y))
+        got = pixels[round(float(pixels.shape[0] - py)), round(float(px))] / 255
+        want = to_rgba(NATURE_COLORS[int(codes[i, j])])
+        assert np.allclose(got, want, atol=2 / 255), (x, y, got, want)

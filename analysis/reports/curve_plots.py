@@ -12,6 +12,7 @@ from analysis.errors import InputError
 from analysis.reports.plots import (  # also selects Agg
     NATURE_COLORS,
     NATURE_NAMES,
+    cell_edges,
     nature_colormap,
 )
 
@@ -51,8 +52,9 @@ def draw_chart(ax, chart: xr.Dataset, x: str, y: str) -> None:
 
     cmap, norm = nature_colormap()
     codes = chart.nature_code.transpose(y, x)
-    ax.pcolormesh(chart[x], chart[y], codes, cmap=cmap, norm=norm, shading="nearest",
-                  alpha=0.75)
+    ax.pcolormesh(cell_edges(chart[x].values, x.startswith("n_balls")),
+                  cell_edges(chart[y].values, y.startswith("n_balls")), codes, cmap=cmap,
+                  norm=norm, shading="flat", alpha=0.75)
     present = sorted(set(np.unique(codes.values).tolist()))
     ax.legend(handles=[Patch(color=NATURE_COLORS[k], alpha=0.75, label=NATURE_NAMES[k])
                        for k in present], fontsize=8, loc="upper left",

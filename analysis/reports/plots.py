@@ -360,24 +360,42 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
     return fig
 
 
+def cell_edges(values: np.ndarray, whole: bool = False) -> np.ndarray:
+    """Edges of the cells centred on grid ``values`` (sorted): halfway between neighbours,
+    the outer ones as far out as the inner ones (matplotlib's ``shading="nearest"``). A
+    single value gets a cell of its own: ±0.5 for a whole-number axis (``whole``, balls),
+    else ±5 % of the value (±0.5 at 0), where "nearest" would draw a cell of no height."""
+    values = np.asarray(values, dtype=float)
+    if values.size == 1:
+        v = float(values[0])
+        half = 0.5 if whole or v == 0 else 0.05 * abs(v)
+        return np.array([v - half, v + half])
+    mid = (values[1:] + values[:-1]) / 2
+    return np.concatenate([[2 * values[0] - mid[0]], mid, [2 * values[-1] - mid[-1]]])
+
+
 def chart_figure(ds: xr.Dataset) -> Figure:
     """Stability chart: the class of the motion on the grid (colours with a legend), and
-    the largest Lyapunov exponent."""
+    the largest Lyapunov exponent. Every grid point is a cell, also on an axis of one
+    value (``cell_edges``)."""
     from matplotlib.patches import Patch
 
     xname, yname = ds.attrs["x"], ds.attrs["y"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
     cmap, norm = nature_colormap()
-    axes[0].pcolormesh(ds[xname], ds[yname], ds.nature_code, cmap=cmap, norm=norm,
-                       shading="nearest")
+    xs, ys = ds[xname].values, ds[yname].values
+    edges = (cell_edges(xs, xname.startswith("n_balls")),
+             cell_edges(ys, yname.startswith("n_balls")))
+    axes[0].pcolormesh(*edges, ds.nature_code.transpose(yname, xname), cmap=cmap, norm=norm,
+                       shading="flat")
     present = sorted(set(np.unique(ds.nature_code.values).tolist()))
     axes[0].legend(handles=[Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k])
                             for k in present], fontsize=8, loc="upper right")
     axes[0].set_title("nature of the response", fontsize=9)
-    mesh = axes[1].pcolormesh(ds[xname], ds[yname], ds.lyapunov, cmap="RdBu_r",
-                              shading="nearest",
-                              vmin=-np.nanmax(np.abs(ds.lyapunov.values)),
-                              vmax=np.nanmax(np.abs(ds.lyapunov.values)))
+    lam = ds.lyapunov.transpose(yname, xname).values
+    top = float(np.nanmax(np.abs(lam))) if np.isfinite(lam).any() else 1.0
+    mesh = axes[1].pcolormesh(*edges, lam, cmap="RdBu_r", shading="flat", vmin=-top,
+                              vmax=top)
     fig.colorbar(mesh, ax=axes[1], label="largest Lyapunov exponent (1/s)")
     axes[1].set_title("largest Lyapunov exponent", fontsize=9)
     from matplotlib.ticker import MaxNLocator
@@ -385,10 +403,11 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     for ax in axes:
         ax.set_xlabel(_grid_label(ds, xname))
         ax.set_ylabel(_grid_label(ds, yname))
-        if yname.startswith("n_balls"):
-            ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-        if xname.startswith("n_balls"):
-            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        for axis, name, values in ((ax.xaxis, xname, xs), (ax.yaxis, yname, ys)):
+            if values.size == 1:
+                axis.set_ticks([float(values[0])], [f"{float(values[0]):g}"])
+            elif name.startswith("n_balls"):
+                axis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
     return fig
 
