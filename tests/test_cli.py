@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 
 import xarray as xr
 
 from analysis.io import load_dataset
+from tests.conftest import SPECS
 
 
 def test_debug_shows_the_traceback(cli, tmp_path):
@@ -59,7 +61,14 @@ def test_run_writes_the_paper_case(cli, tmp_path):
         assert xr.open_dataset(out / f"nb{nb}.nc", engine="h5netcdf").attrs["n_balls"] == nb
     table = (out / "peaks.md").read_text()
     assert "| 6 | 199.3 |" in table and "| 10 | 332.2 |" in table
-    assert json.loads((out / "peaks.json").read_text())[0]["n_balls"] == 6
+    peaks = json.loads((out / "peaks.json").read_text())
+    assert [entry["n_balls"] for entry in peaks] == [6, 10]
+    spec_digest = hashlib.sha256((SPECS / "vakharia2015.toml").read_bytes()).hexdigest()
+    for entry in peaks:  # each entry carries the attrs of its own run file
+        with xr.open_dataset(out / f"nb{entry['n_balls']}.nc", engine="h5netcdf") as ds:
+            assert entry["provenance"]["n_balls"] == ds.attrs["n_balls"] == entry["n_balls"]
+            assert entry["provenance"]["speed_rpm"] == ds.attrs["speed_rpm"]
+        assert entry["provenance"]["spec_sha256"] == spec_digest
 
 
 def test_atomic_write_follows_the_umask(tmp_path):

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 
 import pytest
+import xarray as xr
 
-from analysis.io import load_dataset
+from analysis.io import load_dataset, provenance
 from analysis.model import load_model
 from analysis.reports.paper import PAPER_TABLE2, nature_matches
 from analysis.reports.report import write_reproduction
 from analysis.reports.reproduce import Row, reproduce
 from analysis.signal.spectrum import Peak, find_peaks
+from tests.conftest import SPECS
 
 
 @pytest.fixture(scope="module")
@@ -45,6 +48,12 @@ def test_report_files_show_paper_and_ours_with_provenance(report):
     assert html.count("data:image/png;base64,") == 3 and 'src="fig-' not in html
     table = json.loads(paths["json"].read_text())
     assert [r["n_balls"] for r in table["rows"]] == [6, 10]
+    spec_digest = hashlib.sha256((SPECS / "vakharia2015.toml").read_bytes()).hexdigest()
+    for row, entry in zip(rep.rows, table["rows"], strict=True):  # each row names its run
+        with xr.open_dataset(row.netcdf, engine="h5netcdf") as ds:
+            assert entry["provenance"] == json.loads(json.dumps(provenance(ds)))
+            assert ds.attrs["n_balls"] == entry["provenance"]["n_balls"] == row.n_balls
+        assert entry["provenance"]["spec_sha256"] == spec_digest
     assert set(table["ranges_reproducing_table2"]) == {"damping"}
     chart = rep.sensitivity["damping"]
     assert chart.sizes == {"n_balls": 2, "damping": 2}

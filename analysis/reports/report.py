@@ -11,7 +11,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analysis.io import atomic_write
+from analysis.io import atomic_write, provenance
 from analysis.model import load_model
 from analysis.reports.paper import (
     PAPER_N_BALLS,
@@ -77,7 +77,8 @@ def run_paper_case(
     atomic_write(out / "peaks.md", lambda tmp: tmp.write_text(peak_table_markdown(results)))
     atomic_write(out / "peaks.json", lambda tmp: tmp.write_text(json.dumps(
         [{"n_balls": r.n_balls, **r.frequencies,
-          "peaks": {v: [p.as_dict() for p in ps] for v, ps in r.peaks.items()}}
+          "peaks": {v: [p.as_dict() for p in ps] for v, ps in r.peaks.items()},
+          "provenance": provenance(r.netcdf)}
          for r in results], indent=2)))
     return results
 
@@ -276,7 +277,8 @@ def write_reproduction(rep: Reproduction, out_dir: str | Path) -> dict[str, Path
               "lyapunov": r.lyapunov, "ci95": r.ci95, "marks": r.marks(),
               "differences": {k: {"missing": m, "extra": e}
                               for k, (m, e) in r.differences().items()},
-              "paper": None if r.paper is None else r.paper.__dict__} for r in rep.rows]
+              "paper": None if r.paper is None else r.paper.__dict__,
+              "provenance": provenance(r.netcdf)} for r in rep.rows]
     paths = {"markdown": out / "report.md", "html": out / "report.html",
              "json": out / "table2.json"}
     atomic_write(paths["markdown"], lambda tmp: tmp.write_text(text))
