@@ -108,3 +108,47 @@ def test_bad_period_and_segments():
         shoot("balanced-rotor", 8, "weekly")
     with pytest.raises(InputError, match="segments"):
         shoot("balanced-rotor", 8, "vc", segments=0)
+
+
+def test_the_orbit_in_a_notebook_shows_its_multipliers(rotor_orbit):
+    """``PeriodicOrbit._repr_html_``: the multipliers read back from the table multiply to
+    Liouville's exp(−2cT/M) (to the table's six digits), their moduli give the verdict
+    shown, and the state rows are the orbit's z0 with the model's units."""
+    from html.parser import HTMLParser
+
+    class Rows(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.rows, self.row = [], None
+
+        def handle_starttag(self, tag, attrs):
+            if tag == "tr":
+                self.row = []
+            elif tag in ("td", "th") and self.row is not None:
+                self.row.append("")
+
+        def handle_endtag(self, tag):
+            if tag == "tr" and self.row:
+                self.rows.append(self.row)
+                self.row = None
+
+        def handle_data(self, data):
+            if self.row:
+                self.row[-1] += data
+
+    parser = Rows()
+    parser.feed(rotor_orbit._repr_html_())
+    facts = {row[0]: row[1] for row in parser.rows if len(row) == 2}
+    table = [row for row in parser.rows if len(row) == 5 and row[0].isdigit()]
+    mu = np.array([float(re_) + 1j * float(im) for _, re_, im, _, _ in table])
+    values = rotor_orbit.values
+    liouville = np.exp(-2 * values["damping"] * rotor_orbit.period_s / values["rotor_mass"])
+    assert np.prod(mu).real == pytest.approx(liouville, rel=1e-5)
+    verdict = "stable" if np.abs(mu).max() < 1 else "unstable"
+    assert facts["stability"].startswith(verdict)
+    states = {row[0]: (float(row[1]), row[2]) for row in parser.rows
+              if len(row) == 3 and row[0] != "state"}
+    assert list(states) == ["x", "y", "vx", "vy"]
+    for name, z in zip(states, rotor_orbit.z0, strict=True):
+        assert states[name][0] == pytest.approx(z, rel=1e-5)
+    assert [u for _, u in states.values()] == ["m", "m", "m/s", "m/s"]

@@ -96,6 +96,34 @@ class PeriodicOrbit:
             return "stable"
         return "unstable" if r > 1 + STABILITY_MARGIN else "marginal"
 
+    def _repr_html_(self) -> str:
+        """The orbit in a notebook: model and balls, period, convergence, stability, the
+        orbit's initial state (SI units) and every Floquet multiplier (modulus and angle)."""
+        from html import escape
+
+        facts = [("model", escape(self.model)), ("balls", escape(self.structure_label)),
+                 ("period", f"{escape(self.period)}: {self.period_s:.6g} s from t0 = "
+                            f"{self.t0:.6g} s ({self.n_steps} RK4 steps)"),
+                 ("converged", f"{'yes' if self.converged else 'no'} after "
+                               f"{self.iterations} iterations, residual {self.residual:.3g}"),
+                 ("stability", f"{self.stability} (largest |μ| = "
+                               f"{self.spectral_radius:.6g})")]
+        units = self.system.model.state_units if self.system is not None else {}
+        state = "".join(f"<tr><td><code>{escape(name)}</code></td><td>{value:.6g}</td>"
+                        f"<td>{escape(units.get(name, ''))}</td></tr>"
+                        for name, value in zip(self.state_names, self.z0, strict=False))
+        multipliers = "".join(
+            f"<tr><td>{i + 1}</td><td>{mu.real:.6g}</td><td>{mu.imag:.6g}</td>"
+            f"<td>{abs(mu):.6g}</td><td>{math.degrees(np.angle(mu)):.4g}</td></tr>"
+            for i, mu in enumerate(self.multipliers))
+        return ('<div class="bearingdyn-orbit"><h4>periodic orbit</h4><table>'
+                + "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in facts)
+                + "</table><table><thead><tr><th>state</th><th>at t0</th><th>unit</th>"
+                "</tr></thead><tbody>" + state + "</tbody></table><table><thead><tr>"
+                "<th>multiplier</th><th>real</th><th>imaginary</th><th>|μ|</th>"
+                "<th>angle (°)</th></tr></thead><tbody>" + multipliers
+                + "</tbody></table></div>")
+
     def as_dict(self) -> dict:
         return {
             "model": self.model, "n_balls": self.n_balls, "structure": list(self.structure),
