@@ -31,9 +31,11 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import check_rk4_step
 from analysis.integrate.compiled import Runner, compiled_functions, library, test_state
+from analysis.integrate.lanes import LANES, Kernel
+from analysis.integrate.lanes import kernel as lane_kernel
 from analysis.integrate.simulate import (
     _blow_up,
     blow_up_limit,
@@ -216,12 +218,24 @@ class PointResult:
     """The Poincaré points of the classification (``poincare_section`` of the record)."""
 
 
-def one_pass(system: System, duration: float, transient: float, dt: float,
-             section: str | None, tangent: bool = True, compiled: bool = True) -> PointResult:
-    """Classify ``system``'s motion on ``section`` (None: ``default_section``) after
-    ``transient`` s of a ``duration`` s run (RK4 step ``dt`` s) in one pass; with
-    ``tangent``, λ1 and its interval from the same pass, else λ1 only when the section
-    points cannot decide (``classify``'s own, from the final state)."""
+@dataclass
+class _Point:
+    """A chart point under way: its run's attributes, plan and record, and the state after
+    the states-alone part (at step ``plan.start``)."""
+
+    system: System
+    attrs: dict
+    section: str
+    plan: _Plan
+    record: _Record
+    z: np.ndarray
+    tangent: bool
+
+
+def _prepare(system: System, duration: float, transient: float, dt: float,
+             section: str | None, tangent: bool, compiled: bool) -> _Point:
+    """Check the run, plan it and integrate the states alone up to the tangent's start (or
+    to the end without ``tangent``)."""
     model, structure, values = system.model, system.structure, dict(system.parameters)
     check_rk4_step(model, structure, values, dt, "rk4")
     attrs = run_attrs(model, structure, values)
@@ -232,39 +246,131 @@ def one_pass(system: System, duration: float, transient: float, dt: float,
     record = _Record(plan.first, _section_steps(plan, dt, period_of(attrs, section)), dt,
                      blow_up_limit(values), model.centre_indices(), np.full(n, np.inf),
                      np.full(n, -np.inf))
-    lib, p, z = library(model, structure, compiled), system.p, np.asarray(system.state, float)
+    lib, z = library(model, structure, compiled), np.asarray(system.state, float)
     start = plan.start if tangent else plan.last
     if start > 0:
-        for _, rows in Runner(lib, p, dt).blocks(z, start):  # k counted from step 0
+        for _, rows in Runner(lib, system.p, dt).blocks(z, start):  # k counted from step 0
             record.take(rows)
         z = rows[-1, :n].copy()
+    return _Point(system, attrs, section, plan, record, z, tangent)
+
+
+def _finish(point: _Point, logs: np.ndarray | None) -> PointResult:
+    """The point's verdict from its record and, with a tangent, the logs of its
+    renormalisations (λ1 and its interval from the last ``plan.averaged``)."""
+    model, record, plan = point.system.model, point.record, point.plan
+    dt = point.attrs["dt"]
     lam = ci = np.nan
-    if tangent:
-        logs = _run_tangent(chart_blocks(model, structure, compiled), p, z, dt, plan, record)
+    if point.tangent:
         averaged, interval = logs[None, -plan.averaged:], RENORM_EVERY * dt
         lam = float(running_mean(averaged, interval)[0, -1])
         ci = float(batch_ci95(averaged, interval)[0])
     steps = np.array(sorted(record.samples))
-    run = to_dataset(steps * dt, np.stack([record.samples[k] for k in steps], axis=1), attrs,
-                     model)
+    run = to_dataset(steps * dt, np.stack([record.samples[k] for k in steps], axis=1),
+                     point.attrs, model)
 
     def largest() -> tuple[float, float]:
-        if tangent:
+        if point.tangent:
             return lam, ci
         found = _exponents_of_run(run, None)
         return float(found.exponents[0]), float(found.ci95[0])
 
     ptp = dict(zip(model.state_names, (record.high - record.low).tolist(), strict=True))
-    points = poincare_section(run, section)
+    points = poincare_section(run, point.section)
     return PointResult(classify_section(points, ptp, largest), lam, ci, ptp,
                        displacement_names(run), points)
 
 
-def chart_point(setting: Setting, n_balls: BallCounts, values: dict[str, float]) -> dict:
-    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point, in
-    one pass (see the module docstring): the result of ``sweep.chart_point``."""
-    from analysis.sweeps.sweep import NATURE_CODES
+def one_pass(system: System, duration: float, transient: float, dt: float,
+             section: str | None, tangent: bool = True, compiled: bool = True) -> PointResult:
+    """Classify ``system``'s motion on ``section`` (None: ``default_section``) after
+    ``transient`` s of a ``duration`` s run (RK4 step ``dt`` s) in one pass; with
+    ``tangent``, λ1 and its interval from the same pass, else λ1 only when the section
+    points cannot decide (``classify``'s own, from the final state)."""
+    point = _prepare(system, duration, transient, dt, section, tangent, compiled)
+    logs = None
+    if tangent:
+        logs = _run_tangent(chart_blocks(system.model, system.structure, compiled),
+                            system.p, point.z, dt, point.plan, point.record)
+    return _finish(point, logs)
 
+
+def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
+    """The tangent part of up to ``LANES`` points (same model and balls) in lockstep: each
+    lane from its own start over its own renormalisations, fed to its own record. Returns
+    per point the logs of every renormalisation, or the ``SimulationError`` of its
+    blow-up (the other lanes go on)."""
+    n, lanes = kern.n, len(points)
+    s = np.empty((2 * n + 1, LANES))
+    p = np.empty((kern.n_par, LANES))
+    for k in range(LANES):  # lanes beyond the points repeat the first (results unused)
+        point = points[min(k, lanes - 1)]
+        s[:, k] = np.concatenate([point.z, [point.plan.start], np.eye(n)[:, 0]])
+        p[:, k] = point.system.p
+    left = [point.plan.renorms for point in points]
+    logs: list[list[np.ndarray]] = [[] for _ in points]
+    outcome: list = [None] * lanes
+    while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):
+        count = min(RENORMS_PER_CALL[0], max(left[k] for k in range(lanes)
+                                             if outcome[k] is None))
+        call_logs, states = kern.run(s, p, np.full(LANES, dt), np.zeros(LANES), count,
+                                     RENORM_EVERY)
+        for k, point in enumerate(points):
+            used = min(count, left[k])
+            if outcome[k] is not None or used == 0:
+                continue
+            try:
+                point.record.take(np.ascontiguousarray(states[:used * RENORM_EVERY, :, k]))
+            except SimulationError as exc:
+                outcome[k] = exc
+                continue
+            logs[k].append(call_logs[:used, k].copy())
+            left[k] -= used
+    return [outcome[k] if outcome[k] is not None else
+            (np.concatenate(logs[k]) if logs[k] else np.empty(0)) for k in range(lanes)]
+
+
+def one_pass_lanes(systems: list[System], durations: list[float], transient: float,
+                   dt: float, section: str | None, compiled: bool = True) -> list:
+    """``one_pass`` with the tangent of every system (all of one model and balls) run
+    ``LANES`` at a time in the vector kernel of ``analysis.integrate.lanes`` (each result is
+    ``one_pass``'s bit for bit); per system its ``PointResult`` or its ``SimulationError``.
+    Without a kernel (an operation it does not write, no compiler) the points run one by
+    one."""
+    first = systems[0]
+    kern = lane_kernel(first.model, first.structure, RENORM_EVERY) if compiled else None
+    results: list = [None] * len(systems)
+    prepared: list[tuple[int, _Point]] = []
+    for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):
+        try:
+            prepared.append((i, _prepare(system, duration, transient, dt, section, True,
+                                         compiled)))
+        except SimulationError as exc:
+            results[i] = exc
+    for g in range(0, len(prepared), LANES if kern is not None else 1):
+        group = prepared[g:g + (LANES if kern is not None else 1)]
+        if kern is not None:
+            outcomes = _run_lanes(kern, [point for _, point in group], dt)
+        else:
+            outcomes = []
+            for _, point in group:
+                try:
+                    outcomes.append(_run_tangent(chart_blocks(point.system.model,
+                                                              point.system.structure),
+                                                 point.system.p, point.z, dt, point.plan,
+                                                 point.record))
+                except SimulationError as exc:
+                    outcomes.append(exc)
+        for (i, point), outcome in zip(group, outcomes, strict=True):
+            results[i] = outcome if isinstance(outcome, SimulationError) else \
+                _finish(point, outcome)
+    return results
+
+
+def _chart_run(setting: Setting, n_balls: BallCounts,
+               values: dict[str, float]) -> tuple[System, float]:
+    """The System of one chart point and its run's duration (s): the setting's transient
+    and ``samples + 0.5`` periods of its section."""
     system = as_system(setting.model, n_balls, None, **values)
     full = dict(system.parameters)
     freqs = system.model.frequencies(system.structure, full)
@@ -272,13 +378,48 @@ def chart_point(setting: Setting, n_balls: BallCounts, values: dict[str, float])
         period = period_of({**full, **freqs.as_dict()}, setting.section)
     except InputError as exc:
         raise InputError(f"section {setting.section}: no period here ({exc})") from None
-    duration = setting.transient + (setting.samples + 0.5) * period
-    out = one_pass(system, duration, setting.transient, setting.dt,
-                   setting.section if setting.section != "shaft" else None,
-                   tangent=setting.lyapunov)
+    return system, setting.transient + (setting.samples + 0.5) * period
+
+
+def _chart_result(out: PointResult) -> dict:
+    from analysis.sweeps.sweep import NATURE_CODES
+
     result = out.classification
     return {"nature": result.nature,
             "nature_code": NATURE_CODES.get(result.nature, NATURE_CODES["periodic-n"]),
             "period": result.period or 0, "lyapunov": out.lyapunov, "ci95": out.ci95,
             "graph_ratio": result.graph_ratio or np.nan,
             **{f"amplitude_{v}": out.ptp[v] / 2 for v in out.displacements}}
+
+
+def _section(setting: Setting) -> str | None:
+    return setting.section if setting.section != "shaft" else None
+
+
+def chart_point(setting: Setting, n_balls: BallCounts, values: dict[str, float]) -> dict:
+    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point, in
+    one pass (see the module docstring); ``sweep.chart_point_two_pass`` is the same in
+    two."""
+    system, duration = _chart_run(setting, n_balls, values)
+    return _chart_result(one_pass(system, duration, setting.transient, setting.dt,
+                                  _section(setting), tangent=setting.lyapunov))
+
+
+def chart_points(setting: Setting, points: list[tuple[BallCounts, dict[str, float]]]
+                 ) -> list[dict | SimulationError]:
+    """``chart_point`` of several points of one model and balls, their tangents in lockstep
+    (``one_pass_lanes``): per point its result, bit for bit ``chart_point``'s, or the
+    ``SimulationError`` of its blow-up."""
+    runs = [_chart_run(setting, n_balls, values) for n_balls, values in points]
+    if not setting.lyapunov:
+        outs: list = []
+        for system, duration in runs:
+            try:
+                outs.append(one_pass(system, duration, setting.transient, setting.dt,
+                                     _section(setting), tangent=False))
+            except SimulationError as exc:
+                outs.append(exc)
+    else:
+        outs = one_pass_lanes([r[0] for r in runs], [r[1] for r in runs],
+                              setting.transient, setting.dt, _section(setting))
+    return [out if isinstance(out, SimulationError) else _chart_result(out) for out in outs]

@@ -56,13 +56,14 @@ import xarray as xr
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.lanes import LANES
 from analysis.integrate.simulate import blow_up_limit, run_attrs, simulate, state_at, to_dataset
 from analysis.io import save_dataset
 from analysis.model import BallCounts, System, load_model
 from analysis.signal import displacement_names
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
-from analysis.sweeps.points import chart_point  # one pass; chart_point_two_pass below
+from analysis.sweeps.points import chart_points  # one pass; chart_point_two_pass below
 from analysis.sweeps.store import PointStore
 
 NATURE_CODES = {"failed": 0, "periodic-1": 1, "periodic-2": 2, "periodic-n": 3,
@@ -526,15 +527,40 @@ def _assemble_diagram(store, setting, axis, directions, follow) -> xr.Dataset:
 
 # --- stability charts ---------------------------------------------------------------------
 
-def _chart_task(args: tuple) -> tuple[str, dict]:
-    setting, xname, xval, yname, yval, key = args
-    n_balls, values = setting.at(**{xname: xval, yname: yval})
-    try:
-        return key, chart_point(setting, n_balls, values)
-    except SimulationError as exc:  # recorded as the point's class; the chart goes on
-        return key, {"nature": failure_text(exc), "nature_code": NATURE_CODES["failed"],
-                     "period": 0, "lyapunov": np.nan, "ci95": np.nan, "graph_ratio": np.nan,
-                     **dict.fromkeys(_displacement_fields(setting.model), np.nan)}
+def _failed_point(setting: Setting, exc: SimulationError) -> dict:
+    """A point whose run blew up: recorded as its class, and the chart goes on."""
+    return {"nature": failure_text(exc), "nature_code": NATURE_CODES["failed"],
+            "period": 0, "lyapunov": np.nan, "ci95": np.nan, "graph_ratio": np.nan,
+            **dict.fromkeys(_displacement_fields(setting.model), np.nan)}
+
+
+def _chart_group_task(group: list[tuple]) -> list[tuple[str, dict]]:
+    """Chart points of one model and balls together (``points.chart_points``: their
+    tangents in lockstep, each result ``points.chart_point``'s bit for bit)."""
+    setting = group[0][0]
+    points = [setting.at(**{xname: xval, yname: yval})
+              for _, xname, xval, yname, yval, _ in group]
+    return [(task[-1], out if isinstance(out, dict) else _failed_point(setting, out))
+            for task, out in zip(group, chart_points(setting, points), strict=True)]
+
+
+def _chart_groups(setting: Setting, tasks: list[tuple]) -> list[list[tuple]]:
+    """Neighbouring pending points of the same balls in groups of ``LANES`` (one group per
+    point without a tangent: lanes only speed up the tangent)."""
+    if not setting.lyapunov:
+        return [[task] for task in tasks]
+    model = load_model(setting.model)
+    groups: list[list[tuple]] = []
+    previous = None
+    for task in tasks:
+        _, xname, xval, yname, yval, _ = task
+        balls = model.structure(setting.at(**{xname: xval, yname: yval})[0])
+        if groups and balls == previous and len(groups[-1]) < LANES:
+            groups[-1].append(task)
+        else:
+            groups.append([task])
+        previous = balls
+    return groups
 
 
 def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
@@ -554,9 +580,10 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
-        _run_with_progress(executor or SerialExecutor(), _chart_task, tasks, store,
+        _run_with_progress(executor or SerialExecutor(), _chart_group_task,
+                           _chart_groups(setting, tasks), store,
                            len(x.values) * len(y.values), progress,
-                           lambda task, result: store.save(*result))
+                           lambda group, results: [store.save(*r) for r in results])
         ds = _assemble_chart(store, setting, x, y)
         save_dataset(ds, output)
         store.remove()

@@ -1,0 +1,232 @@
+"""Several runs in lockstep: the RK4 tangent steps of a chart compiled for vector lanes.
+
+A stability chart integrates the states and one tangent vector of many grid points of the
+same model and balls; each point is the same sequence of operations on other numbers. This
+module writes those operations once for ``LANES`` points side by side, as C with GCC's
+vector extensions (``double`` vectors of ``LANES`` lanes: SSE2 on every x86-64, NEON on
+ARM64, no ``-march`` needed), so one instruction advances every lane. The operations are
+those of ``lyapunov.tangent_step`` and of its renormalisation (``lyapunov._qr_logs``),
+read instruction by instruction from the CasADi SX Functions, in the same order: each lane
+performs the IEEE operations the scalar compiled block performs, with the same libm for
+sin, cos and the like (called lane by lane), so every lane's states, tangent and logs are
+those of ``lyapunov.tangent_block`` bit for bit, whichever points share its call
+(``tests/test_lanes.py``).
+
+``kernel(model, structure, renorm_every)`` builds, compiles (the cache and compiler of
+``analysis.integrate.compiled``) and loads the kernel, or returns None when it cannot: an
+operation the writer does not know (listed in ``UNARY``/``BINARY``), no working compiler, or
+a library that does not reproduce the CasADi block on a test state. Callers then use the
+scalar blocks.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from analysis.integrate.compiled import (
+    LAYOUT_VERSION,
+    CompileError,
+    _compile,
+    cache_dir,
+    compiler_command,
+)
+
+LANES = 2
+"""Points per vector: two doubles fill the 128-bit registers every x86-64 and ARM64 CPU
+has. Four (256-bit) would need ``-mavx``, which a cache shared by several CPUs cannot
+assume, and GCC's generic lowering of four lanes without it is slower than two."""
+
+_OP = {getattr(ca, name): name[3:] for name in dir(ca) if name.startswith("OP_")}
+UNARY = {
+    "NEG": "-{0}", "TWICE": "(splat(2.0) * {0})", "SQ": "({0} * {0})",
+    "INV": "(splat(1.0) / {0})", "NOT": "flag({0} == splat(0.0))",
+    **{name: f"lane1({name.lower()}, {{0}})"
+       for name in ("SQRT", "FABS", "SIN", "COS", "TAN", "EXP", "LOG", "TANH", "ASIN",
+                    "ACOS", "ATAN", "SINH", "COSH", "FLOOR", "CEIL", "ERF", "LOG1P",
+                    "EXPM1")},
+    "SIGN": "lane1(csign, {0})",
+}
+"""Templates of the one-argument operations (CasADi's C: ``casadi_sq``, ``casadi_sign``,
+libm); ``lane1`` applies a scalar function to every lane."""
+BINARY = {
+    "ADD": "({0} + {1})", "SUB": "({0} - {1})", "MUL": "({0} * {1})", "DIV": "({0} / {1})",
+    "LT": "flag({0} < {1})", "LE": "flag({0} <= {1})", "EQ": "flag({0} == {1})",
+    "NE": "flag({0} != {1})",
+    "AND": "flag(({0} != splat(0.0)) & ({1} != splat(0.0)))",
+    "OR": "flag(({0} != splat(0.0)) | ({1} != splat(0.0)))",
+    "IF_ELSE_ZERO": "select({0}, {1})",
+    **{name: f"lane2({fn}, {{0}}, {{1}})"
+       for name, fn in (("POW", "pow"), ("CONSTPOW", "pow"), ("ATAN2", "atan2"),
+                        ("FMIN", "fmin"), ("FMAX", "fmax"), ("FMOD", "fmod"),
+                        ("HYPOT", "hypot"), ("COPYSIGN", "copysign"))},
+}
+"""Templates of the two-argument operations; comparisons give 1.0 or 0.0 as in CasADi, and
+``if_else_zero(c, x)`` is x where c is not 0 (NaN counts as true, as C's ``c ? x : 0``)."""
+
+_HEADER = """\
+#include <math.h>
+#include <string.h>
+#define L {lanes}
+typedef double V __attribute__((vector_size(8 * L)));
+typedef long long M __attribute__((vector_size(8 * L)));
+static inline V splat(double a) {{ V r; for (int k = 0; k < L; k++) r[k] = a; return r; }}
+static inline V flag(M m) {{ return (V)(m & (M)splat(1.0)); }}
+static inline V select(V c, V x) {{ return (V)((c != splat(0.0)) & (M)x); }}
+static inline double csign(double x) {{ return x < 0 ? -1 : x > 0 ? 1 : x; }}
+#define lane1(f, a) ({{ V a_ = (a), r_; for (int k = 0; k < L; k++) r_[k] = f(a_[k]); r_; }})
+#define lane2(f, a, b) ({{ V a_ = (a), b_ = (b), r_; \\
+    for (int k = 0; k < L; k++) r_[k] = f(a_[k], b_[k]); r_; }})
+"""
+
+_RUN = """
+/* s: [z; k; v] per lane, lane fastest (s[i * L + k]); p: parameters per lane; h, t0: one
+   per lane. n_renorm renormalisations of `every` steps; logs[r * L + k]; states[(j * (N + 1)
+   + i) * L + k] is [z; k] after step j of the call. */
+void bd_lanes_run(double *s_, const double *p_, const double *h_, const double *t0_,
+                  int n_renorm, int every, double *logs, double *states) {{
+  V s[{ns}], out[{ns}], p[{np}], h[1], t0[1], c[{nc}], y[{n}], q[{n}], lg[1];
+  memcpy(s, s_, sizeof s); memcpy(p, p_, sizeof p); memcpy(h, h_, sizeof h);
+  memcpy(t0, t0_, sizeof t0);
+  constants(p, h, t0, c);
+  long j = 0;
+  for (int r = 0; r < n_renorm; r++) {{
+    for (int i = 0; i < every; i++, j++) {{
+      step(s, p, h, t0, c, out);
+      memcpy(s, out, sizeof s);
+      memcpy(states + j * {n1} * L, s, {n1} * sizeof(V));
+    }}
+    memcpy(y, s + {n1}, sizeof y);
+    renorm(y, q, lg);
+    memcpy(s + {n1}, q, sizeof q);
+    memcpy(logs + r * L, lg, sizeof(V));
+  }}
+  memcpy(s_, s, sizeof s);
+}}
+"""
+
+
+class Unsupported(ValueError):
+    """An operation ``vector_c`` does not write."""
+
+
+def vector_c(fn: ca.Function, name: str) -> str:
+    """``static inline void name(const V *x0, …, V *y0, …)``: the SX Function ``fn`` on
+    ``LANES`` lanes, one C statement per instruction in CasADi's order."""
+    if not fn.is_a("SXFunction"):
+        raise Unsupported(f"{fn.name()}: not an SX Function")
+    inputs = ", ".join(f"const V *restrict x{i}" for i in range(fn.n_in()))
+    outputs = ", ".join(f"V *restrict y{i}" for i in range(fn.n_out()))
+    lines = [f"static inline void {name}({inputs}, {outputs}) {{",
+             "  V " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+    for i in range(fn.n_instructions()):
+        op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
+            fn.instruction_input(i)
+        if op == "INPUT":
+            lines.append(f"  w{out[0]} = x{arg[0]}[{arg[1]}];")
+        elif op == "OUTPUT":
+            lines.append(f"  y{out[0]}[{out[1]}] = w{arg[0]};")
+        elif op == "CONST":
+            lines.append(f"  w{out[0]} = splat({float(fn.instruction_constant(i))!r});")
+        elif op in UNARY:
+            lines.append(f"  w{out[0]} = {UNARY[op].format(f'w{arg[0]}')};")
+        elif op in BINARY:
+            lines.append(f"  w{out[0]} = {BINARY[op].format(f'w{arg[0]}', f'w{arg[1]}')};")
+        else:
+            raise Unsupported(f"{fn.name()}: operation {op} is not written for lanes")
+    lines.append("}")
+    return "\n".join(lines)
+
+
+def kernel_source(step: ca.Function, constants: ca.Function, renorm: ca.Function) -> str:
+    """C of the lane kernel: ``step(s, p, h, t0, c) -> s'``, ``constants(p, h, t0) -> c``
+    and ``renorm(Y) -> (Q, log|R|)`` of ``lyapunov`` for one tangent vector."""
+    n = renorm.size1_in(0)
+    return "\n".join([
+        _HEADER.format(lanes=LANES), vector_c(constants, "constants"),
+        vector_c(step, "step"), vector_c(renorm, "renorm"),
+        _RUN.format(ns=step.size1_in(0), np=step.size1_in(1), nc=step.size1_in(4), n=n,
+                    n1=n + 1)])
+
+
+@dataclass
+class Kernel:
+    """One model's lane kernel: ``run`` advances ``LANES`` points together."""
+
+    n: int
+    """The model's state size."""
+    n_par: int
+    path: Path
+    _fn: Any
+
+    def run(self, s: np.ndarray, p: np.ndarray, h: np.ndarray, t0: np.ndarray,
+            n_renorm: int, every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Advance ``s`` ((2n + 1) × LANES: ``[z; k; v]`` per lane, changed in place) by
+        ``n_renorm`` renormalisations of ``every`` steps; returns the logs (n_renorm ×
+        LANES) and the states ((n_renorm·every) × (n + 1) × LANES, ``[z; k]`` after every
+        step). ``p`` (n_par × LANES), ``h`` and ``t0`` (LANES) in SI units."""
+        logs = np.empty((n_renorm, LANES))
+        states = np.empty((n_renorm * every, self.n + 1, LANES))
+        arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, h, t0)]
+        if not s.flags.c_contiguous or s.dtype != np.float64:
+            raise ValueError("s: a C-contiguous float64 array")
+        self._fn(*(a.ctypes.data_as(ctypes.c_void_p) for a in (s, *arrays)),
+                 ctypes.c_int(n_renorm), ctypes.c_int(every),
+                 logs.ctypes.data_as(ctypes.c_void_p), states.ctypes.data_as(ctypes.c_void_p))
+        return logs, states
+
+
+@cache
+def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel | None:
+    """The lane kernel of ``model`` with these balls, compiled and self-tested against
+    ``lyapunov.tangent_block`` (bit for bit over one renormalisation), or None (see the
+    module). Memoised per process."""
+    from analysis.stability.lyapunov import _qr_logs, tangent_block, tangent_step
+
+    step, constants = tangent_step(model, structure, 1)
+    n = model.n_state
+    try:
+        source = kernel_source(step, constants, _qr_logs(n, 1))
+    except Unsupported:
+        return None
+    command = compiler_command()
+    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
+                         .encode()).hexdigest()
+    balls = "_".join(str(b) for b in structure) or "0"
+    path = cache_dir() / f"bd_lanes_{model.name.replace('-', '_')}_nb{balls}_{key[:20]}.so"
+    try:
+        if not path.exists():
+            _compile(source, path, command)
+        fn = ctypes.CDLL(str(path)).bd_lanes_run
+    except (CompileError, OSError, AttributeError):
+        return None
+    fn.restype = None
+    built = Kernel(n, len(model.parameter_names), path, fn)
+    return built if _agrees(built, tangent_block(model, structure, 1, renorm_every, 1),
+                            model, renorm_every) else None
+
+
+def _agrees(built: Kernel, block: ca.Function, model: Any, renorm_every: int) -> bool:
+    """One renormalisation of every lane equals the CasADi block's, bit for bit."""
+    from analysis.integrate.compiled import test_state
+
+    n = built.n
+    p = model.parameter_vector(model.defaults)
+    h = float(model.simulation_defaults["dt"])
+    lanes = [np.concatenate([test_state(n) * (1 + 0.1 * k), [3.0 + k], np.eye(n)[:, 0]])
+             for k in range(LANES)]
+    s = np.ascontiguousarray(np.stack(lanes, axis=1))
+    logs, _ = built.run(s, np.repeat(p[:, None], LANES, axis=1), np.full(LANES, h),
+                        np.full(LANES, 0.1), 1, renorm_every)
+    for k, start in enumerate(lanes):
+        want_s, want_logs = (np.asarray(x).ravel() for x in block(start, p, h, 0.1)[:2])
+        if not (np.array_equal(want_s, s[:, k]) and np.array_equal(want_logs, logs[:, k])):
+            return False
+    return True
