@@ -3,11 +3,14 @@ each point 1 s transient + 200.5 shaft revolutions (RK4, dt = 1e-5 s), classifie
 largest Lyapunov exponent (``analysis.sweeps.points.chart_point``: states and tangent in one
 pass), on all cores. Prints the wall time and the points per second per core.
 
-In the same run, a serial reference: for ``--reference-points`` points of the grid, one chart
-point computed in this process against the model's compiled RK4 blocks
-(``analysis.integrate.compiled.library`` / ``Runner``: states only, no tangent, no
-classification) over the same simulated time from the same initial state; the ratio of the
-summed times is the chart's cost per point in units of a plain compiled RK4 run.
+In the same run, a serial reference: for ``--reference-points`` points of the grid, each
+with its neighbour on the speed axis (same N_b), the pair computed in this process as the
+chart computes it (``chart_points``: the two tangents in the vector lanes of
+``analysis.integrate.lanes``), each point also alone (``chart_point``: the scalar CasADi
+blocks), against the model's compiled RK4 blocks (``analysis.integrate.compiled.library`` /
+``Runner``: states only, no tangent, no classification) over the same simulated time from
+the same initial states; the ratio of the summed times is the chart's cost per point in
+units of a plain compiled RK4 run.
 
     python benchmarks/bench_chart.py [--speeds 200] [--workers N] [--executor processes|dask]
                                      [--reference-points 10] [--repeat 3] [--no-chart]
@@ -31,7 +34,7 @@ from analysis.integrate.compiled import Runner, library
 from analysis.model import as_system
 from analysis.reports.progress import ProgressReporter
 from analysis.sweeps.executors import make_executor
-from analysis.sweeps.points import chart_point
+from analysis.sweeps.points import chart_point, chart_points
 from analysis.sweeps.sweep import Axis, Setting, _duration, _period, stability_chart
 
 SETTING = Setting("vakharia2015", None, {}, transient=1.0, samples=200, lyapunov=True)
@@ -53,36 +56,53 @@ def rk4_only(n_balls: int, values: dict[str, float], duration: float, dt: float)
     return time.perf_counter() - start
 
 
-def one_point(n_balls: int, values: dict[str, float]) -> float:
-    """Seconds of wall time for one chart point computed in this process."""
+def timed(fn, *args) -> float:
+    """Seconds of wall time for ``fn(*args)`` in this process."""
     start = time.perf_counter()
-    chart_point(SETTING, n_balls, values)
+    fn(*args)
     return time.perf_counter() - start
 
 
+def each_alone(points: list) -> None:
+    """The chart points one by one (``chart_point``: the scalar tangent blocks)."""
+    for point in points:
+        chart_point(SETTING, *point)
+
+
+def rk4_pair(n_balls: int, pair: list[dict], durations: list[float]) -> None:
+    """Compiled RK4 of both points of a pair (states only)."""
+    for values, duration in zip(pair, durations, strict=True):
+        rk4_only(n_balls, values, duration, SETTING.dt)
+
+
 def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
-    """Chart point against compiled RK4 at ``count`` grid points spread over both axes;
-    median of ``repeat`` interleaved runs each (the first call of each point, which loads
-    the libraries, not timed). Times in s."""
+    """Chart points (a pair in lanes, and each alone) against compiled RK4 at ``count``
+    grid points spread over both axes, each with its neighbour on x; median of ``repeat``
+    interleaved runs each (the first call, which loads the libraries, not timed). Times in
+    s, per point."""
     picks = []
     for i in range(count):
-        ix = round(i * (len(x.values) - 1) / max(count - 1, 1))
+        ix = min(round(i * (len(x.values) - 1) / max(count - 1, 1)), len(x.values) - 2)
         n_balls = round(y.values[(3 * i) % len(y.values)])
-        picks.append((n_balls, {x.name: x.values[ix]}))
+        picks.append((n_balls, [{x.name: x.values[ix]}, {x.name: x.values[ix + 1]}]))
     rows = []
-    for n_balls, values in picks:
-        duration = _duration(SETTING, _period(SETTING, n_balls, values))
-        one_point(n_balls, values)
-        rk4_only(n_balls, values, duration, SETTING.dt)
-        chart, rk4 = [], []
+    for n_balls, pair in picks:
+        durations = [_duration(SETTING, _period(SETTING, n_balls, v)) for v in pair]
+        points = [(n_balls, v) for v in pair]
+
+        timed(chart_points, SETTING, points), timed(each_alone, points)
+        timed(rk4_pair, n_balls, pair, durations)
+        lanes, single, plain = [], [], []
         for _ in range(repeat):
-            chart.append(one_point(n_balls, values))
-            rk4.append(rk4_only(n_balls, values, duration, SETTING.dt))
-        rows.append((n_balls, values[x.name], duration, statistics.median(chart),
-                     statistics.median(rk4)))
-    chart_sum, rk4_sum = sum(r[3] for r in rows), sum(r[4] for r in rows)
-    return {"rows": rows, "chart": chart_sum / len(rows), "rk4": rk4_sum / len(rows),
-            "ratio": chart_sum / rk4_sum,
+            lanes.append(timed(chart_points, SETTING, points) / 2)
+            single.append(timed(each_alone, points) / 2)
+            plain.append(timed(rk4_pair, n_balls, pair, durations) / 2)
+        rows.append((n_balls, pair[0][x.name], sum(durations) / 2, statistics.median(lanes),
+                     statistics.median(single), statistics.median(plain)))
+    sums = [sum(r[i] for r in rows) for i in (3, 4, 5)]
+    return {"rows": rows, "chart": sums[0] / len(rows), "alone": sums[1] / len(rows),
+            "rk4": sums[2] / len(rows), "ratio": sums[0] / sums[2],
+            "ratio_alone": sums[1] / sums[2],
             "simulated": sum(r[2] for r in rows) / len(rows)}
 
 
@@ -104,18 +124,19 @@ def main() -> None:
     full_x = Axis.parse("speed_rpm:1000:10000:200")
 
     ref = serial_reference(full_x, y, args.reference_points, args.repeat)
-    print(f"serial reference, {len(ref['rows'])} points of the 1600-point grid "
-          f"(median of {args.repeat} each):")
-    print("| N_b | speed_rpm | simulated (s) | chart point (s) | compiled RK4, states "
-          "only (s) | ratio |")
-    print("|---:|---:|---:|---:|---:|---:|")
-    for n_balls, speed, duration, chart_s, rk4_s in ref["rows"]:
-        print(f"| {n_balls} | {speed:.0f} | {duration:.3f} | {chart_s:.4f} | {rk4_s:.4f} | "
-              f"{chart_s / rk4_s:.2f} |")
+    print(f"serial reference, {len(ref['rows'])} pairs of neighbouring points of the "
+          f"1600-point grid (median of {args.repeat} each; times per point):")
+    print("| N_b | speed_rpm | simulated (s) | chart point, lanes (s) | alone (s) | "
+          "compiled RK4, states only (s) | ratio | ratio alone |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for n_balls, speed, duration, chart_s, alone_s, rk4_s in ref["rows"]:
+        print(f"| {n_balls} | {speed:.0f}+ | {duration:.3f} | {chart_s:.4f} | {alone_s:.4f} | "
+              f"{rk4_s:.4f} | {chart_s / rk4_s:.2f} | {alone_s / rk4_s:.2f} |")
     verdict = "met" if ref["ratio"] <= RATIO_TARGET else "MISSED"
-    print(f"mean per point: chart {ref['chart']:.4f} s, RK4 {ref['rk4']:.4f} s for "
-          f"{ref['simulated']:.3f} s simulated; ratio {ref['ratio']:.2f} "
-          f"(target <= {RATIO_TARGET}: {verdict})")
+    print(f"mean per point: chart {ref['chart']:.4f} s (alone {ref['alone']:.4f} s), RK4 "
+          f"{ref['rk4']:.4f} s for {ref['simulated']:.3f} s simulated; ratio "
+          f"{ref['ratio']:.2f} (alone {ref['ratio_alone']:.2f}; target <= {RATIO_TARGET}: "
+          f"{verdict})")
     if args.no_chart:
         return
 

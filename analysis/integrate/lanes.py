@@ -88,20 +88,22 @@ static inline double csign(double x) {{ return x < 0 ? -1 : x > 0 ? 1 : x; }}
 
 _RUN = """
 /* s: [z; k; v] per lane, lane fastest (s[i * L + k]); p: parameters per lane; h, t0: one
-   per lane. n_renorm renormalisations of `every` steps; logs[r * L + k]; states[(j * (N + 1)
-   + i) * L + k] is [z; k] after step j of the call. */
+   per lane. n_renorm renormalisations of `every` steps; logs[r * L + k]; states[(k * steps
+   + j) * (N + 1) + i] is [z; k] of lane k after step j of the call (each lane's rows in one
+   piece). */
 void bd_lanes_run(double *s_, const double *p_, const double *h_, const double *t0_,
                   int n_renorm, int every, double *logs, double *states) {{
   V s[{ns}], out[{ns}], p[{np}], h[1], t0[1], c[{nc}], y[{n}], q[{n}], lg[1];
   memcpy(s, s_, sizeof s); memcpy(p, p_, sizeof p); memcpy(h, h_, sizeof h);
   memcpy(t0, t0_, sizeof t0);
   constants(p, h, t0, c);
-  long j = 0;
+  long j = 0, steps = (long)n_renorm * every;
   for (int r = 0; r < n_renorm; r++) {{
     for (int i = 0; i < every; i++, j++) {{
       step(s, p, h, t0, c, out);
       memcpy(s, out, sizeof s);
-      memcpy(states + j * {n1} * L, s, {n1} * sizeof(V));
+      for (int k = 0; k < L; k++)
+        for (int m = 0; m < {n1}; m++) states[(k * steps + j) * {n1} + m] = s[m][k];
     }}
     memcpy(y, s + {n1}, sizeof y);
     renorm(y, q, lg);
@@ -170,10 +172,11 @@ class Kernel:
             n_renorm: int, every: int) -> tuple[np.ndarray, np.ndarray]:
         """Advance ``s`` ((2n + 1) × LANES: ``[z; k; v]`` per lane, changed in place) by
         ``n_renorm`` renormalisations of ``every`` steps; returns the logs (n_renorm ×
-        LANES) and the states ((n_renorm·every) × (n + 1) × LANES, ``[z; k]`` after every
-        step). ``p`` (n_par × LANES), ``h`` and ``t0`` (LANES) in SI units."""
+        LANES) and the states (LANES × (n_renorm·every) × (n + 1): lane k's ``[z; k]`` after
+        every step, one contiguous block per lane). ``p`` (n_par × LANES), ``h`` and ``t0``
+        (LANES) in SI units."""
         logs = np.empty((n_renorm, LANES))
-        states = np.empty((n_renorm * every, self.n + 1, LANES))
+        states = np.empty((LANES, n_renorm * every, self.n + 1))
         arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, h, t0)]
         if not s.flags.c_contiguous or s.dtype != np.float64:
             raise ValueError("s: a C-contiguous float64 array")

@@ -67,6 +67,9 @@ RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
 RENORMS_PER_CALL = (100, 10, 1)
 """Renormalisations per call of the compiled blocks, largest first (10⁴, 10³, 10² steps)."""
+LANE_RENORMS = 30
+"""Renormalisations per call of the lane kernel at most (3000 steps: the states it returns,
+2 × 3000 × (n + 1) values, stay in a core's L2 cache)."""
 
 
 @cache
@@ -311,8 +314,7 @@ def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
     logs: list[list[np.ndarray]] = [[] for _ in points]
     outcome: list = [None] * lanes
     while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):
-        count = min(RENORMS_PER_CALL[0], max(left[k] for k in range(lanes)
-                                             if outcome[k] is None))
+        count = min(LANE_RENORMS, max(left[k] for k in range(lanes) if outcome[k] is None))
         call_logs, states = kern.run(s, p, np.full(LANES, dt), np.zeros(LANES), count,
                                      RENORM_EVERY)
         for k, point in enumerate(points):
@@ -320,7 +322,7 @@ def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
             if outcome[k] is not None or used == 0:
                 continue
             try:
-                point.record.take(np.ascontiguousarray(states[:used * RENORM_EVERY, :, k]))
+                point.record.take(states[k, :used * RENORM_EVERY])
             except SimulationError as exc:
                 outcome[k] = exc
                 continue
