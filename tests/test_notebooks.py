@@ -9,13 +9,13 @@ import hashlib
 import os
 import time
 import tomllib
-from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
 
 from analysis.model import load_model
 from tests.conftest import ROOT, SPECS
+from tests.html_rows import table_rows
 
 NOTEBOOKS = ROOT / "docs" / "notebooks"
 BUDGET_S = 60.0
@@ -64,34 +64,10 @@ def test_the_stability_study_notebook(tmp_path, monkeypatch):
     assert images == 1
 
 
-class _Cells(HTMLParser):
-    def __init__(self):
-        super().__init__()
-        self.rows: list[list[str]] = []
-        self._row: list[str] | None = None
-
-    def handle_starttag(self, tag, attrs):
-        if tag == "tr":
-            self._row = []
-        elif tag in ("td", "th") and self._row is not None:
-            self._row.append("")
-
-    def handle_endtag(self, tag):
-        if tag == "tr" and self._row is not None:
-            self.rows.append(self._row)
-            self._row = None
-
-    def handle_data(self, data):
-        if self._row:
-            self._row[-1] += data
-
-
 @pytest.mark.parametrize("name", ["vakharia2015", "two-bearing-rotor", "mathieu"])
 def test_the_model_card_in_a_notebook_lists_every_parameter_of_the_spec(name):
     spec = tomllib.loads((SPECS / f"{name}.toml").read_text())
-    cells = _Cells()
-    cells.feed(load_model(name)._repr_html_())
-    table = {row[0]: row[1:] for row in cells.rows}
+    table = {row[0]: row[1:] for row in table_rows(load_model(name)._repr_html_())}
     assert table["spec sha256"] == [hashlib.sha256((SPECS / f"{name}.toml").read_bytes())
                                     .hexdigest()]
     assert table["spec"] == [f"modelgen/specs/{name}.toml"]

@@ -10,6 +10,7 @@ from analysis.integrate.flow import Period, evaluate, flow_map
 from analysis.integrate.simulate import simulate, state_at
 from analysis.model import load_model
 from analysis.stability.periodic import commensurate, shoot
+from tests.html_rows import table_rows
 
 DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
 
@@ -114,39 +115,16 @@ def test_the_orbit_in_a_notebook_shows_its_multipliers(rotor_orbit):
     """``PeriodicOrbit._repr_html_``: the multipliers read back from the table multiply to
     Liouville's exp(−2cT/M) (to the table's six digits), their moduli give the verdict
     shown, and the state rows are the orbit's z0 with the model's units."""
-    from html.parser import HTMLParser
-
-    class Rows(HTMLParser):
-        def __init__(self):
-            super().__init__()
-            self.rows, self.row = [], None
-
-        def handle_starttag(self, tag, attrs):
-            if tag == "tr":
-                self.row = []
-            elif tag in ("td", "th") and self.row is not None:
-                self.row.append("")
-
-        def handle_endtag(self, tag):
-            if tag == "tr" and self.row:
-                self.rows.append(self.row)
-                self.row = None
-
-        def handle_data(self, data):
-            if self.row:
-                self.row[-1] += data
-
-    parser = Rows()
-    parser.feed(rotor_orbit._repr_html_())
-    facts = {row[0]: row[1] for row in parser.rows if len(row) == 2}
-    table = [row for row in parser.rows if len(row) == 5 and row[0].isdigit()]
+    rows = table_rows(rotor_orbit._repr_html_())
+    facts = {row[0]: row[1] for row in rows if len(row) == 2}
+    table = [row for row in rows if len(row) == 5 and row[0].isdigit()]
     mu = np.array([float(re_) + 1j * float(im) for _, re_, im, _, _ in table])
     values = rotor_orbit.values
     liouville = np.exp(-2 * values["damping"] * rotor_orbit.period_s / values["rotor_mass"])
     assert np.prod(mu).real == pytest.approx(liouville, rel=1e-5)
     verdict = "stable" if np.abs(mu).max() < 1 else "unstable"
     assert facts["stability"].startswith(verdict)
-    states = {row[0]: (float(row[1]), row[2]) for row in parser.rows
+    states = {row[0]: (float(row[1]), row[2]) for row in rows
               if len(row) == 3 and row[0] != "state"}
     assert list(states) == ["x", "y", "vx", "vy"]
     for name, z in zip(states, rotor_orbit.z0, strict=True):
