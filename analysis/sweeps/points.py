@@ -67,9 +67,9 @@ RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
 RENORMS_PER_CALL = (100, 10, 1)
 """Renormalisations per call of the compiled blocks, largest first (10⁴, 10³, 10² steps)."""
-LANE_RENORMS = 30
-"""Renormalisations per call of the lane kernel at most (3000 steps: the states it returns,
-2 × 3000 × (n + 1) values, stay in a core's L2 cache)."""
+LANE_RENORMS = 100
+"""Renormalisations per call of the lane kernel at most (10⁴ steps, as the largest scalar
+block: in benchmarks/bench_lanes.py calls of 30 were 5 % slower)."""
 
 
 @cache
