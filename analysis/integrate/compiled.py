@@ -218,15 +218,26 @@ def library(model: Any, structure: Any, compiled: bool = True) -> Library:
     return _REGISTRY.libraries[memo]
 
 
+def library_stem(prefix: str, model: Any, structure: tuple[int, ...]) -> str:
+    """``<prefix>_<model>_nb<balls>``: the start of a cached library's name."""
+    balls = "_".join(str(n) for n in structure) or "0"
+    return f"{prefix}_{model.name.replace('-', '_')}_nb{balls}"
+
+
+def cached_path(stem: str, source: str, command: list[str]) -> Path:
+    """Where the library of C ``source`` built by ``command`` lives in the cache: named by
+    the SHA-256 of the layout version, the CasADi version, the command and the source."""
+    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
+                         .encode()).hexdigest()
+    return cache_dir() / f"{stem}_{key[:20]}.so"
+
+
 def _compiled_library(model: Any, structure: tuple[int, ...], funcs: Any,
                       command: list[str]) -> Library:
     functions = _library_functions(funcs)
-    balls = "_".join(str(n) for n in structure) or "0"
-    stem = f"bd_{model.name.replace('-', '_')}_nb{balls}"
+    stem = library_stem("bd", model, structure)
     source = _c_source(functions, stem)
-    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
-                         .encode()).hexdigest()
-    path = cache_dir() / f"{stem}_{key[:20]}.so"
+    path = cached_path(stem, source, command)
     p = model.parameter_vector(model.defaults)
     if path.exists():
         lib = _checked_load(path, functions, p)
@@ -380,9 +391,7 @@ def compiled_functions(fns: Sequence[ca.Function],
         return _REGISTRY.libraries[memo]
     stem = f"bd_fn_{fns[0].name()}"
     source = _c_source(fns, stem)
-    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
-                         .encode()).hexdigest()
-    path = cache_dir() / f"{stem}_{key[:20]}.so"
+    path = cached_path(stem, source, command)
 
     def load() -> list[ca.Function] | None:
         try:

@@ -22,7 +22,6 @@ scalar blocks.
 from __future__ import annotations
 
 import ctypes
-import hashlib
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -32,11 +31,11 @@ import casadi as ca
 import numpy as np
 
 from analysis.integrate.compiled import (
-    LAYOUT_VERSION,
     CompileError,
     _compile,
-    cache_dir,
+    cached_path,
     compiler_command,
+    library_stem,
 )
 
 LANES = 2
@@ -200,10 +199,7 @@ def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel 
     except Unsupported:
         return None
     command = compiler_command()
-    key = hashlib.sha256("\0".join([LAYOUT_VERSION, ca.__version__, *command, source])
-                         .encode()).hexdigest()
-    balls = "_".join(str(b) for b in structure) or "0"
-    path = cache_dir() / f"bd_lanes_{model.name.replace('-', '_')}_nb{balls}_{key[:20]}.so"
+    path = cached_path(library_stem("bd_lanes", model, structure), source, command)
     try:
         if not path.exists():
             _compile(source, path, command)

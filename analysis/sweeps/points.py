@@ -291,11 +291,15 @@ def one_pass(system: System, duration: float, transient: float, dt: float,
     ``tangent``, λ1 and its interval from the same pass, else λ1 only when the section
     points cannot decide (``classify``'s own, from the final state)."""
     point = _prepare(system, duration, transient, dt, section, tangent, compiled)
-    logs = None
-    if tangent:
-        logs = _run_tangent(chart_blocks(system.model, system.structure, compiled),
-                            system.p, point.z, dt, point.plan, point.record)
-    return _finish(point, logs)
+    return _finish(point, _scalar_tangent(point, compiled) if tangent else None)
+
+
+def _scalar_tangent(point: _Point, compiled: bool) -> np.ndarray:
+    """The tangent part of one point in the scalar blocks (``chart_blocks``): the logs of
+    every renormalisation, its states fed to the point's record."""
+    system = point.system
+    return _run_tangent(chart_blocks(system.model, system.structure, compiled), system.p,
+                        point.z, point.attrs["dt"], point.plan, point.record)
 
 
 def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
@@ -349,20 +353,16 @@ def one_pass_lanes(systems: list[System], durations: list[float], transient: flo
                                          compiled)))
         except SimulationError as exc:
             results[i] = exc
-    for g in range(0, len(prepared), LANES if kern is not None else 1):
-        group = prepared[g:g + (LANES if kern is not None else 1)]
+    size = LANES if kern is not None else 1
+    for g in range(0, len(prepared), size):
+        group = prepared[g:g + size]
         if kern is not None:
             outcomes = _run_lanes(kern, [point for _, point in group], dt)
         else:
-            outcomes = []
-            for _, point in group:
-                try:
-                    outcomes.append(_run_tangent(chart_blocks(point.system.model,
-                                                              point.system.structure),
-                                                 point.system.p, point.z, dt, point.plan,
-                                                 point.record))
-                except SimulationError as exc:
-                    outcomes.append(exc)
+            try:
+                outcomes = [_scalar_tangent(group[0][1], compiled)]
+            except SimulationError as exc:
+                outcomes = [exc]
         for (i, point), outcome in zip(group, outcomes, strict=True):
             results[i] = outcome if isinstance(outcome, SimulationError) else \
                 _finish(point, outcome)
