@@ -1,0 +1,177 @@
+"""A run plan: a run's system, times and step, checked once before any step is taken.
+
+Every path that integrates a System makes one (``simulate`` and ``simulate_to_file``, the
+sweep's and the chart's records, ``lyapunov``, ``shoot`` and continuation): the same checks
+in the same order, whatever asks, and the defaults are the spec's own (``[simulation]``
+``dt``, ``duration``, ``transient``). A plan either holds a whole run (``RunPlan.make``:
+duration, transient, saved samples) or only a step (``RunPlan.step``: the largest RK4 step
+of a flow map, whose length the period sets).
+
+Checks, in this order (the first that fails is the one reported):
+
+1. the times: duration and dt finite and > 0 s, transient in [0, duration), dt <= duration;
+2. the method (``rk4`` or ``cvodes``) and CVODES' tolerances;
+3. ``save_every`` a whole number >= 1;
+4. the resolution: at most ``MAX_STEPS`` steps, and at least ``RESOLUTION_REFUSE`` steps per
+   period of the fastest forcing (a warning below ``RESOLUTION_WARN``:
+   ``analysis.integrate.checks.check_resolution``);
+5. the memory of the samples a run keeps (``in_memory`` runs only);
+6. the RK4 stability of the step at the model's stiffest linearisation
+   (``analysis.integrate.checks.check_rk4_step``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
+from analysis.model import System
+
+Method = Literal["rk4", "cvodes"]
+METHODS = ("rk4", "cvodes")
+"""The integration methods: fixed-step RK4 (the paper's) and adaptive CVODES (BDF)."""
+MEMORY_BUDGET = 8 * 2**30
+"""Most bytes the states a run keeps in memory may take (their float64 values, twice: the
+blocks and the assembled array)."""
+
+
+def check_times(duration: float, transient: float, dt: float) -> None:
+    """``InputError`` unless duration and dt are finite and > 0 s, the transient is in
+    [0, duration) and the step fits in the duration."""
+    check_seconds("duration", duration)
+    check_seconds("dt", dt)
+    if not (math.isfinite(transient) and 0 <= transient < duration):
+        raise InputError(f"transient: must be in [0, duration) = [0, {duration:g}) s, "
+                         f"got {transient!r}")
+    if dt > duration:
+        raise InputError(f"dt: must be <= duration ({duration:g} s), got {dt!r}")
+
+
+def check_memory(n_state: int, n_saved: int, save_every: int) -> None:
+    """``InputError`` when the samples of a run held in memory exceed ``MEMORY_BUDGET``."""
+    need = 2 * 8 * (n_state + 1) * (n_saved + 1)
+    if need > MEMORY_BUDGET:
+        raise InputError(f"save_every: the run would keep {n_saved + 1:.3g} samples "
+                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: raise "
+                         f"save_every to at least {math.ceil(save_every * need / MEMORY_BUDGET)} "
+                         "or shorten the run")
+
+
+def first_kept(threshold: float, step: float) -> int:
+    """Smallest k with k·step >= threshold, computed as ``np.arange(…) * step`` computes the
+    times (so the first kept sample is the same whichever way the run is stored)."""
+    k = max(0, math.ceil(threshold / step))
+    while k > 0 and float(np.float64(k - 1) * step) >= threshold:
+        k -= 1
+    while float(np.float64(k) * step) < threshold:
+        k += 1
+    return k
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """A checked run of ``system``: step ``dt`` (s), ``duration`` and ``transient`` (s; the
+    duration is None for a step-only plan), ``method``, ``save_every`` (keep every n-th
+    step), the start time ``t0`` (s; None: a run from t = 0, recorded without ``t_start``)
+    and CVODES' ``rtol``/``atol``. Make it with ``make`` or ``step``; the constructor checks
+    nothing."""
+
+    system: System
+    dt: float
+    duration: float | None = None
+    transient: float = 0.0
+    method: Method = "rk4"
+    save_every: int = 1
+    t0: float | None = None
+    rtol: float = 1e-10
+    atol: float = 1e-16
+
+    @classmethod
+    def make(cls, system: System, *, duration: float | None = None,
+             transient: float | None = None, dt: float | None = None, method: Method = "rk4",
+             save_every: int = 1, rtol: float = 1e-10, atol: float = 1e-16, t0: float | None = None,
+             in_memory: bool = False, warn: Callable[[str], None] | None = None) -> RunPlan:
+        """The plan of a whole run: every check of the module's list, in its order. None
+        times are the spec's. ``in_memory``: the run keeps its samples in memory (checked
+        against ``MEMORY_BUDGET``). ``warn(message)``: how a coarse step is reported
+        (default: a Python warning)."""
+        sim = system.model.simulation_defaults
+        duration = float(sim["duration"] if duration is None else duration)
+        transient = float(sim["transient"] if transient is None else transient)
+        dt = float(sim["dt"] if dt is None else dt)
+        check_times(duration, transient, dt)
+        if method not in METHODS:
+            raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
+        if method == "cvodes":
+            if not (math.isfinite(rtol) and 0 < rtol < 1):
+                raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
+            if not (math.isfinite(atol) and 0 <= atol < 1):
+                raise InputError(f"atol: must be in [0, 1), got {atol!r}")
+        if isinstance(save_every, bool) or not (isinstance(save_every, int)
+                                                 and save_every >= 1):
+            raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
+        model, values = system.model, dict(system.parameters)
+        check_resolution(model, system.structure, values, dt, duration, warn=warn)
+        plan = cls(system, dt, duration, transient, method, save_every,
+                   None if t0 is None else float(t0), rtol, atol)
+        if in_memory:
+            check_memory(model.n_state, plan.n_saved, save_every)
+        check_rk4_step(model, system.structure, values, dt, method)
+        return plan
+
+    @classmethod
+    def step(cls, system: System, dt: float | None = None, *,
+             warn: Callable[[str], None] | None = None) -> RunPlan:
+        """The plan of a step only (s; None: the spec's): the largest RK4 step of a flow
+        map over a period (shooting, Floquet, continuation), checked as a run's step is:
+        finite and > 0, resolving the fastest forcing, RK4-stable."""
+        dt = float(system.model.simulation_defaults["dt"] if dt is None else dt)
+        check_seconds("dt", dt)
+        values = dict(system.parameters)
+        check_resolution(system.model, system.structure, values, dt, warn=warn)
+        check_rk4_step(system.model, system.structure, values, dt, "rk4")
+        return cls(system, dt)
+
+    @property
+    def n_steps(self) -> int:
+        """RK4 steps of the whole run (transient included)."""
+        return round(self._duration / self.dt)
+
+    @property
+    def n_saved(self) -> int:
+        """Index of the last saved sample (samples 0 … n_saved are saved)."""
+        return self.n_steps // self.save_every
+
+    @property
+    def first(self) -> int:
+        """Index of the first saved sample after the transient."""
+        threshold = self.transient - 1e-12 * self._duration
+        return max(0, first_kept(threshold, self.save_every * self.dt))
+
+    def times(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Times (s, from ``t0``) of the saved samples ``start … stop − 1`` (all: 0 …
+        n_saved)."""
+        stop = self.n_saved + 1 if stop is None else stop
+        elapsed = np.arange(start, stop) * (self.save_every * self.dt)
+        return elapsed if self.t0 is None else self.t0 + elapsed
+
+    def settings(self) -> dict[str, float | int | str]:
+        """The run's settings as result attributes, in the order results write them."""
+        out: dict[str, float | int | str] = {
+            "method": self.method, "dt": self.dt, "save_every": self.save_every,
+            "duration": self._duration, "transient": self.transient}
+        if self.t0 is not None:
+            out["t_start"] = self.t0
+        return out
+
+    @property
+    def _duration(self) -> float:
+        if self.duration is None:
+            raise InputError("duration: a step-only plan has no duration")
+        return self.duration
