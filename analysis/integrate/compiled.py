@@ -12,8 +12,8 @@ and the time of step
 blocks cover it, so a result does not depend on how the run was cut into calls.
 
 Compiled path: CasADi writes the C source of the blocks (and of ``rhs``, ``rhs_jac``,
-``rk4_step``); the system C compiler turns it into a shared library in the user cache
-directory (``BEARINGDYN_CACHE``, default ``platformdirs.user_cache_dir("bearingdyn")``),
+``rk4_step``); the system C compiler turns it into a shared library in ``compiled/`` of
+the user cache (``BEARINGDYN_CACHE``, default ``platformdirs.user_cache_dir("bearingdyn")``),
 named by the SHA-256 of the source, the compiler command, its flags and the CasADi version;
 ``casadi.external`` loads it. The library is written under a temporary name and renamed, so
 concurrent processes (sweep workers) never see half a file. A cached library that does not
@@ -41,6 +41,7 @@ import casadi as ca
 import numpy as np
 
 from analysis.integrate.tangent import Carry, block_tree, model_tag, tangent_step
+from modelgen.locations import cache_root
 
 BLOCK_SIZES = (10_000, 1000, 100, 10, 1)
 """RK4 steps per block, largest first; each is ten of the next."""
@@ -63,13 +64,10 @@ class CompileError(RuntimeError):
 
 
 def cache_dir() -> Path:
-    """Folder of the compiled libraries: $BEARINGDYN_CACHE or the user cache directory."""
-    env = os.environ.get("BEARINGDYN_CACHE")
-    if env:
-        return Path(env).expanduser()
-    import platformdirs
-
-    return Path(platformdirs.user_cache_dir("bearingdyn")) / "compiled"
+    """Folder of the compiled libraries: ``compiled/`` in the user cache
+    (``$BEARINGDYN_CACHE``, else the platform's user cache folder; ``modelgen.locations``),
+    beside the generated code of user specs in ``models/``."""
+    return cache_root() / "compiled"
 
 
 def compiler_command() -> list[str]:
