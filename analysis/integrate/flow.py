@@ -21,7 +21,13 @@ import numpy as np
 
 from analysis.errors import InputError
 from analysis.integrate.checks import check_seconds
-from analysis.integrate.tangent import Carry, block_tree, model_tag, tangent_step
+from analysis.integrate.tangent import (
+    Carry,
+    block_tree,
+    chain_blocks,
+    model_tag,
+    tangent_step,
+)
 from analysis.model import Model
 
 PERIOD_KINDS = ("vc", "shaft", "ratio", "param")
@@ -174,20 +180,6 @@ def sensitivity_blocks(model: Model, structure: tuple[int, ...],
     return dict(zip(SENSITIVITY_BLOCK_SIZES, built, strict=True))
 
 
-def _chain(blocks: dict[int, ca.Function], n_steps: int, first: ca.MX,
-           args: list[ca.MX]) -> ca.MX:
-    """The state after ``n_steps`` steps of ``blocks`` (sizes largest first, each ten of the
-    next) from ``first``: full blocks of the largest size, then the rest digit by digit,
-    each run of equal blocks one ``fold`` (a loop of calls, nothing unrolled)."""
-    current, left = first, n_steps
-    for size, fn in blocks.items():
-        count, left = divmod(left, size)
-        if count:
-            run = fn.fold(count) if count > 1 else fn
-            current = run(current, *(ca.repmat(a, 1, count) for a in args))
-    return current
-
-
 def _period_step(model: Model, structure: tuple[int, ...], period: Period, n_steps: int,
                  p: ca.MX) -> ca.MX:
     return period.seconds(model, structure, p) / n_steps
@@ -213,7 +205,7 @@ def flow_map(model: Model, n_balls: tuple[int, ...], period: Period, n_steps: in
     h = _period_step(model, structure, period, n_steps, p)
     g = ca.jacobian(h, p)
     s0 = ca.vertcat(z0, ca.MX.zeros(1), ca.vec(ca.MX.eye(n)), ca.MX.zeros(n * n_par))
-    s_end = _chain(blocks, n_steps, s0, [p, h, t0, g])
+    s_end, _ = chain_blocks(blocks, n_steps, s0, [p, h, t0, g])
     mono = ca.reshape(s_end[n + 1:n + 1 + n * n], n, n)
     dp = ca.reshape(s_end[n + 1 + n * n:], n, n_par)
     return ca.Function("flow", [z0, t0, p], [s_end[:n], mono, dp],
@@ -267,14 +259,7 @@ def orbit_states(model: Model, n_balls: tuple[int, ...], period: Period,
         states = lib.blocks[size](zn, pm, hm, tm)
         blocks[size] = ca.Function(f"orbit_block{size}", [zn, pm, hm, tm],
                                    [states[:, -1], states])
-    outputs, current, left = [], ca.vertcat(z0, ca.MX.zeros(1)), n_steps
-    for size, fn in blocks.items():
-        count, left = divmod(left, size)
-        if count == 0:
-            continue
-        run = fn.mapaccum(count) if count > 1 else fn
-        last, states = run(current, *(ca.repmat(a, 1, count) for a in (p, h, t0)))
-        outputs.append(states)
-        current = last[:, -1]
+    _, outputs = chain_blocks(blocks, n_steps, ca.vertcat(z0, ca.MX.zeros(1)), [p, h, t0],
+                              keep_states=True)
     return ca.Function("orbit", [z0, t0, p], [ca.horzcat(*outputs)[:n, :]],
                        ["z0", "t0", "p"], ["Z"])

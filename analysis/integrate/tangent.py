@@ -18,7 +18,8 @@ rides along is described by ``Carry``:
   values, and a step that repeats none of them.
 
 ``tangent_step`` builds that SX step; ``block_tree`` chains it into blocks of ten calls of
-the next smaller size (one step in the C code, however many a block runs);
+the next smaller size (one step in the C code, however many a block runs), and
+``chain_blocks`` covers any number of steps with such blocks;
 ``tangent_block`` renormalises r tangent vectors by QR every ``renorm_every`` steps
 (``qr_logs``, shared with the lane kernel of ``analysis.integrate.lanes``). Every builder is
 memoised per process, so one model, structure and set of options yields one Function
@@ -136,6 +137,34 @@ def block_tree(step: ca.Function, sizes: Sequence[int], name: Callable[[int], st
         inner[size] = ca.Function(name(size), args,
                                   [ca.horzcat(*parts) if keep_states else current], *extra)
     return {size: inner[size] for size in sizes}
+
+
+def chain_blocks(blocks: dict[int, ca.Function], n_steps: int, first: ca.MX,
+                 args: Sequence[ca.MX], keep_states: bool = False
+                 ) -> tuple[ca.MX, list[ca.MX]]:
+    """``n_steps`` steps of ``blocks`` (sizes largest first, each ten of the next; a
+    block's first input is the carried vector, ``args`` the others) from ``first``: full
+    blocks of the largest size, then the rest digit by digit, each run of equal blocks one
+    CasADi loop (nothing unrolled).
+
+    Returns the carried vector after the last step and, with ``keep_states``, the states of
+    every run (blocks that return ``(last, states)``, chained by ``mapaccum``); without, the
+    blocks return the carried vector alone, chained by ``fold``, and the list is empty."""
+    current, left, kept = first, n_steps, []
+    for size, fn in blocks.items():
+        count, left = divmod(left, size)
+        if count == 0:
+            continue
+        repeated = [ca.repmat(a, 1, count) for a in args]
+        if keep_states:
+            run = fn.mapaccum(count) if count > 1 else fn
+            last, states = run(current, *repeated)
+            kept.append(states)
+            current = last[:, -1]
+        else:
+            run = fn.fold(count) if count > 1 else fn
+            current = run(current, *repeated)
+    return current, kept
 
 
 @cache
