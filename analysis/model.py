@@ -308,7 +308,7 @@ class Model:
                          for b, n in zip(self.bearing_names, structure, strict=True))
 
     def functions(self, n_balls: BallCounts = None):
-        """CasADi Functions (rhs, jac, rk4_step, simulator) for these balls (cached)."""
+        """CasADi Functions (rhs, jac, rk4_step) for these balls (cached)."""
         s = self.structure(n_balls)
         if s not in self._functions:
             self._functions[s] = self.module.build(s)

@@ -27,8 +27,6 @@ class ModelFunctions:
                                  positions, then velocities; SI units)
     jac(t, z, p) -> d rhs / d z  n x n Jacobian (AD; CasADi name rhs_jac)
     rk4_step(t, z, p, h) -> z(t + h)  one classical Runge-Kutta step of h seconds
-    simulator(n_out, save_every) -> sim(z0, t0, p, h) -> (Z, T): n_out * save_every RK4
-        steps in one call, keeping every save_every-th state (n x n_out) and its time.
 
     ``structure`` holds the number of balls of each bearing, in the order of the model's
     BEARINGS (one number for a model with one bearing). The ball angles use angle addition, θ_i = φ_i + ψ with φ_i = 2π (i−1)/N_b fixed
@@ -69,10 +67,6 @@ class ModelFunctions:
         k4 = self._derivative(t + h, z + h * k3, p, full)
         z_next = ca.cse(z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
         self.rk4_step = ca.Function("rk4_step", [t, z, p, h], [z_next], [*names, "h"], ["z_next"])
-        zt = ca.vertcat(z, t)
-        self._step_zt = ca.Function("rk4_step_zt", [zt, p, h],
-                                    [ca.vertcat(z_next, t + h)], ["zt", "p", "h"], ["zt_next"])
-        self._simulators = {}
 
     def _derivative(self, t, z, p, angles):
         """dz/dt at time t, with angles[k] = (cos ψ, sin ψ) of bearing k's cage angle ψ(t)."""
@@ -91,28 +85,6 @@ class ModelFunctions:
                     forces[j] = _push(_push(forces[j], ax, push_x), ay, push_y)
         mass = self.model.mass(p)
         return ca.vertcat(*state[n_dof:], *(f / m for f, m in zip(forces, mass, strict=True)))
-
-    def simulator(self, n_out: int, save_every: int = 1):
-        """sim(z0, t0, p, h) -> (Z [n x n_out], T [1 x n_out]) after each save_every steps."""
-        key = (int(n_out), int(save_every))
-        if key not in self._simulators:
-            n_state, n_par = len(self.model.STATE), len(self.model.PARAMETERS)
-            zt, p, h = ca.MX.sym("zt", n_state + 1), ca.MX.sym("p", n_par), ca.MX.sym("h")
-            step = self._step_zt
-            if save_every > 1:
-                block = step.fold(save_every)
-                step = ca.Function("rk4_block", [zt, p, h],
-                                   [block(zt, ca.repmat(p, 1, save_every),
-                                          ca.repmat(h, 1, save_every))])
-            run = step.mapaccum("rk4_run", n_out)
-            out = run(zt, ca.repmat(p, 1, n_out), ca.repmat(h, 1, n_out))
-            z0, t0 = ca.MX.sym("z0", n_state), ca.MX.sym("t0")
-            zt0 = ca.vertcat(z0, t0)
-            out = ca.substitute([out], [zt], [zt0])[0]
-            self._simulators[key] = ca.Function(
-                "sim", [z0, t0, p, h], [out[:n_state, :], out[n_state, :]],
-                ["z0", "t0", "p", "h"], ["Z", "T"])
-        return self._simulators[key]
 
 
 def _push(force, coefficient, push):

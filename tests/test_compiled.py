@@ -5,6 +5,7 @@ from __future__ import annotations
 import shutil
 import warnings
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -32,7 +33,7 @@ def built_cache(tmp_path_factory):
             mp.delenv(name, raising=False)
         mp.setattr(compiled, "_REGISTRY", compiled._Registry())
         lib = compiled.library(load_model(MODEL), N_BALLS)
-    assert lib.backend == "compiled" and lib.path.parent == root
+    assert lib.backend == "compiled" and lib.path.parent == root / "compiled"
     return root
 
 
@@ -55,7 +56,7 @@ def cache(built_cache, fresh):
 
 
 def _library_file(root):
-    (path,) = root.glob("*.so")
+    (path,) = (root / "compiled").glob("*.so")
     return path
 
 
@@ -80,6 +81,19 @@ def test_cached_library_is_reused_without_compiling(cache):
     assert compiled.compilations() == 0
     assert path.stat().st_mtime_ns == mtime
     assert compiled.library(load_model(MODEL), N_BALLS) is lib  # memoised in the process
+
+
+@pytest.mark.skipif(shutil.which(compiled.DEFAULT_CC) is None, reason="no C compiler")
+def test_compiled_libraries_land_in_the_compiled_folder_of_the_cache(fresh):
+    """With BEARINGDYN_CACHE set, every library goes to <cache>/compiled/ (beside the
+    generated code of user specs in <cache>/models/), not into the cache's root."""
+    _run()
+    x = ca.SX.sym("x")
+    compiled.compiled_function(ca.Function("cache_root_probe", [x], [2 * x]), (1.5,))
+    assert compiled.cache_dir() == fresh / "compiled"
+    assert {p.name.split("_")[1] for p in (fresh / "compiled").glob("*.so")} >= {"fn", MODEL}
+    assert sorted(p.relative_to(fresh).parts[0] for p in fresh.rglob("*.so")) == \
+        ["compiled", "compiled"]
 
 
 @pytest.mark.parametrize(("variable", "value", "reason"), [

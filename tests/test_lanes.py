@@ -9,8 +9,8 @@ import pytest
 
 from analysis.integrate import lanes
 from analysis.integrate.lanes import LANES, Unsupported, kernel, vector_c
+from analysis.integrate.tangent import tangent_block
 from analysis.model import load_model
-from analysis.stability.lyapunov import tangent_block
 from analysis.sweeps.points import chart_point, chart_points
 from analysis.sweeps.sweep import Setting
 
@@ -100,10 +100,10 @@ def test_without_a_kernel_the_points_run_one_by_one(monkeypatch):
     kernel.cache_clear()
     try:
         model = load_model("vakharia2015")
-        from analysis.stability.lyapunov import tangent_step
+        from analysis.integrate.tangent import lyapunov_step
 
         with pytest.raises(Unsupported, match="SQRT"):
-            vector_c(tangent_step(model, (8,), 1)[0], "step")
+            vector_c(lyapunov_step(model, (8,), 1).step, "step")
         assert kernel(model, (8,), 100) is None
         points = [(8, {"speed_rpm": v}) for v in (3000.0, 3100.0)]
         for (n_balls, values), got in zip(points, chart_points(CHART, points), strict=True):

@@ -12,8 +12,8 @@ and the time of step
 blocks cover it, so a result does not depend on how the run was cut into calls.
 
 Compiled path: CasADi writes the C source of the blocks (and of ``rhs``, ``rhs_jac``,
-``rk4_step``); the system C compiler turns it into a shared library in the user cache
-directory (``BEARINGDYN_CACHE``, default ``platformdirs.user_cache_dir("bearingdyn")``),
+``rk4_step``); the system C compiler turns it into a shared library in ``compiled/`` of
+the user cache (``BEARINGDYN_CACHE``, default ``platformdirs.user_cache_dir("bearingdyn")``),
 named by the SHA-256 of the source, the compiler command, its flags and the CasADi version;
 ``casadi.external`` loads it. The library is written under a temporary name and renamed, so
 concurrent processes (sweep workers) never see half a file. A cached library that does not
@@ -40,6 +40,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from analysis.integrate.tangent import Carry, block_tree, model_tag, tangent_step
+from modelgen.locations import cache_root
+
 BLOCK_SIZES = (10_000, 1000, 100, 10, 1)
 """RK4 steps per block, largest first; each is ten of the next."""
 DEFAULT_CC = "gcc"
@@ -61,13 +64,10 @@ class CompileError(RuntimeError):
 
 
 def cache_dir() -> Path:
-    """Folder of the compiled libraries: $BEARINGDYN_CACHE or the user cache directory."""
-    env = os.environ.get("BEARINGDYN_CACHE")
-    if env:
-        return Path(env).expanduser()
-    import platformdirs
-
-    return Path(platformdirs.user_cache_dir("bearingdyn")) / "compiled"
+    """Folder of the compiled libraries: ``compiled/`` in the user cache
+    (``$BEARINGDYN_CACHE``, else the platform's user cache folder; ``modelgen.locations``),
+    beside the generated code of user specs in ``models/``."""
+    return cache_root() / "compiled"
 
 
 def compiler_command() -> list[str]:
@@ -86,31 +86,18 @@ def rk4_blocks(funcs: Any) -> dict[int, ca.Function]:
     ``n + j + 1``; step ``k`` runs from ``t0 + k·h`` to ``t0 + (k + 1)·h`` (s). The
     subexpressions of a step that depend on ``p``, ``h`` and ``t0`` only (cage speed, the
     rotations of the cage angle by ω_cage·h/2 and ω_cage·h, …) are computed once per call
-    (``casadi.extract_parametric``): the same operations as per step, so the same values.
+    (``tangent.Carry.constants``): the same operations as per step, so the same values.
     """
-    n_par, n = funcs.rk4_step.size1_in(2), funcs.rk4_step.size1_in(1)
-    zn, p = ca.SX.sym("zn", n + 1), ca.SX.sym("p", n_par)
-    h, t0 = ca.SX.sym("h"), ca.SX.sym("t0")
-    z_next = funcs.rk4_step(t0 + zn[n] * h, zn[:n], p, h)
-    step, extracted, values = ca.extract_parametric(ca.vertcat(z_next, zn[n] + 1),
-                                                    ca.vertcat(p, h, t0))
-    q = ca.vertcat(*extracted)
-    constants = ca.Function("rk4_constants", [p, h, t0], [ca.vertcat(*values)])
-    inner = {1: ca.Function("rk4_steps1", [zn, p, h, t0, q], [step])}
-    names, blocks = ["zn", "p", "h", "t0"], {}
+    step, constants = tangent_step(funcs.rk4_step, Carry(constants=True), "rk4_steps1",
+                                   "rk4_constants")
+    inner = block_tree(step, BLOCK_SIZES, lambda size: f"rk4_steps{size}", keep_states=True)
+    blocks = {}
     for size in sorted(BLOCK_SIZES):
-        zn_m, p_m = ca.MX.sym("zn", n + 1), ca.MX.sym("p", n_par)
-        h_m, t0_m, q_m = ca.MX.sym("h"), ca.MX.sym("t0"), ca.MX.sym("q", q.numel())
-        if size > 1:  # ten calls of the next smaller size
-            parts, current = [], zn_m
-            for _ in range(10):
-                parts.append(inner[size // 10](current, p_m, h_m, t0_m, q_m))
-                current = parts[-1][:, -1]
-            inner[size] = ca.Function(f"rk4_steps{size}", [zn_m, p_m, h_m, t0_m, q_m],
-                                      [ca.horzcat(*parts)])
-        out = inner[size](zn_m, p_m, h_m, t0_m, constants(p_m, h_m, t0_m))
-        blocks[size] = ca.Function(f"rk4_block{size}", [zn_m, p_m, h_m, t0_m], [out], names,
-                                   ["Z"])
+        zn, p, h, t0 = (ca.MX.sym(name, step.sparsity_in(i))
+                        for i, name in enumerate(("zn", "p", "h", "t0")))
+        out = inner[size](zn, p, h, t0, constants(p, h, t0))
+        blocks[size] = ca.Function(f"rk4_block{size}", [zn, p, h, t0], [out],
+                                   ["zn", "p", "h", "t0"], ["Z"])
     return blocks
 
 
@@ -126,7 +113,7 @@ def _c_source(functions: list[ca.Function], prefix: str) -> str:
     return cg.dump()
 
 
-def _compile(source: str, target: Path, command: list[str]) -> None:
+def compile_library(source: str, target: Path, command: list[str]) -> None:
     """Compile ``source`` to the shared library ``target`` (written atomically)."""
     exe = shutil.which(command[0])
     if exe is None:
@@ -220,8 +207,7 @@ def library(model: Any, structure: Any, compiled: bool = True) -> Library:
 
 def library_stem(prefix: str, model: Any, structure: tuple[int, ...]) -> str:
     """``<prefix>_<model>_nb<balls>``: the start of a cached library's name."""
-    balls = "_".join(str(n) for n in structure) or "0"
-    return f"{prefix}_{model.name.replace('-', '_')}_nb{balls}"
+    return f"{prefix}_{model_tag(model, structure)}"
 
 
 def cached_path(stem: str, source: str, command: list[str]) -> Path:
@@ -244,7 +230,7 @@ def _compiled_library(model: Any, structure: tuple[int, ...], funcs: Any,
         if lib is not None:
             return lib
         # unreadable or wrong (a crash while writing it, a bad copy): build it again
-    _compile(source, path, command)
+    compile_library(source, path, command)
     _REGISTRY.compilations += 1
     lib = _checked_load(path, functions, p)
     if lib is None:
@@ -410,7 +396,7 @@ def compiled_functions(fns: Sequence[ca.Function],
     result = load() if path.exists() else None
     if result is None:
         try:
-            _compile(source, path, command)
+            compile_library(source, path, command)
             _REGISTRY.compilations += 1
             result = load()
         except (CompileError, OSError) as exc:

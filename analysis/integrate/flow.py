@@ -12,7 +12,6 @@ discrete RK4 map, not finite differences).
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cache
@@ -22,6 +21,13 @@ import numpy as np
 
 from analysis.errors import InputError
 from analysis.integrate.checks import check_seconds
+from analysis.integrate.tangent import (
+    Carry,
+    block_tree,
+    chain_blocks,
+    model_tag,
+    tangent_step,
+)
 from analysis.model import Model
 
 PERIOD_KINDS = ("vc", "shaft", "ratio", "param")
@@ -134,59 +140,36 @@ SENSITIVITY_BLOCK_SIZES = (100, 10, 1)
 of the next, so N steps take N // 100 + at most 18 calls."""
 
 
-def _tag(model: Model, structure: tuple[int, ...]) -> str:
-    """``<model>_nb<balls>`` as a C identifier: names the functions (and so the library)."""
-    balls = "_".join(str(b) for b in structure) or "0"
-    return re.sub(r"\W", "_", f"{model.name}_nb{balls}")
+FLOW_NAMES = (("s", "p", "h", "t0", "g"), ("s_next",))
+"""Input and output names of the flow maps' step and blocks."""
 
 
-def _sensitivity_step(model: Model, structure: tuple[int, ...]) -> ca.Function:
-    """One RK4 step carrying the derivatives of the flow, as an SX Function.
+@cache
+def sensitivity_blocks(model: Model, structure: tuple[int, ...],
+                       compiled: bool) -> dict[int, ca.Function]:
+    """The blocks of ``SENSITIVITY_BLOCK_SIZES`` RK4 steps carrying the derivatives of the
+    flow, ``flow_<model>_nb<balls>_steps<size>(s, p, h, t0, g) -> s'``.
 
-    ``flow_<model>_nb<balls>_steps1(s, p, h, t0, g) -> s'`` with
     ``s = [z; k; vec(M); vec(D)]``: the state z after step k (time ``t0 + k·h``, as in
     ``compiled.rk4_blocks``), M = ∂z/∂z0 (n × n) and D = dz/dp (n × n_par, column-major),
     the step h's own dependence on p included through ``g = dh/dp`` (1 × n_par):
     M' = A·M and D' = A·D + ∂z'/∂p + ∂z'/∂h·g with A = ∂z'/∂z, the exact derivatives of
-    the discrete RK4 map (CasADi AD, ∂z'/∂h through the step's time too).
-    """
-    step = model.functions(structure).rk4_step
-    n, n_par = model.n_state, len(model.parameter_names)
-    z, k, p = ca.SX.sym("z", n), ca.SX.sym("k"), ca.SX.sym("p", n_par)
-    h, t0, g = ca.SX.sym("h"), ca.SX.sym("t0"), ca.SX.sym("g", 1, n_par)
-    m, d = ca.SX.sym("M", n, n), ca.SX.sym("D", n, n_par)
-    z_next = step(t0 + k * h, z, p, h)
-    a = ca.jacobian(z_next, z)
-    d_next = ca.mtimes(a, d) + ca.jacobian(z_next, p) + ca.mtimes(ca.jacobian(z_next, h), g)
-    s = ca.vertcat(z, k, ca.vec(m), ca.vec(d))
-    return ca.Function(f"flow_{_tag(model, structure)}_steps1", [s, p, h, t0, g],
-                       [ca.vertcat(z_next, k + 1, ca.vec(ca.mtimes(a, m)), ca.vec(d_next))],
-                       ["s", "p", "h", "t0", "g"], ["s_next"])
-
-
-@cache
-def _sensitivity_blocks(model: Model, structure: tuple[int, ...],
-                        compiled: bool) -> dict[int, ca.Function]:
-    """The blocks of ``SENSITIVITY_BLOCK_SIZES`` steps (each ten calls of the next smaller:
-    the C code holds one step, not 100), compiled into one library of the cache
+    the discrete RK4 map (``tangent.tangent_step``; ∂z'/∂h through the step's time too).
+    Each block is ten calls of the next smaller (``tangent.block_tree``: the C code holds
+    one step, not 100), compiled into one library of the cache
     (``compiled.compiled_functions``: keyed by the C source, so by the model and its balls,
     never by a period or a step count) or, with ``compiled=False`` or no compiler, the same
     Functions in the VM."""
     from analysis.integrate.compiled import compiled_functions, test_state
 
-    inner = {1: _sensitivity_step(model, structure)}
-    n_s, n_par = inner[1].size1_in(0), len(model.parameter_names)
-    for size in sorted(SENSITIVITY_BLOCK_SIZES)[1:]:
-        s, p = ca.MX.sym("s", n_s), ca.MX.sym("p", n_par)
-        h, t0, g = ca.MX.sym("h"), ca.MX.sym("t0"), ca.MX.sym("g", 1, n_par)
-        current = s
-        for _ in range(10):
-            current = inner[size // 10](current, p, h, t0, g)
-        inner[size] = ca.Function(f"flow_{_tag(model, structure)}_steps{size}",
-                                  [s, p, h, t0, g], [current],
-                                  ["s", "p", "h", "t0", "g"], ["s_next"])
+    tag = model_tag(model, structure)
+    n, n_par = model.n_state, len(model.parameter_names)
+    step = tangent_step(model.functions(structure).rk4_step,
+                        Carry(directions=n, product="jacobian", parameters=True),
+                        f"flow_{tag}_steps1", names=FLOW_NAMES).step
+    inner = block_tree(step, SENSITIVITY_BLOCK_SIZES, lambda size: f"flow_{tag}_steps{size}",
+                       keep_states=False, names=FLOW_NAMES)
     fns = [inner[size] for size in SENSITIVITY_BLOCK_SIZES]
-    n = model.n_state
     s_test = np.concatenate([test_state(n), [3.0], np.eye(n).ravel(),
                              np.linspace(-1.0, 1.0, n * n_par)])
     p_test = model.parameter_vector(model.defaults)
@@ -195,20 +178,6 @@ def _sensitivity_blocks(model: Model, structure: tuple[int, ...],
     built = compiled_functions(fns, [args if size <= 10 else None
                                      for size in SENSITIVITY_BLOCK_SIZES], compiled)
     return dict(zip(SENSITIVITY_BLOCK_SIZES, built, strict=True))
-
-
-def _chain(blocks: dict[int, ca.Function], n_steps: int, first: ca.MX,
-           args: list[ca.MX]) -> ca.MX:
-    """The state after ``n_steps`` steps of ``blocks`` (sizes largest first, each ten of the
-    next) from ``first``: full blocks of the largest size, then the rest digit by digit,
-    each run of equal blocks one ``fold`` (a loop of calls, nothing unrolled)."""
-    current, left = first, n_steps
-    for size, fn in blocks.items():
-        count, left = divmod(left, size)
-        if count:
-            run = fn.fold(count) if count > 1 else fn
-            current = run(current, *(ca.repmat(a, 1, count) for a in args))
-    return current
 
 
 def _period_step(model: Model, structure: tuple[int, ...], period: Period, n_steps: int,
@@ -224,19 +193,19 @@ def flow_map(model: Model, n_balls: tuple[int, ...], period: Period, n_steps: in
     steps (dzT/dp includes the period's own dependence on p).
 
     The steps run in blocks of 100, 10 and 1 steps that carry the derivatives
-    (``_sensitivity_blocks``): compiled C from the cache of ``analysis.integrate.compiled``
+    (``sensitivity_blocks``): compiled C from the cache of ``analysis.integrate.compiled``
     when a compiler works (one library per model and balls, whatever the period or step
     count; one warning and the VM otherwise), the same Functions in the CasADi VM with
     ``compiled=False``. The returned Function chains them: at most N // 100 + 18 calls.
     """
     structure = model.structure(n_balls)
-    blocks = _sensitivity_blocks(model, structure, compiled)
+    blocks = sensitivity_blocks(model, structure, compiled)
     n, n_par = model.n_state, len(model.parameter_names)
     z0, t0, p = ca.MX.sym("z0", n), ca.MX.sym("t0"), ca.MX.sym("p", n_par)
     h = _period_step(model, structure, period, n_steps, p)
     g = ca.jacobian(h, p)
     s0 = ca.vertcat(z0, ca.MX.zeros(1), ca.vec(ca.MX.eye(n)), ca.MX.zeros(n * n_par))
-    s_end = _chain(blocks, n_steps, s0, [p, h, t0, g])
+    s_end, _ = chain_blocks(blocks, n_steps, s0, [p, h, t0, g])
     mono = ca.reshape(s_end[n + 1:n + 1 + n * n], n, n)
     dp = ca.reshape(s_end[n + 1 + n * n:], n, n_par)
     return ca.Function("flow", [z0, t0, p], [s_end[:n], mono, dp],
@@ -290,14 +259,7 @@ def orbit_states(model: Model, n_balls: tuple[int, ...], period: Period,
         states = lib.blocks[size](zn, pm, hm, tm)
         blocks[size] = ca.Function(f"orbit_block{size}", [zn, pm, hm, tm],
                                    [states[:, -1], states])
-    outputs, current, left = [], ca.vertcat(z0, ca.MX.zeros(1)), n_steps
-    for size, fn in blocks.items():
-        count, left = divmod(left, size)
-        if count == 0:
-            continue
-        run = fn.mapaccum(count) if count > 1 else fn
-        last, states = run(current, *(ca.repmat(a, 1, count) for a in (p, h, t0)))
-        outputs.append(states)
-        current = last[:, -1]
+    _, outputs = chain_blocks(blocks, n_steps, ca.vertcat(z0, ca.MX.zeros(1)), [p, h, t0],
+                              keep_states=True)
     return ca.Function("orbit", [z0, t0, p], [ca.horzcat(*outputs)[:n, :]],
                        ["z0", "t0", "p"], ["Z"])

@@ -5,11 +5,11 @@ same model and balls; each point is the same sequence of operations on other num
 module writes those operations once for ``LANES`` points side by side, as C with GCC's
 vector extensions (``double`` vectors of ``LANES`` lanes: SSE2 on every x86-64, NEON on
 ARM64, no ``-march`` needed), so one instruction advances every lane. The operations are
-those of ``lyapunov.tangent_step`` and of its renormalisation (``lyapunov._qr_logs``),
+those of ``tangent.lyapunov_step`` and of its renormalisation (``tangent.qr_logs``),
 read instruction by instruction from the CasADi SX Functions, in the same order: each lane
 performs the IEEE operations the scalar compiled block performs, with the same libm for
 sin, cos and the like (called lane by lane), so every lane's states, tangent and logs are
-those of ``lyapunov.tangent_block`` bit for bit, whichever points share its call
+those of ``tangent.tangent_block`` bit for bit, whichever points share its call
 (``tests/test_lanes.py``).
 
 ``kernel(model, structure, renorm_every)`` builds, compiles (the cache and compiler of
@@ -32,11 +32,13 @@ import numpy as np
 
 from analysis.integrate.compiled import (
     CompileError,
-    _compile,
     cached_path,
+    compile_library,
     compiler_command,
     library_stem,
+    test_state,
 )
+from analysis.integrate.tangent import lyapunov_step, qr_logs, tangent_block
 
 LANES = 2
 """Points per vector: two doubles fill the 128-bit registers every x86-64 and ARM64 CPU
@@ -148,7 +150,7 @@ def vector_c(fn: ca.Function, name: str) -> str:
 
 def kernel_source(step: ca.Function, constants: ca.Function, renorm: ca.Function) -> str:
     """C of the lane kernel: ``step(s, p, h, t0, c) -> s'``, ``constants(p, h, t0) -> c``
-    and ``renorm(Y) -> (Q, log|R|)`` of ``lyapunov`` for one tangent vector."""
+    and ``renorm(Y) -> (Q, log|R|)`` (``tangent.qr_logs``) for one tangent vector."""
     n = renorm.size1_in(0)
     return "\n".join([
         _HEADER.format(lanes=LANES), vector_c(constants, "constants"),
@@ -188,21 +190,19 @@ class Kernel:
 @cache
 def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel | None:
     """The lane kernel of ``model`` with these balls, compiled and self-tested against
-    ``lyapunov.tangent_block`` (bit for bit over one renormalisation), or None (see the
+    ``tangent.tangent_block`` (bit for bit over one renormalisation), or None (see the
     module). Memoised per process."""
-    from analysis.stability.lyapunov import _qr_logs, tangent_block, tangent_step
-
-    step, constants = tangent_step(model, structure, 1)
+    step, constants = lyapunov_step(model, structure, 1)
     n = model.n_state
     try:
-        source = kernel_source(step, constants, _qr_logs(n, 1))
+        source = kernel_source(step, constants, qr_logs(n, 1))
     except Unsupported:
         return None
     command = compiler_command()
     path = cached_path(library_stem("bd_lanes", model, structure), source, command)
     try:
         if not path.exists():
-            _compile(source, path, command)
+            compile_library(source, path, command)
         fn = ctypes.CDLL(str(path)).bd_lanes_run
     except (CompileError, OSError, AttributeError):
         return None
@@ -214,8 +214,6 @@ def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel 
 
 def _agrees(built: Kernel, block: ca.Function, model: Any, renorm_every: int) -> bool:
     """One renormalisation of every lane equals the CasADi block's, bit for bit."""
-    from analysis.integrate.compiled import test_state
-
     n = built.n
     p = model.parameter_vector(model.defaults)
     h = float(model.simulation_defaults["dt"])

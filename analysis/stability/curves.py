@@ -62,6 +62,7 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate
 from analysis.integrate.simulate import run_attrs
+from analysis.integrate.tangent import Carry, tangent_step
 from analysis.model import Model, Structure
 from analysis.stability.continuation import (
     _correct,
@@ -79,20 +80,6 @@ at one of the two points (test functions are normalised: dimensionless, O(1)).""
 NS_ENTRIES = ((0, 0), (0, 1), (1, 0), (1, 1))
 
 
-def _tangent_step(model: Model, structure: Structure, r: int) -> ca.Function:
-    """One RK4 step carrying r tangent vectors, as an SX Function:
-    ``(s, p, h, t0) -> s'`` with ``s = [z; k; vec(Y)]``, z the state after step k (time
-    ``t0 + k·h``, as in ``flow.flow_map``) and Y' = (∂z'/∂z) Y (n × r): Y_k = M_k Y_0."""
-    step = model.functions(structure).rk4_step
-    n, n_par = model.n_state, len(model.parameter_names)
-    z, k, y = ca.SX.sym("z", n), ca.SX.sym("k"), ca.SX.sym("Y", n, r)
-    p, h, t0 = ca.SX.sym("p", n_par), ca.SX.sym("h"), ca.SX.sym("t0")
-    z_next = step(t0 + k * h, z, p, h)
-    s = ca.vertcat(z, k, ca.vec(y))
-    return ca.Function("tangent_step", [s, p, h, t0],
-                       [ca.vertcat(z_next, k + 1, ca.vec(ca.jtimes(z_next, z, y)))])
-
-
 @cache
 def bilinear_gradients(model: Model, structure: Structure, period: Period, n_steps: int,
                        r: int) -> ca.Function:
@@ -101,7 +88,8 @@ def bilinear_gradients(model: Model, structure: Structure, period: Period, n_ste
     n × r), M the monodromy matrix of the RK4 map of ``flow.flow_map`` (``n_steps`` steps
     of h = T(p)/n_steps, the period's dependence on p included).
 
-    M b_i is carried step by step as a tangent vector (Y' = A Y, ``_tangent_step``) and the
+    M b_i is carried step by step as a tangent vector (Y' = A Y: ``tangent.tangent_step``
+    with ``s = [z; k; vec(Y)]``, z the state after step k at time ``t0 + k·h``) and the
     gradient of aᵀ M b is taken by reverse-mode AD (CasADi, virtual machine) through those
     steps: the second derivatives of the discrete RK4 map, exactly, at the cost of a few
     flows of n (r + 1) states. These give ∂A/∂x of the bordered test functions, and the
@@ -111,7 +99,9 @@ def bilinear_gradients(model: Model, structure: Structure, period: Period, n_ste
     z0, t0, p = ca.MX.sym("z0", n), ca.MX.sym("t0"), ca.MX.sym("p", n_par)
     a, b = ca.MX.sym("a", n, r), ca.MX.sym("b", n, r)
     h = period.seconds(model, structure, p) / n_steps
-    run = _tangent_step(model, structure, r).fold(n_steps)
+    step = tangent_step(model.functions(structure).rk4_step, Carry(directions=r),
+                        "tangent_step").step
+    run = step.fold(n_steps)
     s_end = run(ca.vertcat(z0, 0, ca.vec(b)),
                 *(ca.repmat(x, 1, n_steps) for x in (p, h, t0)))
     y = ca.reshape(s_end[n + 1:], n, r)

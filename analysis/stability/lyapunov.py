@@ -20,10 +20,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from functools import cache
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import xarray as xr
 
@@ -31,6 +29,7 @@ from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import MAX_STEPS, check_seconds
 from analysis.integrate.compiled import compiled_function
 from analysis.integrate.simulate import run_attrs, simulate, state_at
+from analysis.integrate.tangent import tangent_block
 from analysis.model import BallCounts, Model, Structure, System, as_system
 
 BLOCKS = 10
@@ -42,82 +41,6 @@ TANGENT_TRANSIENT_FRACTION = 0.1
 """Default tangent transient as a fraction of the spec's transient (0.1 s for the bearing
 models, 30 s for Duffing): time for the tangent vectors to turn from the identity frame into
 the Lyapunov (covariant-ordered) frame before the logs are averaged."""
-
-
-@cache
-def tangent_step(model: Model, structure: Structure,
-                 n_vectors: int) -> tuple[ca.Function, ca.Function]:
-    """One RK4 step of the state and ``n_vectors`` tangent vectors, as SX Functions.
-
-    ``step(s, p, h, t0, c) -> s'`` with ``s = [z; k; vec(Q)]``: the state z (SI units)
-    after step k, whose time is ``t0 + k·h`` (s) as in ``compiled.rk4_blocks`` (so the
-    states are those of ``simulate`` bit for bit), and the tangent vectors Q (n × k) moved by
-    the exact derivative of the step (forward-mode AD, ``jtimes``). The subexpressions that
-    depend on p, h and t0 only (the cage rotations, …) are the inputs ``c``, computed once
-    per call by ``constants(p, h, t0) -> c`` (``casadi.extract_parametric``).
-    """
-    funcs = model.functions(structure)
-    n, n_par = model.n_state, len(model.parameter_names)
-    z, k, q = ca.SX.sym("z", n), ca.SX.sym("k"), ca.SX.sym("q", n, n_vectors)
-    p, h, t0 = ca.SX.sym("p", n_par), ca.SX.sym("h"), ca.SX.sym("t0")
-    z_next = funcs.rk4_step(t0 + k * h, z, p, h)
-    moved = ca.vertcat(z_next, k + 1, ca.vec(ca.jtimes(z_next, z, q)))
-    expr, extracted, values = ca.extract_parametric(moved, ca.vertcat(p, h, t0))
-    c = ca.vertcat(*extracted)
-    step = ca.Function("tangent_step", [ca.vertcat(z, k, ca.vec(q)), p, h, t0, c], [expr])
-    return step, ca.Function("tangent_constants", [p, h, t0], [ca.vertcat(*values)])
-
-
-def _renormalisation(model: Model, structure: Structure, n_vectors: int, renorm_every: int,
-                     with_states: bool) -> ca.Function:
-    """``(s, p, h, t0, c) -> (s', log|diag R| (k), [Z])``: ``renorm_every`` steps of
-    ``tangent_step``, then Q re-orthonormalised by QR; Z ((n + 1) × renorm_every) holds
-    ``[z; k]`` after every step when ``with_states``."""
-    step, _ = tangent_step(model, structure, n_vectors)
-    n = model.n_state
-    s, p, h, t0, c = (ca.MX.sym(name, step.sparsity_in(i))
-                      for i, name in enumerate(("s", "p", "h", "t0", "c")))
-    repeated = [ca.repmat(a, 1, renorm_every) for a in (p, h, t0, c)]
-    if with_states:
-        states = step.mapaccum(renorm_every)(s, *repeated)
-        last, outputs = states[:, -1], [states[:n + 1, :]]
-    else:
-        last, outputs = step.fold(renorm_every)(s, *repeated), []
-    q_new, logs = _qr_logs(n, n_vectors)(ca.reshape(last[n + 1:], n, n_vectors))
-    return ca.Function("renorm", [s, p, h, t0, c],
-                       [ca.vertcat(last[:n + 1], ca.vec(q_new)), logs, *outputs])
-
-
-@cache
-def tangent_block(model: Model, structure: Structure, n_vectors: int, renorm_every: int,
-                  n_renorm: int, with_states: bool = False) -> ca.Function:
-    """``(s, p, h, t0) -> (s', logs (k × n_renorm), [Z])``: ``n_renorm`` renormalisations
-    of ``renorm_every`` steps each (see ``tangent_step`` for s); Z ((n + 1) ×
-    renorm_every·n_renorm) holds ``[z; k]`` after every step when ``with_states``."""
-    renorm = _renormalisation(model, structure, n_vectors, renorm_every, with_states)
-    _, constants = tangent_step(model, structure, n_vectors)
-    s, p, h, t0 = (ca.MX.sym(name, renorm.sparsity_in(i))
-                   for i, name in enumerate(("s", "p", "h", "t0")))
-    args = [ca.repmat(a, 1, n_renorm) for a in (p, h, t0, constants(p, h, t0))]
-    out = renorm.mapaccum(n_renorm)(s, *args)
-    name = f"lyapunov_{_tag(model, structure)}_k{n_vectors}_r{renorm_every}_n{n_renorm}"
-    return ca.Function(name + ("_states" if with_states else ""), [s, p, h, t0],
-                       [out[0][:, -1], *out[1:]])
-
-
-def _tag(model: Model, structure: Structure) -> str:
-    balls = "_".join(str(b) for b in structure) or "0"
-    return f"{model.name.replace('-', '_')}_nb{balls}"
-
-
-@cache
-def _qr_logs(n: int, n_vectors: int) -> ca.Function:
-    """Y (n × k) -> (Q with R's diagonal made positive, log|diag R|); SX, callable from MX."""
-    y = ca.SX.sym("y", n, n_vectors)
-    q, r = ca.qr(y)
-    signs = ca.sign(ca.diag(r))  # keeps Q continuous from one block to the next
-    return ca.Function("qr_logs", [y], [ca.mtimes(q, ca.diag(signs)),
-                                        ca.log(ca.fabs(ca.diag(r)))])
 
 
 def default_lengths(model: Model) -> tuple[float, float, float]:
