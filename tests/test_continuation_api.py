@@ -19,8 +19,8 @@ from analysis.stability.continuation import (
     StepGuards,
     continue_orbits,
     continue_problem,
-    orbit_scale,
     options_with,
+    orbit_scale,
     switch_and_continue,
 )
 from analysis.stability.curves import continue_curve
@@ -138,11 +138,11 @@ def test_switch_and_continue_says_when_there_is_nothing_to_switch_to(pd_cli):
     none = switch_and_continue(branch, "BP", stop=14.32)
     assert not none.ok and none.branch is None and none.point is None
     assert none.message == "no BP point on the branch: nothing to switch to"
-    with pytest.raises(InputError, match="^point: 0 is not a period-doubling point"):
+    with pytest.raises(InputError, match=r"^point: 0 is not a period-doubling point"):
         switch_and_continue(branch, "PD", stop=14.32, point=0)
     with pytest.raises(InputError, match=r"^point: must be in \[-26, 25\]"):
         switch_and_continue(branch, "PD", stop=14.32, point=26)
-    with pytest.raises(InputError, match="^kind: must be PD or BP, got 'LP'"):
+    with pytest.raises(InputError, match=r"^kind: must be PD or BP, got 'LP'"):
         switch_and_continue(branch, "LP", stop=14.32)
 
 
