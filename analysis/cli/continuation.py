@@ -133,21 +133,15 @@ def _first_branch(model, param, start, stop, from_branch, point, n_balls, sets, 
 def _switched_branch(branch, kind: str, stop: float, common: dict,
                      say: Callable[[str], None]):
     """The branch born at the first ``kind`` (PD or BP) point, or None (said why)."""
-    from analysis.stability import continuation as cont
+    from analysis.stability.continuation import ContinuationOptions, switch_and_continue
 
-    k = cont.first_point(branch, kind)
-    if k is None:
-        say(f"no {kind} point on the branch: nothing to switch to")
-        return None
-    orbit = cont.switch_branch(branch, k)
-    if not orbit.converged:
-        say(f"branch switching at {kind} (point {k}) failed: {orbit.message}")
-        return None
-    what = "period " + orbit.period if kind == "PD" else f"asymmetric, period {orbit.period}"
-    new = cont.continue_from_orbit(orbit, param=branch.attrs["param"], stop=stop,
-                                   label=what, **common)
-    new.attrs["switched_at"] = kind
-    return new
+    steps = {name: common[name] for name in ("max_points", "ds_max")}
+    switched = switch_and_continue(branch, kind, stop=stop,
+                                   options=ContinuationOptions(**steps),
+                                   dt=common.get("dt"), progress=common["progress"])
+    if not switched.ok:
+        say(switched.message)
+    return switched.branch
 
 
 def _print_branch(branch, path: Path) -> None:

@@ -24,7 +24,7 @@ dependence on λ); the test rows from ∂g_ij/∂x = −W_iᵀ (∂A/∂x) V_j, 
 second derivatives of Φ: the gradients of the bilinear forms aᵀ M(z0, p) b with respect to
 z0 and p are computed by reverse-mode AD (CasADi) through the RK4 flow map in the virtual
 machine (``bilinear_gradients``): exact derivatives of the discrete map, no finite
-differences. Keller's pseudo-arclength condition closes the system (``continuation._correct``).
+differences. Keller's pseudo-arclength condition closes the system (``continuation.correct``).
 
 Codimension-two points, located by bisection on the arclength where their test function
 changes sign (Kuznetsov Sec. 9.2 and Ch. 9 for maps; the MatCont manual's LPC/PD/NS
@@ -65,11 +65,12 @@ from analysis.integrate.simulate import run_attrs
 from analysis.integrate.tangent import Carry, tangent_step
 from analysis.model import Model, Structure
 from analysis.stability.continuation import (
-    _correct,
-    _Problem,
-    _tangent,
-    check_steps,
+    BranchProblem,
+    ContinuationOptions,
+    correct,
+    options_with,
     orbit_scale,
+    tangent,
 )
 from analysis.stability.periodic import system_of_attrs
 
@@ -148,8 +149,8 @@ class CurvePoint:
 
 
 @dataclass
-class _CurveProblem(_Problem):
-    """``continuation._Problem`` with a second parameter and the augmented equations."""
+class _CurveProblem(BranchProblem):
+    """``continuation.BranchProblem`` with a second parameter and the augmented equations."""
 
     kind: str = "LP"
     index2: int = 0
@@ -240,7 +241,7 @@ class _CurveProblem(_Problem):
 
     def residual(self, w: np.ndarray):
         """H(w) (n + r), its Jacobian ((n + r) × (n + r + 1)) and the monodromy matrix:
-        the interface of ``continuation._correct``."""
+        the interface of ``continuation.correct``."""
         e = self.evaluate_all(w)
         entries = NS_ENTRIES if self.kind == "NS" else ((0, 0),)
         idx = [entries.index(ij) for ij in self.entries]
@@ -324,7 +325,7 @@ def _make_point(prob: _CurveProblem, w: np.ndarray, jac: np.ndarray, previous, d
     z, kappa, lam1, lam2 = prob.split(w)
     return CurvePoint(w=w.copy(), lam1=lam1, lam2=lam2, kappa=kappa, z0=z,
                       multipliers=np.linalg.eigvals(e["mono"]),
-                      tangent=_tangent(jac, previous, direction), right=e["v"].copy(),
+                      tangent=tangent(jac, previous, direction), right=e["v"].copy(),
                       left=e["wl"].copy(), tests=_tests(prob, e, kappa),
                       amplitude=prob.amplitude(w), newton_iterations=iterations)
 
@@ -338,7 +339,7 @@ def _locate(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, label: str,
     lo, hi, best = 0.0, 1.0, None
     for _ in range(iterations):
         mid = (lo + hi) / 2
-        out = _correct(prob, a.w + mid * (b.w - a.w), chord, tol)
+        out = correct(prob, a.w + mid * (b.w - a.w), chord, tol)
         if out is None:
             break
         best = _make_point(prob, out[0], out[1], a.tangent, 1.0, out[3])
@@ -369,7 +370,7 @@ def _at_value(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, index: int, val
     t = (value - a.w[index]) / (b.w[index] - a.w[index])
     guess = a.w + t * (b.w - a.w)
     guess[index] = value
-    out = _correct(prob, guess, np.eye(len(guess))[index], tol)
+    out = correct(prob, guess, np.eye(len(guess))[index], tol)
     if out is None:
         return None
     return _make_point(prob, out[0], out[1], a.tangent, 1.0, out[3])
@@ -420,11 +421,16 @@ def _initial_borders(prob: _CurveProblem, w: np.ndarray) -> None:
 
 # --- the curve --------------------------------------------------------------------------
 
+CURVE_OPTIONS = ContinuationOptions(max_points=300)
+"""The default settings of a curve: ``ContinuationOptions()`` with 300 points."""
+
+
 def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, stop: float,
-                   ds: float = 0.01, ds_min: float = 1e-6, ds_max: float = 0.05,
-                   max_points: int = 300, tol: float = 1e-9,
-                   marks: Sequence[float] = (),
-                   progress: Callable[[str], None] | None = None) -> xr.Dataset:
+                   ds: float | None = None, ds_min: float | None = None,
+                   ds_max: float | None = None, max_points: int | None = None,
+                   tol: float | None = None, marks: Sequence[float] = (),
+                   progress: Callable[[str], None] | None = None,
+                   options: ContinuationOptions | None = None) -> xr.Dataset:
     """Follow the LP, PD or NS point ``point`` (``"PD"``, ``"LP[2]"``, …: ``parse_point``)
     of ``branch`` (a Dataset or netCDF file of ``continuation.continue_orbits``) in the
     branch's parameter and ``param``, from the branch's value of ``param`` towards ``stop``
@@ -433,12 +439,17 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     The curve ends where ``param`` leaves the interval between its start value and ``stop``
     (that end point solved exactly at the bound), after ``max_points`` points or when the
     step falls below ``ds_min``. ``marks``: values of ``param`` where a point is solved
-    exactly (``marked`` = 1), e.g. to compare with an independent solution. ``ds``,
-    ``ds_min``, ``ds_max``: scaled arclength steps (``param`` scaled by |stop − start|, the
-    branch parameter by its range on the branch). The RK4 step count per period is the
-    branch's. Returns the curve as a Dataset (``curve_dataset``).
+    exactly (``marked`` = 1), e.g. to compare with an independent solution. ``options``:
+    the steps, point budget and tolerance (``continuation.ContinuationOptions``, its guards
+    unused; default ``CURVE_OPTIONS``); each of ``ds``, ``ds_min``, ``ds_max``,
+    ``max_points``, ``tol`` that is given replaces its field. The steps are scaled
+    arclength steps (``param`` scaled by |stop − start|, the branch parameter by its range
+    on the branch). The RK4 step count per period is the branch's. Returns the curve as a
+    Dataset (``curve_dataset``).
     """
-    check_steps(ds, ds_min, ds_max, max_points, tol)
+    options = options_with(options, CURVE_OPTIONS, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                           max_points=max_points, tol=tol)
+    tol = options.tol
     if not math.isfinite(stop):
         raise InputError(f"stop: must be a finite number, got {stop!r}")
     source = "" if isinstance(branch, xr.Dataset) else str(branch)
@@ -455,17 +466,18 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     start = w[-1] * prob.s_lam2
     direction = math.copysign(1.0, stop - start)
     _initial_borders(prob, w)
-    out = _correct(prob, w, np.eye(len(w))[-1], tol)  # solve at the start value of param
+    out = correct(prob, w, np.eye(len(w))[-1], tol)  # solve at the start value of param
     if out is None:
         raise InputError(f"point: the {kind} point at {prob.param_name} = "
                          f"{float(w[-2] * prob.s_lam):g} does not converge as a {kind} "
                          f"point of the augmented system")
     prob.choose_entries(out[0])
-    out = _correct(prob, out[0], np.eye(len(w))[-1], tol)
+    out = correct(prob, out[0], np.eye(len(w))[-1], tol)
     first = _make_point(prob, out[0], out[1], None, direction, out[3])
     prob.update_borders(first)
-    curve, status = _follow(prob, first, (min(start, stop), max(start, stop)), ds, ds_min,
-                            ds_max, max_points, tol, marks, progress)
+    curve, status = _follow(prob, first, (min(start, stop), max(start, stop)),
+                            options.first_ds, options.ds_min, options.ds_max,
+                            options.max_points, tol, marks, progress)
     return curve_dataset(prob, curve, param, status, kind,
                          source or str(branch.encoding.get("source", "")))
 
@@ -516,7 +528,7 @@ def _follow(prob: _CurveProblem, first: CurvePoint, box: tuple[float, float], ds
     lo, hi = box
     while len(curve) < max_points:
         prev = curve[-1]
-        out = _correct(prob, prev.w + ds * prev.tangent, prev.tangent, tol)
+        out = correct(prob, prev.w + ds * prev.tangent, prev.tangent, tol)
         if out is None:
             ds /= 2
             if ds < ds_min:
