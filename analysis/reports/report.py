@@ -11,8 +11,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analysis.io import atomic_write, provenance
+from analysis.io import atomic_write
 from analysis.model import load_model
+from analysis.provenance import provenance
 from analysis.reports.paper import (
     PAPER_N_BALLS,
     PAPER_NATURE,

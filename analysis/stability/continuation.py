@@ -48,14 +48,13 @@ from analysis.integrate.flow import (
     period_seconds,
     steps_per_period,
 )
-from analysis.integrate.simulate import run_attrs
 from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.provenance import run_attrs, system_of_attrs
 from analysis.stability.periodic import (
     PeriodicOrbit,
     as_period,
     shoot,
     state_scale,
-    system_of_attrs,
 )
 
 

@@ -61,8 +61,8 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate
-from analysis.integrate.simulate import run_attrs
 from analysis.model import Model, Structure
+from analysis.provenance import run_attrs, system_of_attrs
 from analysis.stability.continuation import (
     _correct,
     _Problem,
@@ -70,7 +70,6 @@ from analysis.stability.continuation import (
     check_steps,
     orbit_scale,
 )
-from analysis.stability.periodic import system_of_attrs
 
 KINDS = ("LP", "PD", "NS")
 TEST_GUARD = 1e-6

@@ -57,10 +57,10 @@ from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.lanes import LANES
-from analysis.integrate.simulate import blow_up_limit, run_attrs, simulate, state_at, to_dataset
+from analysis.integrate.simulate import blow_up_limit, simulate
 from analysis.io import save_dataset
 from analysis.model import BallCounts, System, load_model
-from analysis.signal import displacement_names
+from analysis.provenance import completed_attrs, displacement_names, run_attrs, state_at, to_dataset
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
 from analysis.sweeps.points import chart_points  # one pass; chart_point_two_pass below
@@ -288,11 +288,9 @@ def _record_from(setting: Setting, n_balls: BallCounts, values: dict[str, float]
     elapsed = np.arange(n_steps + 1) * dt
     _check_bounded(system, states, start.time + elapsed)
     keep = elapsed >= setting.transient - 1e-12 * duration
-    attrs = run_attrs(model, system.structure, dict(system.parameters))
-    attrs.update(method="rk4", dt=dt, save_every=1, duration=duration,
-                 transient=setting.transient, t_start=start.time)
-    attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, system.state,
-                                                          strict=True)})
+    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
+                            transient=setting.transient, t_start=start.time,
+                            initial_state=True)
     return to_dataset(start.time + elapsed[keep], states[:, keep], attrs, model)
 
 
