@@ -217,7 +217,7 @@ def check_out_dir(path: Path, option: str = "--out-dir") -> Path:
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""
-    from analysis.signal import cage_frequencies, vc_frequencies
+    from analysis.provenance import cage_frequencies, vc_frequencies
 
     words = []
     if float(attrs.get("shaft_hz", 0.0)) > 0:
@@ -284,9 +284,12 @@ def main(args: list[str] | None = None) -> None:
     """Run the command line (``bearingdyn``): usage errors that the parser finds before a
     command runs (``--n-balls six``, an unknown option) end in one line and exit code 2,
     with the command's ``--help`` named; ``--help`` and everything else as typer does."""
+    import os
     import signal
     import sys
     import warnings
+
+    os.environ["MPLBACKEND"] = "Agg"  # figures are written to files, never shown
 
     def one_line(message, category, filename, lineno, file=None, line=None):
         typer.echo(f"warning: {' '.join(str(message).split())}", err=True)

@@ -1,12 +1,12 @@
-"""Matplotlib figures. Functions return figures; saving is the caller's business."""
+"""Matplotlib figures. Functions return figures; saving is the caller's business.
+
+Importing this module leaves matplotlib's backend as it is (a notebook's inline backend, a
+script's choice); the ``bearingdyn`` command draws with Agg (``analysis.cli.common.main``),
+and matplotlib itself falls back to Agg where no display exists."""
 
 from __future__ import annotations
 
 import math
-
-import matplotlib
-
-matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
 import numpy as np
