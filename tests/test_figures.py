@@ -97,9 +97,11 @@ def test_an_unnamed_peak_is_its_frequency_everywhere_and_explained_in_the_legend
     assert "?" not in "".join(notes) and "None" not in "".join(notes)
     legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert any(t.startswith("unnamed peak") for t in legend)
-    from analysis.reports.paper import peak_name
+    from analysis.reports.paper import major_name, other_peak_names
 
-    assert peak_name(unnamed) == unnamed.name
+    assert major_name([unnamed]) == unnamed.name
+    assert other_peak_names([unnamed, unnamed]) == [unnamed.name]
+    assert other_peak_names([unnamed, unnamed], named_only=True) == []
     ds.to_netcdf(tmp_path / "run.nc", engine="h5netcdf")
     res = cli("spectrum", "run.nc", cwd=tmp_path)
     assert res.returncode == 0, res.stderr

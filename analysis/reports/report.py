@@ -19,7 +19,7 @@ from analysis.reports.paper import (
     PAPER_NATURE,
     SENSITIVITY,
     major_name,
-    peak_name,
+    other_peak_names,
     series_f_max,
     simulate_case,
 )
@@ -42,11 +42,8 @@ class CaseResult:
         return major_name(self.peaks[var])
 
     def others(self, var: str) -> str:
-        names = []
-        for p in self.peaks[var][1:]:
-            if peak_name(p) not in names:
-                names.append(peak_name(p))
-        return ", ".join(names) or "-"
+        """The other peaks of ``var`` as text (``-`` for none)."""
+        return ", ".join(other_peak_names(self.peaks[var])) or "-"
 
 
 def run_paper_case(
