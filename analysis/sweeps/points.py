@@ -214,7 +214,7 @@ class PointResult:
     ptp: dict[str, float]
     """Peak-to-peak of every state variable over the record (SI units)."""
     displacements: tuple[str, ...]
-    """The first body's translations (``analysis.signal.displacement_names``)."""
+    """The first body's translations (``analysis.provenance.displacement_names``)."""
     points: xr.Dataset
     """The Poincaré points of the classification (``poincare_section`` of the record)."""
 
