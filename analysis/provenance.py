@@ -123,10 +123,11 @@ def is_velocity(name: str, names: Sequence[str]) -> bool:
     return name.startswith("v") and name[1:] in names
 
 
-def displacement_names(ds: xr.Dataset) -> tuple[str, ...]:
+def displacement_names(source: xr.Dataset | Mapping) -> tuple[str, ...]:
     """The default variables of spectra and figures: the translations (``x``, ``y``) of the
-    run's first body (``x``, ``y``; ``x_rotor``, ``y_rotor``; ``x`` for one coordinate)."""
-    names = state_names(ds)
+    run's first body (``x``, ``y``; ``x_rotor``, ``y_rotor``; ``x`` for one coordinate);
+    ``source`` a run or its attrs."""
+    names = state_names(source)
     positions = [n for n in names if not is_velocity(n, names)]
     if not positions:
         return names[:1]

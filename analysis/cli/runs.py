@@ -52,6 +52,7 @@ def simulate(
     from analysis.integrate.simulate import simulate_to_file
     from analysis.io import save_dataset
     from analysis.model import balls_text
+    from analysis.provenance import state_names
 
     params = _parameters(speed_rpm, sets)
     start = time.perf_counter()
@@ -69,7 +70,7 @@ def simulate(
         typer.echo(f"wrote {output}: {attrs['model']}, {balls_text(attrs)}, {speed}"
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "
-                   f"{', '.join(str(attrs['state_names']).split())}")
+                   f"{', '.join(state_names(attrs))}")
 
 
 @app.command()

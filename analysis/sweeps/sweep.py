@@ -60,7 +60,14 @@ from analysis.integrate.lanes import LANES
 from analysis.integrate.simulate import blow_up_limit, simulate
 from analysis.io import save_dataset
 from analysis.model import BallCounts, System, load_model
-from analysis.provenance import completed_attrs, displacement_names, run_attrs, state_at, to_dataset
+from analysis.provenance import (
+    completed_attrs,
+    displacement_names,
+    run_attrs,
+    state_at,
+    state_names,
+    to_dataset,
+)
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
 from analysis.sweeps.points import chart_points  # one pass; chart_point_two_pass below
@@ -79,7 +86,7 @@ def failure_text(exc: SimulationError) -> str:
 
 def _displacement_fields(model_name: str) -> list[str]:
     model = load_model(model_name)
-    names = displacement_names(xr.Dataset(attrs={"state_names": " ".join(model.state_names)}))
+    names = displacement_names({"state_names": " ".join(model.state_names)})
     return [f"amplitude_{v}" for v in names]
 
 
@@ -326,7 +333,7 @@ def diagram_point(setting: Setting, n_balls: BallCounts, values: dict[str, float
         ds, t_start = _record_from(setting, n_balls, values, start), start.time
     pts = poincare_section(ds, setting.section)
     k = setting.samples
-    out = {v: pts[v].values[:k] for v in ds.attrs["state_names"].split()}
+    out = {v: pts[v].values[:k] for v in state_names(ds)}
     out["final"] = state_at(ds, -1)
     out["t_start"] = t_start
     out["t_final"] = float(ds.t[-1])
