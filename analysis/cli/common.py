@@ -284,12 +284,9 @@ def main(args: list[str] | None = None) -> None:
     """Run the command line (``bearingdyn``): usage errors that the parser finds before a
     command runs (``--n-balls six``, an unknown option) end in one line and exit code 2,
     with the command's ``--help`` named; ``--help`` and everything else as typer does."""
-    import os
     import signal
     import sys
     import warnings
-
-    os.environ["MPLBACKEND"] = "Agg"  # figures are written to files, never shown
 
     def one_line(message, category, filename, lineno, file=None, line=None):
         typer.echo(f"warning: {' '.join(str(message).split())}", err=True)

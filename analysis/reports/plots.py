@@ -1,14 +1,13 @@
 """Matplotlib figures. Functions return figures; saving is the caller's business.
 
-Importing this module leaves matplotlib's backend as it is (a notebook's inline backend, a
-script's choice); the ``bearingdyn`` command draws with Agg (``analysis.cli.common.main``),
-and matplotlib itself falls back to Agg where no display exists."""
+The figures are made without pyplot (``analysis.reports.canvas``: each on its own Agg
+canvas), so importing this module or drawing leaves matplotlib's backend as it is (a
+notebook's inline backend, a script's choice) and needs no display."""
 
 from __future__ import annotations
 
 import math
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
@@ -16,6 +15,7 @@ from matplotlib.figure import Figure
 from analysis.errors import InputError
 from analysis.model import balls_text
 from analysis.provenance import displacement_names, is_velocity, state_names, vc_frequencies
+from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
 from analysis.signal.poincare import poincare_section, section_period
 from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
 
