@@ -14,7 +14,9 @@ The package is layered: ``model`` (the generated models), ``integrate`` (RK4/CVO
 blocks, flow maps), ``signal`` (spectra, Poincaré sections), ``stability`` (Lyapunov
 exponents, periodic orbits, continuation, classification), ``sweeps`` (parameter grids and
 their executors) and ``reports`` (figures, the paper's job and report, progress display);
-``errors`` and ``io`` are shared by all, and ``cli`` is the ``bearingdyn`` command on top.
+``errors``, ``io`` (files) and ``provenance`` (result attributes: what a result says about
+its system, read and written in one place) are shared by all, and ``cli`` is the
+``bearingdyn`` command on top.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from typing import Any
 _API = {
     "BearingdynError": "analysis.errors", "InputError": "analysis.errors",
     "SimulationError": "analysis.errors", "StaleModelError": "analysis.errors",
-    "load_dataset": "analysis.io", "save_dataset": "analysis.io",
+    "load_dataset": "analysis.provenance", "save_dataset": "analysis.io",
     "Model": "analysis.model", "available_models": "analysis.model",
     "load_model": "analysis.model", "System": "analysis.model", "as_system": "analysis.model",
     "poincare_section": "analysis.signal.poincare",

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Literal
 
 from analysis.model import Model, load_model
+from analysis.provenance import package_version
 
 Format = Literal["bibtex", "cff"]
 FORMATS: tuple[str, ...] = ("bibtex", "cff")
@@ -67,8 +68,6 @@ class ModelCitation:
 def model_citation(model: Model | str | Path) -> ModelCitation:
     """The facts a citation of ``model`` (a ``Model``, a model name, a spec path or a
     generated folder) states."""
-    from analysis.integrate.simulate import package_version
-
     model = model if isinstance(model, Model) else load_model(model)
     module = model.module
     return ModelCitation(name=model.name, title=str(module.TITLE), spec_file=model.spec_file,

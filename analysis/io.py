@@ -5,11 +5,10 @@ from __future__ import annotations
 import os
 import re
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, Interrupt, WriteError
@@ -150,96 +149,9 @@ def _engine(path: Path) -> str:
         return "scipy" if handle.read(3) == b"CDF" else "h5netcdf"
 
 
-RUN_ATTRS_NONNEGATIVE = ("shaft_hz", "speed_rpm")
-"""Attributes of a run that must be finite numbers >= 0 when present."""
-
-
-def load_dataset(path: str | Path) -> xr.Dataset:
-    """Read a simulation run of any model written by bearingdyn, or raise ``InputError``
-    saying why not: it must have ``t`` and every state variable its ``state_names`` attr
-    names (``x``, ``y``, ``vx``, ``vy`` for files written before that attr), and pass
-    ``check_run``."""
-    from analysis.signal import run_state_names
-
-    data = open_result(path)
-    missing = [v for v in run_state_names(data) if v not in data]
-    if "t" not in data.coords or missing:
-        raise InputError(f"result file: '{path}' is not a bearingdyn run "
-                         f"(missing {', '.join(missing) or 't'})")
-    check_run(data, path)
-    return data
-
-
-def check_run(ds: xr.Dataset, path: str | Path = "the run") -> None:
-    """Raise ``InputError`` when a run cannot be analysed as it is: its times not strictly
-    increasing at the step its attributes give, a state variable not finite or not over
-    ``t``, or an attribute the analyses read (``dt``, frequencies, speed) not a finite
-    number in its range (a damaged or edited file)."""
-    from analysis.signal import run_state_names
-
-    where = f"result file: '{path}'"
-    t = np.asarray(ds["t"].values, dtype=float)
-    if t.ndim != 1 or len(t) < 2:
-        raise InputError(f"{where}: holds {t.size} sample(s); a run needs at least 2")
-    for name in ("dt", *RUN_ATTRS_NONNEGATIVE, *(k for k in ds.attrs if
-                                                 str(k).startswith(("vc_hz", "cage_hz")))):
-        if name not in ds.attrs:
-            continue
-        try:
-            value = float(ds.attrs[name])
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (np.isfinite(value) and (value > 0 if name == "dt" else value >= 0)):
-            raise InputError(f"{where}: attribute {name} must be a finite number "
-                             f"{'> 0' if name == 'dt' else '>= 0'}, got {ds.attrs[name]} "
-                             "(a damaged or edited file)")
-    step = np.diff(t)
-    if not np.all(np.isfinite(t)) or not np.all(step > 0):
-        raise InputError(f"{where}: its times are not strictly increasing")
-    if "dt" in ds.attrs:
-        spacing = float(ds.attrs["dt"]) * float(ds.attrs.get("save_every", 1))
-        if not np.allclose(step, spacing, rtol=1e-6, atol=0.0):
-            raise InputError(f"{where}: its samples are not {spacing:g} s apart as its "
-                             "attributes dt and save_every say (a damaged or edited file)")
-    for name in run_state_names(ds):
-        if ds[name].dims != ("t",):
-            raise InputError(f"{where}: variable {name} is not a series over t")
-        bad = ~np.isfinite(ds[name].values)
-        if bad.any():
-            raise InputError(f"{where}: variable {name} is not finite at t = "
-                             f"{t[int(np.argmax(bad))]:g} s (NaN or inf); it cannot be "
-                             "analysed")
-
-
-def provenance(source: Any) -> dict[str, Any]:
-    """The provenance of a result in plain JSON types, the same content as its netCDF attrs:
-    ``source`` is a result (``xarray`` object: its attrs), a mapping of attrs, or a
-    ``System`` (then ``analysis.integrate.simulate.run_attrs`` of it: the model, spec path
-    and sha256, balls per bearing, every parameter value, the frequencies and the versions,
-    exactly what ``simulate`` writes for that system before the run's own settings), or the
-    path of a result file (its attrs, read without its data)."""
-    from analysis.model import System
-
-    if isinstance(source, (str, Path)):
-        if not Path(source).is_file():
-            raise InputError(f"result file: '{source}' does not exist")
-        with xr.open_dataset(source, engine=_engine(Path(source))) as ds:
-            attrs: Mapping = dict(ds.attrs)
-    elif isinstance(source, System):
-        from analysis.integrate.simulate import run_attrs
-
-        attrs = run_attrs(source.model, source.structure, dict(source.parameters))
-    else:
-        attrs = getattr(source, "attrs", source)
-    return {str(key): _plain(value) for key, value in attrs.items()}
-
-
-def _plain(value: Any) -> Any:
-    """A netCDF attribute value as a JSON value (numpy scalars and arrays to Python)."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, bytes):
-        return value.decode()
-    return value
+def read_attrs(path: str | Path) -> dict[str, Any]:
+    """The attrs of the result file at ``path``, read without its data."""
+    if not Path(path).is_file():
+        raise InputError(f"result file: '{path}' does not exist")
+    with xr.open_dataset(path, engine=_engine(Path(path))) as ds:
+        return dict(ds.attrs)

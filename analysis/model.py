@@ -287,10 +287,6 @@ class Model:
                                  f"(at most {b.most} balls fit the geometry), got {n!r}")
         return tuple(int(n) for n in counts)
 
-    def check_n_balls(self, n_balls: BallCounts) -> Structure:
-        """Alias of ``structure`` (kept for callers of the one-bearing API)."""
-        return self.structure(n_balls)
-
     def structure_attrs(self, structure: Structure) -> dict[str, int]:
         """Result-file attributes: ``n_balls`` and ``bearing_name`` with one bearing (``n_balls``
         0 without), else ``n_balls_<bearing>``."""

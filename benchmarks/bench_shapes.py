@@ -1,7 +1,7 @@
 """Benchmark: the compiled RK4 of generated models against hand-written numba RK4s of the
 same equations, measured in the same run (the targets of "Models of any shape").
 
-- 2-DOF: vakharia2015, N_b = 8 (the numba kernel of ``bench_simulate.py``);
+- 2-DOF: vakharia2015, N_b = 8 (the numba kernel of ``analysis.reports.bench``);
 - 8 states: rotor-housing, N_b = 8 (a numba kernel written out below).
 
 Both paths keep every state of a 1 s run at Δt = 1e-5 s (1e5 steps); the time is the median
@@ -16,7 +16,6 @@ compared on a non-chaotic setting (they must agree to 1e-9 relative).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import statistics
@@ -29,22 +28,13 @@ import numpy as np
 
 from analysis.integrate.compiled import library, run_rk4
 from analysis.model import load_model
+from analysis.reports import bench
 
 DT = 1e-5
 N_BALLS = 8
 TARGETS = {"vakharia2015": 1.2, "rotor-housing": 1.3}
 CALM = {"radial_load": 50.0, "damping": 2000.0}
 """A non-chaotic setting, where two correct RK4 codes must agree to rounding."""
-
-
-def _bench_simulate():
-    """The 2-DOF numba kernel and its constants (benchmarks/bench_simulate.py)."""
-    path = Path(__file__).with_name("bench_simulate.py")
-    spec = importlib.util.spec_from_file_location("bench_simulate", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["bench_simulate"] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def housing_kernel() -> Callable:
@@ -123,7 +113,6 @@ def paths(name: str, values: dict[str, float], n_steps: int) -> dict[str, Callab
         kernel, args = housing_kernel(), housing_constants(values)
         numba_run = lambda: kernel(z0, DT, n_steps, *args)  # noqa: E731
     else:
-        bench = _bench_simulate()
         ref = bench.Reference.from_parameters(values, N_BALLS)
         kernel = bench.numba_rk4()
         numba_run = lambda: kernel(ref, z0, DT, n_steps)  # noqa: E731

@@ -111,7 +111,7 @@ QUANTITIES: dict[str, Quantity] = {
 TAKEN_NAMES = frozenset({
     # generated code: modules and helpers its functions use, their parameter vector
     "ca", "math", "sys", "p", "z", "hertz15", "race_stiffness", "inner_race_load",
-    # attributes of result files besides the parameters (analysis.integrate.simulate.run_attrs)
+    # attributes of result files besides the parameters (analysis.provenance.run_attrs)
     "model", "spec_sha256", "n_balls", "bearingdyn_version", "generator", "casadi_version",
     "method", "dt", "save_every", "duration", "transient", "x0", "y0", "vx0", "vy0", "rtol",
     "atol", "shaft_hz", "cage_hz", "vc_hz", "spec_file", "state_names",

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 from analysis.integrate.flow import Period, evaluate, flow_map
-from analysis.integrate.simulate import simulate, state_at
+from analysis.integrate.simulate import simulate
 from analysis.model import System
+from analysis.provenance import state_at, system_of_attrs
 from analysis.stability.continuation import (
     StepGuards,
     continue_from_orbit,
@@ -23,7 +24,7 @@ from analysis.stability.continuation import (
     first_point,
     switch_branch_point,
 )
-from analysis.stability.periodic import PeriodicOrbit, shoot, system_of_attrs
+from analysis.stability.periodic import PeriodicOrbit, shoot
 
 RPM = 30 / math.pi
 ROTOR = dict(radial_load=50.0)

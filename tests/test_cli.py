@@ -7,7 +7,7 @@ import json
 
 import xarray as xr
 
-from analysis.io import load_dataset
+from analysis.provenance import load_dataset
 from tests.conftest import SPECS
 
 

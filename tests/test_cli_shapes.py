@@ -11,7 +11,8 @@ import json
 import numpy as np
 import pytest
 
-from analysis.io import load_dataset, open_result
+from analysis.io import open_result
+from analysis.provenance import load_dataset
 from tests.conftest import SPECS
 
 ROTOR_HOUSING = ("x_rotor", "y_rotor", "x_housing", "y_housing",

@@ -157,14 +157,14 @@ def test_block_plan_covers_the_steps_in_few_calls(n_steps):
     assert len(plan) - plan.count(compiled.BLOCK_SIZES[0]) <= 36
 
 
-# The benchmark (benchmarks/bench_simulate.py, not part of the package): its hand-written
-# paths compute the same model.
+# The benchmark (analysis.reports.bench; benchmarks/bench_simulate.py runs it): its
+# hand-written paths compute the same model.
 
 @pytest.fixture(scope="module")
 def bench():
-    from analysis.cli.reports import _benchmark_module
+    from analysis.reports import bench
 
-    return _benchmark_module()
+    return bench
 
 
 def test_benchmark_reference_matches_the_generated_model(bench):
@@ -197,14 +197,34 @@ def test_bench_command_prints_the_table(cli):
     assert bad.returncode == 2 and "--repeat" in bad.stderr
 
 
-def test_bench_command_outside_a_checkout_says_where_the_benchmarks_are(tmp_path, monkeypatch):
+def test_bench_command_needs_nothing_outside_the_package(monkeypatch):
+    """`bearingdyn bench` as from an installed package: it imports no module and opens no
+    file of the source tree's benchmarks/ folder."""
+    import builtins
+    import importlib.util
+    from pathlib import Path
+
     from typer.testing import CliRunner
 
-    import analysis.cli.reports
+    import analysis.cli
 
-    monkeypatch.setattr(analysis.cli.reports, "BENCHMARKS", tmp_path / "benchmarks")
-    res = CliRunner().invoke(analysis.cli.app, ["bench", "--repeat", "1"])
-    assert res.exit_code == 2
-    lines = res.output.strip().splitlines()
-    assert len(lines) == 1 and "source tree" in lines[0]
-    assert "python benchmarks/bench_simulate.py" in lines[0]
+    outside = str(Path(analysis.cli.__file__).resolve().parents[2] / "benchmarks")
+    touched: list[str] = []
+
+    def guard(original):
+        def checked(path, *args, **kwargs):
+            if str(Path(str(path)).resolve()).startswith(outside):
+                touched.append(str(path))
+                raise OSError(f"read outside the package: {path}")
+            return original(path, *args, **kwargs)
+        return checked
+
+    monkeypatch.setattr(builtins, "open", guard(builtins.open))
+    monkeypatch.setattr(importlib.util, "spec_from_file_location",
+                        guard(importlib.util.spec_from_file_location))
+    monkeypatch.setattr("sys.path", [p for p in __import__("sys").path
+                                     if not str(p).startswith(outside)])
+    res = CliRunner().invoke(analysis.cli.app, ["bench", "--repeat", "1", "--duration", "0.002",
+                                                "--memory-duration", "0"])
+    assert res.exit_code == 0, res.output
+    assert "| (a) bearingdyn RK4" in res.output and not touched

@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from analysis.integrate.simulate import simulate, state_at
+from analysis.integrate.simulate import simulate
 from analysis.io import open_result, save_dataset
+from analysis.provenance import state_at
 from analysis.signal.poincare import poincare_section
 from analysis.stability.classify import _normalised_points, repeat_period
 from analysis.stability.continuation import (

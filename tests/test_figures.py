@@ -97,9 +97,11 @@ def test_an_unnamed_peak_is_its_frequency_everywhere_and_explained_in_the_legend
     assert "?" not in "".join(notes) and "None" not in "".join(notes)
     legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert any(t.startswith("unnamed peak") for t in legend)
-    from analysis.reports.paper import peak_name
+    from analysis.reports.paper import major_name, other_peak_names
 
-    assert peak_name(unnamed) == unnamed.name
+    assert major_name([unnamed]) == unnamed.name
+    assert other_peak_names([unnamed, unnamed]) == [unnamed.name]
+    assert other_peak_names([unnamed, unnamed], named_only=True) == []
     ds.to_netcdf(tmp_path / "run.nc", engine="h5netcdf")
     res = cli("spectrum", "run.nc", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -156,3 +158,30 @@ def test_every_chart_point_is_a_cell_of_its_colour_also_on_one_row(rows):
         got = pixels[round(float(pixels.shape[0] - py)), round(float(px))] / 255
         want = to_rgba(NATURE_COLORS[int(codes[i, j])])
         assert np.allclose(got, want, atol=2 / 255), (x, y, got, want)
+
+
+def test_figures_leave_the_backend_and_pyplot_alone(tmp_path):
+    """Importing the figure modules and drawing sets no backend and opens no pyplot figure
+    (a notebook's inline backend stays, and shows a returned figure once)."""
+    import subprocess
+    import sys
+
+    code = ("import matplotlib; matplotlib.use('svg')\n"
+            "import numpy as np, xarray as xr, sys\n"
+            "import analysis.reports.plots as plots, analysis.reports.curve_plots\n"
+            "t = np.arange(2000) * 1e-4\n"
+            "ds = xr.Dataset({'x': ('t', 1e-6 * np.sin(2 * np.pi * 80 * t)),"
+            " 'y': ('t', 1e-6 * np.cos(2 * np.pi * 80 * t))}, coords={'t': t},"
+            " attrs={'state_names': 'x y', 'shaft_hz': 80.0, 'dt': 1e-4})\n"
+            "fig = plots.spectrum_figure(ds, ['x'])\n"
+            "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
+            "pyplot = sys.modules.get('matplotlib.pyplot')\n"
+            "assert pyplot is None or not pyplot.get_fignums()\n"
+            "fig.savefig(sys.argv[1], format='png')\n")
+    from tests.conftest import ROOT
+
+    out = tmp_path / "figure.png"
+    res = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True,
+                         text=True, cwd=ROOT, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

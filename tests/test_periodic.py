@@ -7,8 +7,9 @@ import pytest
 
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate, flow_map
-from analysis.integrate.simulate import simulate, state_at
+from analysis.integrate.simulate import simulate
 from analysis.model import load_model
+from analysis.provenance import state_at
 from analysis.stability.periodic import commensurate, shoot
 from tests.html_rows import table_rows
 

@@ -10,8 +10,9 @@ import json
 
 import pytest
 
-from analysis.io import open_result, provenance
+from analysis.io import open_result
 from analysis.model import load_model
+from analysis.provenance import provenance
 from tests.conftest import SPECS, run_cli
 
 SIMULATE_ONLY = {"method", "dt", "save_every", "duration", "transient", "rtol", "atol"}

@@ -8,8 +8,8 @@ import json
 import pytest
 import xarray as xr
 
-from analysis.io import load_dataset, provenance
 from analysis.model import load_model
+from analysis.provenance import load_dataset, provenance
 from analysis.reports.paper import PAPER_TABLE2, nature_matches
 from analysis.reports.report import write_reproduction
 from analysis.reports.reproduce import Row, reproduce

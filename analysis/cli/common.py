@@ -217,7 +217,7 @@ def check_out_dir(path: Path, option: str = "--out-dir") -> Path:
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""
-    from analysis.signal import cage_frequencies, vc_frequencies
+    from analysis.provenance import cage_frequencies, vc_frequencies
 
     words = []
     if float(attrs.get("shaft_hz", 0.0)) > 0:

@@ -96,7 +96,7 @@ def continue_(
 
         _save_figure(branch_figure(branches), plot, err=as_json)
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
         from analysis.stability.continuation import branch_summary
 
         typer.echo(json.dumps({

@@ -20,7 +20,7 @@ from analysis.cli.common import (
     parse_sets,
     reports_errors,
 )
-from analysis.errors import BearingdynError, InputError
+from analysis.errors import InputError
 
 
 @app.command()
@@ -99,35 +99,16 @@ def bench(
 ):
     """Speed and memory benchmark (about 2 min): compiled RK4, CasADi VM, NumPy, SciPy, numba.
 
-    Runs benchmarks/bench_simulate.py of a source checkout (the benchmarks are not installed).
+    The benchmark is ``analysis.reports.bench`` (``benchmarks/bench_simulate.py`` of a source
+    checkout runs the same).
     """
     if repeat < 1:
         raise InputError(f"--repeat: must be >= 1, got {repeat}")
     if not duration > 0 or memory_duration < 0:
         raise InputError(f"--duration: must be > 0 s and --memory-duration >= 0 s, got "
                          f"{duration:g} and {memory_duration:g}")
-    bench_module = _benchmark_module()
-    res = bench_module.run_benchmark(repeat, duration, memory_duration,
-                                     progress=lambda msg: typer.echo(msg, err=True))
-    typer.echo(bench_module.format_result(res))
+    from analysis.reports.bench import format_result, run_benchmark
 
-
-BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
-"""``benchmarks/`` of the source checkout this package runs from (absent when installed)."""
-
-
-def _benchmark_module():
-    """benchmarks/bench_simulate.py, loaded by path (it is not part of the package)."""
-    import importlib.util
-    import sys
-
-    path = BENCHMARKS / "bench_simulate.py"
-    if not path.is_file():
-        raise BearingdynError(
-            f"the benchmarks live in the source tree, not in the installed package ({path} "
-            "not found): in a checkout of bearingdyn run `python benchmarks/bench_simulate.py`")
-    spec = importlib.util.spec_from_file_location("bench_simulate", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while it executes
-    spec.loader.exec_module(module)
-    return module
+    res = run_benchmark(repeat, duration, memory_duration,
+                        progress=lambda msg: typer.echo(msg, err=True))
+    typer.echo(format_result(res))

@@ -52,6 +52,7 @@ def simulate(
     from analysis.integrate.simulate import simulate_to_file
     from analysis.io import save_dataset
     from analysis.model import balls_text
+    from analysis.provenance import state_names
 
     params = _parameters(speed_rpm, sets)
     start = time.perf_counter()
@@ -69,7 +70,7 @@ def simulate(
         typer.echo(f"wrote {output}: {attrs['model']}, {balls_text(attrs)}, {speed}"
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "
-                   f"{', '.join(str(attrs['state_names']).split())}")
+                   f"{', '.join(state_names(attrs))}")
 
 
 @app.command()
@@ -96,8 +97,12 @@ def spectrum(
     """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
     of a run's displacements or of any state variables; with --envelope the envelope
     spectrum, named by the defect frequencies."""
-    from analysis.io import load_dataset
-    from analysis.signal import cage_frequencies, displacement_names, vc_frequencies
+    from analysis.provenance import (
+        cage_frequencies,
+        displacement_names,
+        load_dataset,
+        vc_frequencies,
+    )
     from analysis.signal.spectrum import fault_frequencies, peak_table
 
     passband = None
@@ -119,7 +124,7 @@ def spectrum(
     vocabulary = "fault" if faults else "shaft"
     peaks = peak_table(ds, variables, max_peaks=max_peaks, vocabulary=vocabulary)
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         report = {"shaft_hz": ds.attrs.get("shaft_hz"), "vc_hz": ds.attrs.get("vc_hz"),
                   "vc": vc_frequencies(ds.attrs), "cage": cage_frequencies(ds.attrs)}
@@ -162,7 +167,7 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
         peaks, chosen = envelope_peaks(ds, name, passband, max_peaks=max_peaks)
         results.append((name, peaks, chosen))
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         typer.echo(json.dumps({
             "shaft_hz": ds.attrs.get("shaft_hz"), "faults": faults,
@@ -210,8 +215,7 @@ def poincare(
 ):
     """Stroboscopic Poincaré section of a run (once per shaft, cage, VC or parameter
     period); every state variable is sampled."""
-    from analysis.io import load_dataset
-    from analysis.signal import displacement_names, run_state_names
+    from analysis.provenance import displacement_names, load_dataset, state_names
     from analysis.signal.poincare import SECTION_SYNTAX, parse_section, poincare_section
 
     try:
@@ -219,7 +223,7 @@ def poincare(
     except InputError:
         raise InputError(f"--section: must be {SECTION_SYNTAX}, got {section!r}") from None
     ds = load_dataset(run_file)
-    names = run_state_names(ds)
+    names = state_names(ds)
     for option, name in (("--x", x), ("--y", y)):
         if name is not None and name not in names:
             raise InputError(f"{option}: no state variable {name!r} in this run; "
@@ -234,7 +238,7 @@ def poincare(
         raise
     shown = (x, y) if x else displacement_names(ds)
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         typer.echo(json.dumps({**{v: pts[v].values.tolist() for v in ("t", *names)},
                                "provenance": provenance(ds)}))

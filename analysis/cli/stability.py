@@ -69,7 +69,7 @@ def lyapunov(
             "transient_running": _running_json(res.transient_running, "t_transient"),
             **{k: int(v) for k, v in res.attrs.items() if str(k).startswith("n_balls")}}
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         typer.echo(json.dumps({**data, "provenance": provenance(res)}, indent=2))
     else:
@@ -144,7 +144,7 @@ def floquet(
     orbit = shoot(model, parse_n_balls(n_balls), period, segments=segments,
                   **_given(dt=dt, settle=settle), **_parameters(speed_rpm, sets))
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         typer.echo(json.dumps({**orbit.as_dict(), "provenance": provenance(orbit.system)},
                               indent=2))
@@ -171,12 +171,12 @@ def classify(
 ):
     """Periodic-n, quasi-periodic or chaotic (computes the largest Lyapunov exponent when
     the Poincaré points alone cannot tell)."""
-    from analysis.io import load_dataset
+    from analysis.provenance import load_dataset
     from analysis.stability.classify import classify as run_classify
 
     result = run_classify(load_dataset(run_file), section)
     if as_json:
-        from analysis.io import provenance
+        from analysis.provenance import provenance
 
         typer.echo(json.dumps({**result.as_dict(), "provenance": provenance(run_file)},
                               indent=2))

@@ -44,23 +44,15 @@ def parse_speeds(text: str) -> list[float]:
     return speeds
 
 
-def _plain(value):
-    """A JSON-ready copy of numpy scalars and arrays."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def stiffness_json(ds) -> dict:
     """The JSON of `bearingdyn stiffness --json`: provenance, the equilibrium and matrices at
     cage angle 0, their cage-angle means, and every cage angle."""
+    from analysis.provenance import provenance
     from analysis.stability.statics import bearing_coefficients
 
     coords = [str(c) for c in ds.row.values]
     data = {
-        "provenance": {str(k): _plain(v) for k, v in ds.attrs.items()},
+        "provenance": provenance(ds),
         "coordinates": coords,
         "units": {"position": ds.position.attrs["units"], "stiffness": ds.stiffness.attrs["units"],
                   "damping": ds.damping.attrs["units"], "cage_angle": "rad"},

@@ -9,11 +9,9 @@ parameter value, method and step, the characteristic frequencies and the package
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 from typing import Literal
 
@@ -24,22 +22,13 @@ import xarray as xr
 from analysis.errors import InputError, Interrupt, SimulationError
 from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
-from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.model import BallCounts, Model, System, as_system
+from analysis.provenance import completed_attrs, state_variable_attrs, to_dataset
 
 Method = Literal["rk4", "cvodes"]
 BLOW_UP_FACTOR = 1000.0
 """A displacement beyond this many clearances is a blow-up (models without a clearance are
 only checked for non-finite states)."""
-RK4_STABILITY_LIMIT = 2.785
-"""|λ|·Δt at which classical RK4 stops being stable on the imaginary axis (2√2)."""
-
-
-@functools.cache
-def package_version() -> str:
-    try:
-        return metadata.version("bearingdyn")
-    except metadata.PackageNotFoundError:  # running from a source tree
-        return "0+unknown"
 
 
 def _check_times(duration: float, transient: float, dt: float) -> None:
@@ -146,12 +135,9 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
     check_rk4_step(model, n, values, dt, method)
     z0 = system.state
     first = _first_kept(transient - 1e-12 * duration, save_every * dt)
-    attrs = run_attrs(model, n, values)
-    attrs.update(method=method, dt=dt, save_every=save_every, duration=duration,
-                 transient=transient)
-    attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, z0, strict=True)})
-    if method == "cvodes":
-        attrs.update(rtol=rtol, atol=atol)
+    attrs = completed_attrs(system, method=method, dt=dt, save_every=save_every,
+                            duration=duration, transient=transient, initial_state=True,
+                            tolerances=(rtol, atol) if method == "cvodes" else None)
     return _Run(system, z0, dt, save_every, n_saved, max(0, first), blow_up_limit(values),
                 attrs)
 
@@ -216,8 +202,7 @@ def simulate_to_file(
             for name in model.state_names:
                 var = f.create_variable(name, ("t",), "f8", chunks=(rows,),
                                         fillvalue=np.nan)
-                var.attrs.update({"units": model.state_units[name],
-                                  "long_name": state_meaning(model, name)})
+                var.attrs.update(state_variable_attrs(model, name))
                 variables.append(var)
             f.attrs.update(run.attrs)
 
@@ -270,53 +255,6 @@ def blow_up_limit(values: dict[str, float]) -> float:
     limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
     limits += [BALL_FRACTION * ball] if ball > 0 else []
     return min(limits, default=np.inf)
-
-
-def run_attrs(model: Model, structure: Structure, values: dict[str, float]) -> dict:
-    """Provenance of a run: model, spec path and hash, versions, balls, every parameter,
-    frequencies, the state names."""
-    attrs = {"model": model.name, "spec_sha256": model.spec_sha256,
-             "spec_file": model.spec_file, **model.structure_attrs(structure),
-             "state_names": " ".join(model.state_names),
-             "bearingdyn_version": package_version(),
-             "generator": ", ".join(f"{k} {v}" for k, v in model.module.GENERATOR.items()),
-             "casadi_version": ca.__version__}
-    attrs.update(values)
-    attrs.update(model.frequencies(structure, values).as_dict())
-    return attrs
-
-
-def state_names(ds: xr.Dataset) -> tuple[str, ...]:
-    """The state variables of a run, in the order of the state vector."""
-    return tuple(ds.attrs.get("state_names", "x y vx vy").split())
-
-
-def state_at(ds: xr.Dataset, index: int) -> np.ndarray:
-    """The state (SI units, the model's order) at sample ``index`` of a run (-1: the last)."""
-    return np.array([float(ds[v][index]) for v in state_names(ds)])
-
-
-def state_meaning(model: Model, name: str) -> str:
-    """Words for a state variable: 'rotor displacement along the radial load', …"""
-    velocity = name.startswith("v") and name[1:] in model.state_names
-    base = name[1:] if velocity else name
-    coordinate, _, body = base.partition("_")
-    body = body or model.module.BODIES[0][0]
-    what = {"x": "displacement along the radial load", "y": "displacement across the radial load",
-            "tx": "tilt dx/dz", "ty": "tilt dy/dz"}[coordinate]
-    if velocity:
-        what = what.replace("displacement", "velocity").replace("tilt", "tilt rate")
-    return f"{body} {what}"
-
-
-def to_dataset(t: np.ndarray, states: np.ndarray, attrs: dict, model: Model) -> xr.Dataset:
-    """A run as a Dataset: one variable per state over ``t`` (s)."""
-    units = model.state_units
-    data = {name: ("t", states[i], {"units": units[name],
-                                    "long_name": state_meaning(model, name)})
-            for i, name in enumerate(model.state_names)}
-    return xr.Dataset(data, coords={"t": ("t", t, {"units": "s", "long_name": "time"})},
-                      attrs=attrs)
 
 
 def _displacement(states: np.ndarray, pairs: list[tuple[int, int | None]]) -> np.ndarray:

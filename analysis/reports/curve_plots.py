@@ -3,13 +3,13 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
-from analysis.reports.plots import (  # also selects Agg
+from analysis.reports import canvas as plt  # pyplot's subplots, without pyplot
+from analysis.reports.plots import (
     NATURE_COLORS,
     NATURE_NAMES,
     cell_edges,

@@ -28,7 +28,8 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import BearingdynError, InputError
-from analysis.io import atomic_write, open_result, provenance
+from analysis.io import atomic_write, open_result
+from analysis.provenance import displacement_names, plain, provenance, system_of_attrs
 
 SPECTRUM_BINS = 400
 """Default number of spectrum bins kept per variable (peak-preserving thinning)."""
@@ -38,7 +39,6 @@ MAX_SECTION_POINTS = 400
 
 def _setting_of_chart(chart: xr.Dataset):
     """The ``Setting`` a chart was computed with, from its attrs."""
-    from analysis.stability.periodic import system_of_attrs
     from analysis.sweeps.sweep import Setting
 
     attrs = chart.attrs
@@ -61,7 +61,6 @@ def point_detail(task: tuple) -> dict[str, Any]:
     from analysis.integrate.simulate import simulate
     from analysis.model import as_system
     from analysis.reports.plots import _f_max, default_partner
-    from analysis.signal import displacement_names
     from analysis.signal.poincare import period_of, poincare_section
     from analysis.signal.spectrum import amplitude_spectrum, find_peaks
 
@@ -115,14 +114,6 @@ def _floats(values) -> list[float | None]:
             for v in np.ravel(values)]
 
 
-def _value(v: Any) -> Any:
-    if isinstance(v, (np.floating, float)):
-        return float(v) if math.isfinite(float(v)) else None
-    if isinstance(v, np.integer):
-        return int(v)
-    return v
-
-
 def explorer_data(chart: xr.Dataset, *, spectrum_bins: int = SPECTRUM_BINS, executor=None,
                   progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
     """Everything the page shows, as plain data: the grid and each point's chart values
@@ -147,7 +138,7 @@ def explorer_data(chart: xr.Dataset, *, spectrum_bins: int = SPECTRUM_BINS, exec
     points = []
     for iy, yv in enumerate(ys):
         for ix, xv in enumerate(xs):
-            values = {f: _value(chart[f].values[iy, ix]) for f in fields}
+            values = {f: plain(chart[f].values[iy, ix], finite=True) for f in fields}
             points.append({"ix": ix, "iy": iy, "x": xv, "y": yv, **values,
                            "detail": details[(xv, yv)]})
     field_units = {f: str(chart[f].attrs.get("units", "")) for f in fields}

@@ -57,14 +57,23 @@ def nature_matches(paper: str, ours: str) -> bool:
     return ours == paper
 
 
-def peak_name(peak: Peak) -> str:
-    """A peak's label, or an unnamed peak's frequency (``Peak.name``)."""
-    return peak.name
-
-
 def major_name(peaks: Sequence[Peak]) -> str:
-    """Name of the largest peak (``-`` when there is none)."""
-    return peak_name(peaks[0]) if peaks else "-"
+    """Name of the largest peak (``-`` when there is none; ``Peak.name``: its label, or an
+    unnamed peak's frequency)."""
+    return peaks[0].name if peaks else "-"
+
+
+def other_peak_names(peaks: Sequence[Peak], named_only: bool = False) -> list[str]:
+    """The distinct names of the peaks after the largest (``peaks`` largest first), in
+    their order; with ``named_only``, only labelled peaks and never the largest's name (the
+    paper's "other peaks" column, which lists combinations only)."""
+    names: list[str] = []
+    major = major_name(peaks)
+    for p in peaks[1:]:
+        if p.name in names or (named_only and (not p.label or p.name == major)):
+            continue
+        names.append(p.name)
+    return names
 
 
 def series_f_max(model, n_balls: Sequence[int], **parameters: float) -> float | None:

@@ -1,21 +1,21 @@
-"""Matplotlib figures. Functions return figures; saving is the caller's business."""
+"""Matplotlib figures. Functions return figures; saving is the caller's business.
+
+The figures are made without pyplot (``analysis.reports.canvas``: each on its own Agg
+canvas), so importing this module or drawing leaves matplotlib's backend as it is (a
+notebook's inline backend, a script's choice) and needs no display."""
 
 from __future__ import annotations
 
 import math
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
 from analysis.model import balls_text
-from analysis.signal import displacement_names, is_velocity, run_state_names, vc_frequencies
+from analysis.provenance import displacement_names, is_velocity, state_names, vc_frequencies
+from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
 from analysis.signal.poincare import poincare_section, section_period
 from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
 
@@ -198,7 +198,7 @@ def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> N
 def default_partner(ds: xr.Dataset, var: str) -> str:
     """The variable drawn against ``var`` in a Poincaré map: its velocity (``vx`` for
     ``x``), else the next state variable."""
-    names = run_state_names(ds)
+    names = state_names(ds)
     if f"v{var}" in names:
         return f"v{var}"
     if is_velocity(var, names):
@@ -216,7 +216,7 @@ def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft",
     for name in (var, against):
         if name not in pts:
             raise InputError(f"{name}: not a state variable of this run; variables: "
-                             f"{', '.join(run_state_names(ds))}")
+                             f"{', '.join(state_names(ds))}")
     fx, _ = scale_of(ds, var)
     fy, _ = scale_of(ds, against)
     ax.plot(pts[var] * fx, pts[against] * fy, ".", ms=2.5, color="C2")
@@ -336,7 +336,7 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
     missing = [v for v in variables if v not in ds.data_vars or "k" not in ds[v].dims]
     if missing:
         raise InputError(f"{missing[0]}: not a state variable of this diagram; variables: "
-                         f"{', '.join(run_state_names(ds))}")
+                         f"{', '.join(state_names(ds))}")
     fig, axes = plt.subplots(len(variables), 1, figsize=(9, 1 + 3 * len(variables)),
                              sharex=True, layout="constrained", squeeze=False)
     axes = axes[:, 0]

@@ -11,14 +11,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from analysis.io import atomic_write, provenance
+from analysis.io import atomic_write
 from analysis.model import load_model
+from analysis.provenance import provenance
 from analysis.reports.paper import (
     PAPER_N_BALLS,
     PAPER_NATURE,
     SENSITIVITY,
     major_name,
-    peak_name,
+    other_peak_names,
     series_f_max,
     simulate_case,
 )
@@ -41,11 +42,8 @@ class CaseResult:
         return major_name(self.peaks[var])
 
     def others(self, var: str) -> str:
-        names = []
-        for p in self.peaks[var][1:]:
-            if peak_name(p) not in names:
-                names.append(peak_name(p))
-        return ", ".join(names) or "-"
+        """The other peaks of ``var`` as text (``-`` for none)."""
+        return ", ".join(other_peak_names(self.peaks[var])) or "-"
 
 
 def run_paper_case(

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from analysis.integrate.simulate import state_at
 from analysis.model import load_model
+from analysis.provenance import state_at
 from analysis.reports.paper import (
     PAPER_NATURE,
     PAPER_TABLE2,
@@ -24,7 +24,7 @@ from analysis.reports.paper import (
     PaperRow,
     major_name,
     nature_matches,
-    peak_name,
+    other_peak_names,
     series_f_max,
     simulate_case,
 )
@@ -53,11 +53,8 @@ class Row:
         return major_name(self.peaks[var])
 
     def others(self, var: str) -> list[str]:
-        names: list[str] = []
-        for p in self.peaks[var][1:]:
-            if p.label and peak_name(p) not in names and peak_name(p) != self.major(var):
-                names.append(peak_name(p))
-        return names
+        """The other labelled peaks of ``var`` (the paper's "other peaks" column)."""
+        return other_peak_names(self.peaks[var], named_only=True)
 
     def marks(self) -> dict[str, bool | None]:
         """Per column: True (matches the paper), False, or None (not counted: the paper has

@@ -35,7 +35,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.signal import displacement_names
+from analysis.provenance import displacement_names
 from analysis.signal.spectrum import (
     Peak,
     _time_step,

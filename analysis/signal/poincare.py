@@ -25,7 +25,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.signal import cage_frequencies, run_state_names, vc_frequencies
+from analysis.provenance import cage_frequencies, state_names, vc_frequencies
 
 SECTIONS = ("shaft", "cage", "vc")
 """The sections every model with a shaft and a bearing has (see ``SECTION_SYNTAX``)."""
@@ -169,7 +169,7 @@ def poincare_section(ds: xr.Dataset, section: str = "shaft", phase: float = 0.0)
     phase = float(phase)
     if not 0.0 <= phase < 1.0:
         raise InputError(f"phase: must be a fraction of the period in [0, 1), got {phase!r}")
-    names = run_state_names(ds)
+    names = state_names(ds)
     missing = [name for name in names if name not in ds.data_vars]
     if missing:
         raise InputError(f"dataset: missing variable(s) {', '.join(missing)}")

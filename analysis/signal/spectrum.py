@@ -29,7 +29,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.signal import displacement_names, vc_frequencies
+from analysis.provenance import displacement_names, vc_frequencies
 
 _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
 

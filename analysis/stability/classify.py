@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.integrate.simulate import state_at, state_names
+from analysis.provenance import state_at, state_names, system_of_attrs
 from analysis.signal.poincare import poincare_section
 
 GRAPH_RATIO = 0.2
@@ -197,7 +197,6 @@ def classify_section(
 
 def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
     from analysis.stability.lyapunov import lyapunov
-    from analysis.stability.periodic import system_of_attrs
 
     system = system_of_attrs(ds.attrs, state_at(ds, -1))
     length = float(ds.t[-1] - ds.t[0])

@@ -61,9 +61,9 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate
-from analysis.integrate.simulate import run_attrs
 from analysis.integrate.tangent import Carry, tangent_step
 from analysis.model import Model, Structure
+from analysis.provenance import run_attrs, system_of_attrs
 from analysis.stability.continuation import (
     BranchProblem,
     ContinuationOptions,
@@ -72,7 +72,6 @@ from analysis.stability.continuation import (
     orbit_scale,
     tangent,
 )
-from analysis.stability.periodic import system_of_attrs
 
 KINDS = ("LP", "PD", "NS")
 TEST_GUARD = 1e-6

@@ -28,9 +28,10 @@ import xarray as xr
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import MAX_STEPS, check_seconds
 from analysis.integrate.compiled import compiled_function
-from analysis.integrate.simulate import run_attrs, simulate, state_at
+from analysis.integrate.simulate import simulate
 from analysis.integrate.tangent import tangent_block
 from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.provenance import run_attrs, state_at
 
 BLOCKS = 10
 """Batches for the confidence interval of the exponents (batch means)."""

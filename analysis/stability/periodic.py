@@ -18,7 +18,7 @@ ball): a non-converged solve is reported as such in the result, never as an exce
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -36,8 +36,9 @@ from analysis.integrate.flow import (
     period_seconds,
     steps_per_period,
 )
-from analysis.integrate.simulate import simulate, state_at
-from analysis.model import BallCounts, Model, Structure, System, as_system, load_model
+from analysis.integrate.simulate import simulate
+from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.provenance import state_at
 
 STABILITY_MARGIN = 1e-6
 """|μ| below 1 − margin counts as stable; within the margin the verdict is 'marginal'."""
@@ -161,25 +162,6 @@ def state_scale(z: np.ndarray, period_s: float,
         scale[group] = size
         scale[vel] = max(float(np.max(z[vel])), size * 2 * math.pi / period_s)
     return scale
-
-
-def structure_of_attrs(model: Model, attrs: Mapping) -> Structure:
-    """Balls per bearing from a result's attributes (``n_balls`` or ``n_balls_<bearing>``)."""
-    if not model.bearing_names:
-        return ()
-    if "n_balls" in attrs:
-        return model.structure(int(attrs["n_balls"]))
-    return model.structure({b: int(attrs[f"n_balls_{b}"]) for b in model.bearing_names})
-
-
-def system_of_attrs(attrs: Mapping, state: np.ndarray | None = None) -> System:
-    """The System a result was computed for, from its attributes (``model``, ``spec_file``,
-    balls per bearing and every parameter); ``state`` (default: the spec's initial state)."""
-    spec = str(attrs.get("spec_file", ""))
-    model = load_model(spec) if spec and Path(spec).is_absolute() and Path(spec).exists() \
-        else load_model(str(attrs["model"]))
-    values = {name: float(attrs[name]) for name in model.parameter_names if name in attrs}
-    return System.make(model, structure_of_attrs(model, attrs), state, **values)
 
 
 def default_period(model: Model) -> Period:

@@ -43,8 +43,8 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.simulate import run_attrs
 from analysis.model import BallCounts, Model, System, as_system
+from analysis.provenance import run_attrs
 
 TIME_SAMPLES = 8
 """Instants over one shaft revolution over which time-varying forces are averaged."""

@@ -40,11 +40,9 @@ from analysis.integrate.simulate import (
     _blow_up,
     blow_up_limit,
     extremes,
-    run_attrs,
-    to_dataset,
 )
 from analysis.model import BallCounts, Model, Structure, System, as_system
-from analysis.signal import displacement_names
+from analysis.provenance import completed_attrs, displacement_names, to_dataset
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.stability.classify import (
     Classification,
@@ -216,7 +214,7 @@ class PointResult:
     ptp: dict[str, float]
     """Peak-to-peak of every state variable over the record (SI units)."""
     displacements: tuple[str, ...]
-    """The first body's translations (``analysis.signal.displacement_names``)."""
+    """The first body's translations (``analysis.provenance.displacement_names``)."""
     points: xr.Dataset
     """The Poincaré points of the classification (``poincare_section`` of the record)."""
 
@@ -241,8 +239,8 @@ def _prepare(system: System, duration: float, transient: float, dt: float,
     to the end without ``tangent``)."""
     model, structure, values = system.model, system.structure, dict(system.parameters)
     check_rk4_step(model, structure, values, dt, "rk4")
-    attrs = run_attrs(model, structure, values)
-    attrs.update(method="rk4", dt=dt, save_every=1, duration=duration, transient=transient)
+    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
+                            transient=transient)
     section = section or default_section(attrs)
     plan = _plan(duration, transient, dt, default_lengths(model)[2] if tangent else 0.0)
     n = model.n_state

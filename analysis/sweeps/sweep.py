@@ -57,10 +57,17 @@ from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import check_rk4_step, check_seconds
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.lanes import LANES
-from analysis.integrate.simulate import blow_up_limit, run_attrs, simulate, state_at, to_dataset
+from analysis.integrate.simulate import blow_up_limit, simulate
 from analysis.io import save_dataset
 from analysis.model import BallCounts, System, load_model
-from analysis.signal import displacement_names
+from analysis.provenance import (
+    completed_attrs,
+    displacement_names,
+    run_attrs,
+    state_at,
+    state_names,
+    to_dataset,
+)
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.sweeps.executors import Executor, SerialExecutor
 from analysis.sweeps.points import chart_points  # one pass; chart_point_two_pass below
@@ -79,7 +86,7 @@ def failure_text(exc: SimulationError) -> str:
 
 def _displacement_fields(model_name: str) -> list[str]:
     model = load_model(model_name)
-    names = displacement_names(xr.Dataset(attrs={"state_names": " ".join(model.state_names)}))
+    names = displacement_names({"state_names": " ".join(model.state_names)})
     return [f"amplitude_{v}" for v in names]
 
 
@@ -288,11 +295,9 @@ def _record_from(setting: Setting, n_balls: BallCounts, values: dict[str, float]
     elapsed = np.arange(n_steps + 1) * dt
     _check_bounded(system, states, start.time + elapsed)
     keep = elapsed >= setting.transient - 1e-12 * duration
-    attrs = run_attrs(model, system.structure, dict(system.parameters))
-    attrs.update(method="rk4", dt=dt, save_every=1, duration=duration,
-                 transient=setting.transient, t_start=start.time)
-    attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, system.state,
-                                                          strict=True)})
+    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
+                            transient=setting.transient, t_start=start.time,
+                            initial_state=True)
     return to_dataset(start.time + elapsed[keep], states[:, keep], attrs, model)
 
 
@@ -328,7 +333,7 @@ def diagram_point(setting: Setting, n_balls: BallCounts, values: dict[str, float
         ds, t_start = _record_from(setting, n_balls, values, start), start.time
     pts = poincare_section(ds, setting.section)
     k = setting.samples
-    out = {v: pts[v].values[:k] for v in ds.attrs["state_names"].split()}
+    out = {v: pts[v].values[:k] for v in state_names(ds)}
     out["final"] = state_at(ds, -1)
     out["t_start"] = t_start
     out["t_final"] = float(ds.t[-1])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from analysis.integrate.simulate import run_attrs
 from analysis.model import Model
+from analysis.provenance import run_attrs
 from analysis.stability.continuation.problem import BranchPoint, BranchProblem
 
 

@@ -17,6 +17,7 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, evaluate, flow_map, period_seconds
+from analysis.provenance import system_of_attrs
 from analysis.stability.continuation.dataset import first_point
 from analysis.stability.continuation.options import ContinuationOptions
 from analysis.stability.continuation.trace import Progress, continue_from_orbit
@@ -25,7 +26,6 @@ from analysis.stability.periodic import (
     as_period,
     shoot,
     state_scale,
-    system_of_attrs,
 )
 
 

@@ -27,6 +27,7 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, steps_per_period
 from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.provenance import system_of_attrs
 from analysis.stability.continuation.dataset import branch_dataset
 from analysis.stability.continuation.detect import fold_between, lp_test, points_between
 from analysis.stability.continuation.options import (
@@ -44,7 +45,7 @@ from analysis.stability.continuation.problem import (
     orbit_scale,
     scaled,
 )
-from analysis.stability.periodic import PeriodicOrbit, as_period, shoot, system_of_attrs
+from analysis.stability.periodic import PeriodicOrbit, as_period, shoot
 
 Progress = Callable[[str], None] | None
 """Where progress lines go (None: nowhere)."""
