@@ -60,13 +60,19 @@ def test_a_chart_classifies_on_the_section_given_and_else_on_the_models_own(tmp_
         assert "periodic-1" in set(ds.nature.values.ravel())
 
 
-def test_chart_attrs_carry_nothing_the_axes_overrule(tmp_path):
-    out = tmp_path / "c.nc"
+@pytest.fixture(scope="module")
+def small_chart(tmp_path_factory):
+    """A 2 × 2 chart of vakharia2015 over speed and balls, short records, no λ1."""
+    out = tmp_path_factory.mktemp("grid") / "c.nc"
     res = run_cli("chart", "vakharia2015", "--x", "speed_rpm:5000:6000:2", "--y",
                   "n_balls:7:8", "--transient", "0.02", "--revolutions", "5", "--no-lyapunov",
                   "--executor", "serial", "--quiet", "-o", str(out))
     assert res.returncode == 0, res.stderr
-    ds = open_result(out)
+    return open_result(out)
+
+
+def test_chart_attrs_carry_nothing_the_axes_overrule(small_chart):
+    ds = small_chart
     for name in ("speed_rpm", "n_balls", "bearing_name", "shaft_hz", "vc_hz"):
         assert name not in ds.attrs, name
     assert ds.n_balls.dtype == np.int64 and ds.n_balls.values.tolist() == [7, 8]
@@ -74,6 +80,22 @@ def test_chart_attrs_carry_nothing_the_axes_overrule(tmp_path):
     assert ds.attrs["radial_clearance"] > 0 and ds.attrs["dt"] == 1e-5  # the spec's step
     setting = Setting.from_attrs(ds.attrs, ("speed_rpm", "n_balls"))
     assert setting.n_balls is None and "speed_rpm" not in setting.values
+
+
+def test_the_explorer_and_plot_read_old_and_new_chart_files(small_chart):
+    """An old chart file (float ball coordinates, base n_balls and speed_rpm under the
+    axes) gives the explorer the same points as the new one, and ``plot`` draws both."""
+    from analysis.reports.explorer import explorer_data
+    from analysis.reports.plots import any_figure
+
+    new = small_chart
+    old = new.assign_coords(n_balls=new.n_balls.astype(float))
+    old.attrs.update(n_balls=6, bearing_name="bearing", speed_rpm=5000.0)
+    got = [explorer_data(ds, spectrum_bins=16)["points"] for ds in (new, old)]
+    assert [p["detail"] for p in got[0]] == [p["detail"] for p in got[1]]
+    assert all("error" not in p["detail"] for p in got[0])
+    for ds in (new, old):
+        any_figure(ds)
 
 
 def test_an_old_chart_files_attrs_still_give_its_setting():
