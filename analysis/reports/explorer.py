@@ -53,7 +53,7 @@ def _setting_of_chart(chart: xr.Dataset) -> Setting:
 def point_detail(task: tuple) -> dict[str, Any]:
     """Spectra, Poincaré points and peaks of one chart point (``task``: setting, x name,
     x value, y name, y value); ``{"error": message}`` when its run fails."""
-    from analysis.reports.plots import _f_max, default_partner
+    from analysis.reports.plots import default_partner, f_max_of
     from analysis.signal import displacement_names
     from analysis.signal.poincare import poincare_section
     from analysis.signal.spectrum import amplitude_spectrum, find_peaks
@@ -64,7 +64,7 @@ def point_detail(task: tuple) -> dict[str, Any]:
     try:
         system = setting.system_at(**{xname: xv, yname: yv})
         run = record(setting, system)
-        f_max = _f_max(run)
+        f_max = f_max_of(run.attrs)
         spectra, sections, peaks = {}, [], []
         for var in displacement_names(run):
             amp = amplitude_spectrum(run, var)

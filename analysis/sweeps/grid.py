@@ -113,6 +113,13 @@ def _axis_number(name: str, text: str, kind: type, form: str):
         raise InputError(f"axis {name}: {text!r} is not {word}; {form}") from None
 
 
+def section_period(system: System, section: str) -> float:
+    """The period (s) of ``section`` (``analysis.signal.poincare``) at ``system``."""
+    full = dict(system.parameters)
+    freqs = system.model.frequencies(system.structure, full)
+    return period_of({**full, **freqs.as_dict()}, section)
+
+
 @dataclass(frozen=True)
 class Setting:
     """What every point shares: model (name, spec path or generated folder), balls per
@@ -160,10 +167,8 @@ class Setting:
 
     def period(self, system: System) -> float:
         """The period (s) of the record section at ``system``."""
-        full = dict(system.parameters)
-        freqs = system.model.frequencies(system.structure, full)
         try:
-            return period_of({**full, **freqs.as_dict()}, self.record_section)
+            return section_period(system, self.record_section)
         except InputError as exc:
             raise InputError(f"section {self.record_section}: no period here ({exc})") from None
 
@@ -252,10 +257,7 @@ def check_grid(setting: Setting, *axes: Axis) -> None:
             raise InputError(f"axis {axis.name}: model '{model.name}' has no bearing "
                              f"'{bearing}'; bearings: {', '.join(model.bearing_names) or 'none'}")
         for value in (axis.values[0], axis.values[-1]):
-            system = setting.system_at(**{axis.name: value})
-            full = dict(system.parameters)
-            freqs = system.model.frequencies(system.structure, full)
-            period_of({**full, **freqs.as_dict()}, setting.record_section)
+            section_period(setting.system_at(**{axis.name: value}), setting.record_section)
 
 
 def _check_setting_times(setting: Setting) -> None:
