@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -206,7 +207,7 @@ class Setting:
         or those of an older file: base balls and parameters that the axes named ``axes``
         overrule are dropped; without ``record_section`` the ``section`` was recorded)."""
         spec = str(attrs.get("spec_file", ""))
-        source = spec if spec and spec.startswith("/") else str(attrs["model"])
+        source = spec if spec and Path(spec).is_absolute() else str(attrs["model"])
         model = load_model(source)
         bearings = {axis_bearing(a) for a in axes}
         values = {name: float(attrs[name]) for name in model.parameter_names
