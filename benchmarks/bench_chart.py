@@ -33,9 +33,10 @@ import numpy as np
 from analysis.integrate.compiled import Runner, library
 from analysis.model import as_system
 from analysis.reports.progress import ProgressReporter
+from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.executors import make_executor
+from analysis.sweeps.grid import Axis, Setting
 from analysis.sweeps.points import chart_point, chart_points
-from analysis.sweeps.sweep import Axis, Setting, _duration, _period, stability_chart
 
 SETTING = Setting("vakharia2015", None, {}, transient=1.0, samples=200, lyapunov=True)
 WALL_TARGET = 150.0
@@ -65,14 +66,14 @@ def timed(fn, *args) -> float:
 
 def each_alone(points: list) -> None:
     """The chart points one by one (``chart_point``: the scalar tangent blocks)."""
-    for point in points:
-        chart_point(SETTING, *point)
+    for system in points:
+        chart_point(SETTING, system)
 
 
 def rk4_pair(n_balls: int, pair: list[dict], durations: list[float]) -> None:
     """Compiled RK4 of both points of a pair (states only)."""
     for values, duration in zip(pair, durations, strict=True):
-        rk4_only(n_balls, values, duration, SETTING.dt)
+        rk4_only(n_balls, values, duration, SETTING.step())
 
 
 def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
@@ -87,8 +88,8 @@ def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
         picks.append((n_balls, [{x.name: x.values[ix]}, {x.name: x.values[ix + 1]}]))
     rows = []
     for n_balls, pair in picks:
-        durations = [_duration(SETTING, _period(SETTING, n_balls, v)) for v in pair]
-        points = [(n_balls, v) for v in pair]
+        points = [SETTING.system_at(n_balls=n_balls, **v) for v in pair]
+        durations = [SETTING.seconds(system) for system in points]
 
         timed(chart_points, SETTING, points), timed(each_alone, points)
         timed(rk4_pair, n_balls, pair, durations)

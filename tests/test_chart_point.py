@@ -1,5 +1,5 @@
 """The one-pass chart point (``analysis.sweeps.points``) against the two-pass one it replaces
-(``sweep.chart_point_two_pass``: ``simulate`` keeping every state, then ``lyapunov``) and
+(``chart.chart_point_two_pass``: ``simulate`` keeping every state, then ``lyapunov``) and
 against ``lyapunov`` run on the same setting.
 
 The one-pass run makes the same RK4 steps at the same times k·dt as ``simulate``, so the
@@ -18,16 +18,9 @@ from analysis.model import as_system
 from analysis.signal.poincare import poincare_section
 from analysis.stability.classify import default_section
 from analysis.stability.lyapunov import lyapunov
+from analysis.sweeps.chart import chart_point_two_pass, stability_chart
+from analysis.sweeps.grid import Axis, Setting, record
 from analysis.sweeps.points import chart_point, one_pass
-from analysis.sweeps.sweep import (
-    Axis,
-    Setting,
-    _duration,
-    _period,
-    _record,
-    chart_point_two_pass,
-    stability_chart,
-)
 
 CALM = {"radial_load": 50.0}
 """Radial load 50 N: a periodic orbit for the balanced rotor, a two-frequency torus with
@@ -48,17 +41,21 @@ def _setting(model: str, transient: float = 0.5, samples: int = 40) -> Setting:
     return Setting(model, None, {}, transient=transient, samples=samples, lyapunov=True)
 
 
+def _system(setting: Setting, n_balls: int, values: dict[str, float]):
+    return as_system(setting.model, n_balls, None, **values)
+
+
 def _one_pass(setting: Setting, n_balls: int, values: dict[str, float]):
-    system = as_system(setting.model, n_balls, None, **values)
-    duration = _duration(setting, _period(setting, n_balls, values))
-    return one_pass(system, duration, setting.transient, setting.dt, None), duration
+    system = _system(setting, n_balls, values)
+    duration = setting.seconds(system)
+    return one_pass(system, duration, setting.transient, setting.step(), None), duration
 
 
 @pytest.mark.parametrize(("model", "n_balls", "values", "nature"), CASES)
 def test_one_pass_equals_two_pass_on_non_chaotic_points(model, n_balls, values, nature):
     setting = _setting(model)
-    one = chart_point(setting, n_balls, values)
-    two = chart_point_two_pass(setting, n_balls, values)
+    one = chart_point(setting, _system(setting, n_balls, values))
+    two = chart_point_two_pass(setting, _system(setting, n_balls, values))
     assert one["nature"] == two["nature"] == nature
     assert one["period"] == two["period"]
     assert one["nature_code"] == two["nature_code"]
@@ -71,12 +68,12 @@ def test_one_pass_equals_two_pass_on_non_chaotic_points(model, n_balls, values, 
 
     # section points: those of the full record of the two-pass run
     out, duration = _one_pass(setting, n_balls, values)
-    record = _record(setting, n_balls, values)
-    want = poincare_section(record, default_section(record))
+    run = record(setting, _system(setting, n_balls, values))
+    want = poincare_section(run, default_section(run))
     got = out.points
     np.testing.assert_array_equal(got.k.values, want.k.values)
     np.testing.assert_array_equal(got.t.values, want.t.values)
-    for v in record.attrs["state_names"].split():
+    for v in run.attrs["state_names"].split():
         scale = np.abs(want[v].values).max()
         np.testing.assert_allclose(got[v].values, want[v].values, rtol=0, atol=1e-12 * scale)
 
@@ -91,8 +88,8 @@ def test_one_pass_equals_two_pass_on_non_chaotic_points(model, n_balls, values, 
 def test_paper_case_is_chaotic_both_ways():
     """vakharia2015, N_b = 6, the paper's parameters: chaotic (``tests/test_lyapunov.py``)."""
     setting = _setting("vakharia2015", transient=1.0, samples=100)
-    one = chart_point(setting, 6, {})
-    two = chart_point_two_pass(setting, 6, {})
+    one = chart_point(setting, _system(setting, 6, {}))
+    two = chart_point_two_pass(setting, _system(setting, 6, {}))
     assert one["nature"] == two["nature"] == "chaotic"
     assert one["lyapunov"] - one["ci95"] > 0
     for k in ("amplitude_x", "amplitude_y"):
@@ -102,16 +99,16 @@ def test_paper_case_is_chaotic_both_ways():
 def test_a_point_that_blows_up_raises_simulation_error_like_the_two_pass_path():
     setting = _setting("vakharia2015", transient=0.05, samples=5)
     with pytest.raises(SimulationError, match="blew up"):
-        chart_point_two_pass(setting, 8, BLOW_UP)
+        chart_point_two_pass(setting, _system(setting, 8, BLOW_UP))
     with pytest.raises(SimulationError, match="blew up"):
-        chart_point(setting, 8, BLOW_UP)
+        chart_point(setting, _system(setting, 8, BLOW_UP))
 
 
 def test_chart_without_lyapunov_runs_the_states_only():
     """``lyapunov=False``: no tangent; λ1 only when the section cannot decide."""
     setting = Setting("balanced-rotor", 8, CALM, transient=0.5, samples=40, lyapunov=False)
-    one = chart_point(setting, 8, {**CALM, "speed_rpm": 5000.0})
-    two = chart_point_two_pass(setting, 8, {**CALM, "speed_rpm": 5000.0})
+    one = chart_point(setting, _system(setting, 8, {**CALM, "speed_rpm": 5000.0}))
+    two = chart_point_two_pass(setting, _system(setting, 8, {**CALM, "speed_rpm": 5000.0}))
     assert one["nature"] == two["nature"] == "periodic-1"
     assert np.isnan(one["lyapunov"]) and np.isnan(two["lyapunov"])
     assert one["amplitude_x"] == two["amplitude_x"]
@@ -122,5 +119,6 @@ def test_chart_uses_the_one_pass_point(tmp_path):
     chart = stability_chart(setting, Axis.parse("speed_rpm:3000:5000:2"),
                             Axis.parse("radial_load:50:50:1"), tmp_path / "c.nc")
     for ix, speed in enumerate((3000.0, 5000.0)):
-        want = chart_point(setting, 8, {"speed_rpm": speed, "radial_load": 50.0})
+        want = chart_point(setting, _system(setting, 8, {"speed_rpm": speed,
+                                                         "radial_load": 50.0}))
         assert float(chart.lyapunov.values[0, ix]) == want["lyapunov"]

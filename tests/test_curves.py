@@ -24,7 +24,8 @@ from scipy.optimize import fsolve, minimize_scalar
 from analysis.io import open_result
 from analysis.stability.continuation import continue_orbits
 from analysis.stability.curves import continue_curve, special_lines
-from analysis.sweeps.sweep import Axis, Setting, stability_chart
+from analysis.sweeps.chart import stability_chart
+from analysis.sweeps.grid import Axis, Setting
 from tests.conftest import run_cli
 
 RPM = 30 / math.pi

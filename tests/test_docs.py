@@ -99,7 +99,8 @@ def test_site_has_the_api_reference_from_docstrings(site):
     modules = ["analysis.integrate.simulate", "analysis.signal.spectrum",
                "analysis.signal.poincare", "analysis.stability.lyapunov",
                "analysis.stability.periodic", "analysis.stability.continuation",
-               "analysis.stability.classify", "analysis.sweeps.sweep",
+               "analysis.stability.classify", "analysis.sweeps.grid",
+               "analysis.sweeps.diagram", "analysis.sweeps.chart",
                "analysis.sweeps.executors", "analysis.model", "analysis.io", "modelgen.spec",
                "modelgen.assemble", "modelgen.codegen", "modelgen.terms",
                "modelgen.locations"]

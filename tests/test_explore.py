@@ -94,6 +94,34 @@ def test_clicking_a_point_shows_its_detail(chart, browser):
     assert len(browser.find_elements("css selector", "rect.cell.selected")) == 1
 
 
+def test_each_cell_is_drawn_in_its_class_colour(chart, browser):
+    """The rendered page (a screenshot's pixel at each cell's centre) draws every point in
+    its class's colour of ``analysis.stability.classify.NATURE_COLORS``, as the chart PNG
+    and the curve figure do."""
+    import io
+
+    from matplotlib.colors import to_rgb
+    from PIL import Image
+
+    from analysis.stability.classify import NATURE_COLORS
+
+    require_chromium()
+    chart_file, page = chart
+    ds = open_result(chart_file)
+    browser.get(page.as_uri())
+    cells = browser.find_elements("css selector", "rect.cell")
+    shot = Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")
+    scale = shot.width / browser.execute_script("return window.innerWidth;")
+    for cell in cells:
+        ix, iy = int(cell.get_attribute("data-ix")), int(cell.get_attribute("data-iy"))
+        box = browser.execute_script("const r = arguments[0].getBoundingClientRect();"
+                                     "return [r.left + r.width / 2, r.top + r.height / 2];",
+                                     cell)
+        got = np.array(shot.getpixel((round(box[0] * scale), round(box[1] * scale)))) / 255
+        code = int(ds.nature_code.values[iy, ix])
+        assert np.allclose(got, to_rgb(NATURE_COLORS[code]), atol=2 / 255), (ix, iy, got)
+
+
 def test_the_api_gives_the_same_data_as_plain_json(chart):
     chart_file, _ = chart
     data = explorer_data(open_result(chart_file), spectrum_bins=64)

@@ -29,8 +29,10 @@ import pytest
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
+from analysis.sweeps.chart import stability_chart
+from analysis.sweeps.diagram import bifurcation_diagram
+from analysis.sweeps.grid import Axis, Setting
 from analysis.sweeps.store import PointStore
-from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram, stability_chart
 from tests.conftest import run_cli
 
 TINY = Setting("vakharia2015", None, {}, transient=0.02, samples=12, lyapunov=False)
@@ -266,12 +268,12 @@ def test_a_blow_up_inside_a_block_is_found_at_its_first_sample(monkeypatch):
 
 
 def test_the_block_check_by_extremes_decides_as_the_state_by_state_one():
-    """``_blow_up`` passes a block at once when its extremes are within the limit, and
+    """``check_bounded`` passes a block at once when its extremes are within the limit, and
     searches it state by state otherwise. On blocks with a NaN, an inf or one displacement
     beyond the limit at a random row, and on blocks whose extremes (x large in one row, y in
     another) exceed the limit while no state does, it raises exactly when a plain search of
     every column finds a bad one, and names that column's time."""
-    from analysis.integrate.simulate import _blow_up
+    from analysis.integrate.simulate import check_bounded
 
     rng = np.random.default_rng(7)
     limit, pairs = 1.0, [(0, 1)]
@@ -293,7 +295,7 @@ def test_the_block_check_by_extremes_decides_as_the_state_by_state_one():
         bad = ~np.all(np.isfinite(states), axis=0) | (np.hypot(states[0], states[1]) > limit)
         if bad.any():
             with pytest.raises(SimulationError, match=rf"t = {times[np.argmax(bad)]:.6g} s"):
-                _blow_up(states, times, limit, pairs)
+                check_bounded(states, times, limit, pairs)
         else:
-            _blow_up(states, times, limit, pairs)
+            check_bounded(states, times, limit, pairs)
         assert bad.any() == (kind != 3)

@@ -141,7 +141,8 @@ def test_every_chart_point_is_a_cell_of_its_colour_also_on_one_row(rows):
     (With matplotlib's "nearest" shading a row of one value had no height: an empty chart.)"""
     from matplotlib.colors import to_rgba
 
-    from analysis.reports.plots import NATURE_COLORS, chart_figure
+    from analysis.reports.plots import chart_figure
+    from analysis.stability.classify import NATURE_COLORS
 
     xs, ys = np.linspace(1000.0, 2000.0, 5), 8.0 + np.arange(rows)
     codes = (np.arange(rows * 5).reshape(rows, 5) % 3) + 1

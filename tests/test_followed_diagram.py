@@ -28,7 +28,8 @@ from analysis.integrate.flow import Period, evaluate, flow_map
 from analysis.integrate.simulate import simulate
 from analysis.stability.continuation import continue_orbits
 from analysis.stability.periodic import PeriodicOrbit, shoot
-from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram
+from analysis.sweeps.diagram import bifurcation_diagram
+from analysis.sweeps.grid import Axis, Setting
 
 LOAD = {"radial_load": 50.0}
 """Radial load (N) of the case."""

@@ -11,8 +11,8 @@ from analysis.integrate import lanes
 from analysis.integrate.lanes import LANES, Unsupported, kernel, vector_c
 from analysis.integrate.tangent import tangent_block
 from analysis.model import load_model
+from analysis.sweeps.grid import Setting
 from analysis.sweeps.points import chart_point, chart_points
-from analysis.sweeps.sweep import Setting
 
 CHART = Setting("vakharia2015", None, {}, transient=0.3, samples=40, lyapunov=True)
 DUFFING = Setting("duffing", None, {"linear_stiffness": 1.0, "damping": 0.2,
@@ -63,10 +63,11 @@ def test_each_lane_is_the_casadi_block_bit_for_bit_whatever_its_neighbour():
 def test_chart_points_in_lanes_are_chart_point_bit_for_bit():
     """Five speeds (records of different lengths, an odd count: the last group is one point)
     give chart_point's class, period, λ1, interval and amplitudes exactly."""
-    points = [(8, {"speed_rpm": v}) for v in (2000.0, 2100.0, 4000.0, 6100.0, 9000.0)]
+    points = [CHART.system_at(n_balls=8, speed_rpm=v)
+              for v in (2000.0, 2100.0, 4000.0, 6100.0, 9000.0)]
     together = chart_points(CHART, points)
-    for (n_balls, values), got in zip(points, together, strict=True):
-        assert _same(got, chart_point(CHART, n_balls, values)), values
+    for system, got in zip(points, together, strict=True):
+        assert _same(got, chart_point(CHART, system)), dict(system.parameters)
 
 
 def test_a_lane_that_blows_up_leaves_its_neighbour_alone():
@@ -77,17 +78,17 @@ def test_a_lane_that_blows_up_leaves_its_neighbour_alone():
 
     from analysis.errors import SimulationError
     from analysis.stability.lyapunov import default_lengths
-    from analysis.sweeps.points import _chart_run, _plan
+    from analysis.sweeps.points import _plan
 
-    points = [(None, {"cubic_stiffness": 1.0}), (None, {"cubic_stiffness": -1.0,
-                                                       "forcing_amplitude": 2.0})]
+    points = [DUFFING.system_at(cubic_stiffness=1.0),
+              DUFFING.system_at(cubic_stiffness=-1.0, forcing_amplitude=2.0)]
     good, bad = chart_points(DUFFING, points)
-    assert _same(good, chart_point(DUFFING, *points[0]))
+    assert _same(good, chart_point(DUFFING, points[0]))
     with pytest.raises(SimulationError) as alone:
-        chart_point(DUFFING, *points[1])
+        chart_point(DUFFING, points[1])
     assert isinstance(bad, SimulationError) and str(bad) == str(alone.value)
-    system, duration = _chart_run(DUFFING, *points[1])
-    plan = _plan(duration, DUFFING.transient, DUFFING.dt,
+    system = points[1]
+    plan = _plan(DUFFING.seconds(system), DUFFING.transient, DUFFING.dt,
                  default_lengths(system.model)[2])
     when = float(re.search(r"t = ([0-9.e+-]+) s", str(bad)).group(1))
     assert when > plan.start * DUFFING.dt
@@ -105,8 +106,8 @@ def test_without_a_kernel_the_points_run_one_by_one(monkeypatch):
         with pytest.raises(Unsupported, match="SQRT"):
             vector_c(lyapunov_step(model, (8,), 1).step, "step")
         assert kernel(model, (8,), 100) is None
-        points = [(8, {"speed_rpm": v}) for v in (3000.0, 3100.0)]
-        for (n_balls, values), got in zip(points, chart_points(CHART, points), strict=True):
-            assert _same(got, chart_point(CHART, n_balls, values))
+        points = [CHART.system_at(n_balls=8, speed_rpm=v) for v in (3000.0, 3100.0)]
+        for system, got in zip(points, chart_points(CHART, points), strict=True):
+            assert _same(got, chart_point(CHART, system))
     finally:
         kernel.cache_clear()

@@ -15,8 +15,9 @@ import pytest
 
 from analysis.io import open_result
 from analysis.stability.periodic import shoot
+from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.executors import DaskExecutor, ProcessExecutor
-from analysis.sweeps.sweep import Axis, Setting, stability_chart
+from analysis.sweeps.grid import Axis, Setting
 from tests.conftest import ROOT
 
 SWEEP = ["sweep", "vakharia2015", "--n-balls", "8", "--param", "speed_rpm", "--from", "4000",
@@ -142,8 +143,9 @@ def test_structure_axis_names_its_bearing():
     assert (axis.name, axis.values) == ("n_balls[left]", (5.0, 6.0, 7.0))
     assert Axis.linear("n_balls[right]", 6, 8.4, 5).values == (6.0, 7.0, 8.0)
     setting = Setting("two-bearing-rotor", {"right": 9}, {}, transient=0.1, samples=2)
-    assert setting.at(**{"n_balls[left]": 6.0, "damping": 50.0}) == (
-        {"right": 9, "left": 6}, {"damping": 50.0})
+    system = setting.system_at(**{"n_balls[left]": 6.0, "damping": 50.0})
+    assert system.structure == system.model.structure({"right": 9, "left": 6})
+    assert system.parameters["damping"] == 50.0
     with pytest.raises(ValueError, match="axis"):
         Axis.parse("n_balls[left]:7")
 
@@ -153,14 +155,14 @@ def test_followed_value_starts_at_the_same_forcing_angles():
     both, so the start time of the next value (``follow_start``) gives the end state the
     shaft and cage angles it ended with, whichever section is followed."""
     from analysis.model import load_model
-    from analysis.sweeps.sweep import follow_start
+    from analysis.sweeps.diagram import follow_start
 
     model = load_model("vakharia2015")
     end = {"final": np.array([1e-6, 2e-6, 3e-3, 4e-3]), "t_final": 1.2345}
     for section in ("shaft", "vc"):
         setting = Setting("vakharia2015", 8, {}, transient=0.1, samples=10, section=section)
-        start = follow_start(setting, (8, {"speed_rpm": 5000.0}), end, 8,
-                             {"speed_rpm": 5200.0})
+        start = follow_start(setting, setting.system_at(speed_rpm=5000.0), end,
+                             setting.system_at(speed_rpm=5200.0))
         assert start.state == tuple(end["final"])
         for key in ("shaft_hz", "cage_hz", "vc_hz"):
             old, new = (model.frequencies(model.structure(8), model.parameters(

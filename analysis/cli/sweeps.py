@@ -47,9 +47,11 @@ def sweep(
              "parallel.")] = True,
     transient: Annotated[float, typer.Option(help="Dropped time per value, s.")] = 1.0,
     samples: Annotated[int, typer.Option(help="Poincaré points per value.")] = 200,
-    section: Annotated[str, typer.Option(
-        help="shaft, cage, vc, cage[BEARING], vc[BEARING] or param:NAME.")] = "shaft",
-    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    section: Annotated[str | None, typer.Option(
+        help="shaft, cage, vc, cage[BEARING], vc[BEARING] or param:NAME (default: "
+             "shaft).")] = None,
+    dt: Annotated[float | None, typer.Option(
+        help="RK4 step, s (default: the spec's [simulation] dt).")] = None,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -57,7 +59,8 @@ def sweep(
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.sweep import Axis, Setting, bifurcation_diagram, check_grid
+    from analysis.sweeps.diagram import bifurcation_diagram
+    from analysis.sweeps.grid import Axis, Setting, check_grid
 
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
                       section, dt)
@@ -90,12 +93,15 @@ def chart(
     transient: Annotated[float, typer.Option(help="Dropped time per point, s.")] = 1.0,
     revolutions: Annotated[int, typer.Option(
         help="Recorded periods of the section (shaft revolutions by default).")] = 200,
-    section: Annotated[str, typer.Option(
-        help="Section the points are classified on: shaft, cage, vc, cage[BEARING], "
-             "vc[BEARING] or param:NAME.")] = "shaft",
+    section: Annotated[str | None, typer.Option(
+        help="Section the points are classified on and whose periods are recorded: shaft, "
+             "cage, vc, cage[BEARING], vc[BEARING] or param:NAME (default: the model's own "
+             "for the class, e.g. vc for a balanced rotor, and shaft revolutions for the "
+             "record).")] = None,
     lyapunov: Annotated[bool, typer.Option(help="Largest Lyapunov exponent at every "
                                                 "point.")] = True,
-    dt: Annotated[float, typer.Option(help="RK4 step, s.")] = 1e-5,
+    dt: Annotated[float | None, typer.Option(
+        help="RK4 step, s (default: the spec's [simulation] dt).")] = None,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -104,14 +110,8 @@ def chart(
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.sweep import (
-        MAX_SAMPLES,
-        Axis,
-        Setting,
-        chart_table,
-        check_grid,
-        stability_chart,
-    )
+    from analysis.sweeps.chart import chart_table, stability_chart
+    from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid
 
     if not 1 <= revolutions <= MAX_SAMPLES:
         raise InputError(f"--revolutions: must be a whole number in [1, {MAX_SAMPLES}], "

@@ -284,9 +284,9 @@ def _bounded(low: np.ndarray, high: np.ndarray, limit: float,
                for i, j in pairs)
 
 
-def _blow_up(states: np.ndarray, times: np.ndarray, limit: float,
-             pairs: list[tuple[int, int | None]],
-             bounds: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+def check_bounded(states: np.ndarray, times: np.ndarray, limit: float,
+                  pairs: list[tuple[int, int | None]],
+                  bounds: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """Raise SimulationError at the first column of ``states`` (n × m, at ``times`` s) that
     is not finite or whose centre displacement is beyond ``limit`` (m). ``bounds``: the
     rows' ``extremes`` when already known. A block whose extremes are within the limit is
@@ -314,7 +314,7 @@ def _run_rk4(system: System, p: np.ndarray, z0: np.ndarray, dt: float,
     n, pairs = system.n_state, system.model.centre_indices()
 
     def check(block: np.ndarray) -> None:
-        _blow_up(block[:, :n].T, block[:, n] * dt, limit, pairs)
+        check_bounded(block[:, :n].T, block[:, n] * dt, limit, pairs)
 
     return run_rk4(library(system.model, system.structure, compiled), p, z0, dt,
                    n_saved * save_every, save_every, check=check, sink=sink)
@@ -334,5 +334,5 @@ def _run_cvodes(system: System, p: np.ndarray, z0: np.ndarray,
     except RuntimeError as exc:
         raise SimulationError(f"CVODES failed: {str(exc).splitlines()[-1]}") from None
     states = np.concatenate([z0[:, None], zs], axis=1)
-    _blow_up(states, times, limit, system.model.centre_indices())
+    check_bounded(states, times, limit, system.model.centre_indices())
     return states

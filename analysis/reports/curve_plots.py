@@ -1,5 +1,5 @@
 """Figures of two-parameter curves (``analysis.stability.curves``), over a stability chart
-(``analysis.sweeps.sweep.stability_chart``) of the same two parameters when one is given."""
+(``analysis.sweeps.chart.stability_chart``) of the same two parameters when one is given."""
 
 from __future__ import annotations
 
@@ -9,12 +9,8 @@ from matplotlib.figure import Figure
 
 from analysis.errors import InputError
 from analysis.reports import canvas as plt  # pyplot's subplots, without pyplot
-from analysis.reports.plots import (
-    NATURE_COLORS,
-    NATURE_NAMES,
-    cell_edges,
-    nature_colormap,
-)
+from analysis.reports.plots import cell_edges, nature_colormap
+from analysis.stability.classify import NATURE_COLORS, NATURE_NAMES
 
 CURVE_STYLES = {"LP": ("C0", "-"), "PD": ("k", "-"), "NS": ("C3", "-")}
 CODIM2_MARKERS = {"CP": "v", "R1": "s", "R2": "D", "R3": "^", "R4": "p", "LPPD": "X",

@@ -5,7 +5,7 @@ and, for the point clicked, its spectra, its Poincaré maps and its numbers (cla
 largest Lyapunov exponent with its 95 % interval, amplitudes, the labelled peaks). Its
 script, its style and its data are inline: it opens from disk with no network.
 
-A chart file stores per point only what classifies it (``analysis.sweeps.sweep``), not the
+A chart file stores per point only what classifies it (``analysis.sweeps.chart``), not the
 motion. The detail is therefore computed here, at export time, point by point: the run the
 chart point made (same model, balls, parameters, RK4 step, transient and number of section
 periods; the tangent dynamics left out), its amplitude spectra (``amplitude_spectrum``,
@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,9 @@ import xarray as xr
 
 from analysis.errors import BearingdynError, InputError
 from analysis.io import atomic_write, open_result
-from analysis.provenance import displacement_names, plain, provenance, system_of_attrs
+from analysis.provenance import displacement_names, plain, provenance
+from analysis.stability.classify import NATURE_COLORS
+from analysis.sweeps.grid import Setting
 
 SPECTRUM_BINS = 400
 """Default number of spectrum bins kept per variable (peak-preserving thinning)."""
@@ -37,42 +40,31 @@ MAX_SECTION_POINTS = 400
 """Most Poincaré points kept per point (the first ones)."""
 
 
-def _setting_of_chart(chart: xr.Dataset):
-    """The ``Setting`` a chart was computed with, from its attrs."""
-    from analysis.sweeps.sweep import Setting
-
+def _setting_of_chart(chart: xr.Dataset) -> Setting:
+    """The ``Setting`` a chart was computed with, from its attrs (``Setting.from_attrs``;
+    an old chart file's base balls and speed under its axes are dropped), without λ1."""
     attrs = chart.attrs
     if attrs.get("kind") != "chart":
         raise InputError(f"chart file: kind must be 'chart', got {attrs.get('kind')!r} "
                          "(make one with `bearingdyn chart`)")
-    system = system_of_attrs(attrs)
-    model = system.model
-    n_balls = dict(zip(model.bearing_names, system.structure, strict=True)) \
-        if len(system.structure) > 1 else (system.structure[0] if system.structure else None)
-    spec = str(attrs.get("spec_file", ""))
-    source = spec if spec and Path(spec).is_absolute() else model.name
-    return Setting(source, n_balls, dict(system.parameters), float(attrs["transient"]),
-                   int(attrs["samples"]), str(attrs["section"]), float(attrs["dt"]), False)
+    setting = Setting.from_attrs(attrs, (str(attrs["x"]), str(attrs["y"])))
+    return replace(setting, lyapunov=False)
 
 
 def point_detail(task: tuple) -> dict[str, Any]:
     """Spectra, Poincaré points and peaks of one chart point (``task``: setting, x name,
     x value, y name, y value); ``{"error": message}`` when its run fails."""
-    from analysis.integrate.simulate import simulate
-    from analysis.model import as_system
-    from analysis.reports.plots import _f_max, default_partner
-    from analysis.signal.poincare import period_of, poincare_section
+    from analysis.reports.plots import default_partner, f_max_of
+    from analysis.signal.poincare import poincare_section
     from analysis.signal.spectrum import amplitude_spectrum, find_peaks
+    from analysis.sweeps.chart import classified_section
+    from analysis.sweeps.grid import record
 
     setting, xname, xv, yname, yv, bins = task
     try:
-        n_balls, values = setting.at(**{xname: xv, yname: yv})
-        system = as_system(setting.model, n_balls, None, **values)
-        freqs = system.model.frequencies(system.structure, dict(system.parameters))
-        period = period_of({**system.parameters, **freqs.as_dict()}, setting.section)
-        duration = setting.transient + (setting.samples + 0.5) * period
-        run = simulate(system, duration=duration, transient=setting.transient, dt=setting.dt)
-        f_max = _f_max(run)
+        system = setting.system_at(**{xname: xv, yname: yv})
+        run = record(setting, system)
+        f_max = f_max_of(run.attrs)
         spectra, sections, peaks = {}, [], []
         for var in displacement_names(run):
             amp = amplitude_spectrum(run, var)
@@ -83,7 +75,8 @@ def point_detail(task: tuple) -> dict[str, Any]:
                             "units": str(amp.attrs.get("units", ""))}
             peaks += [{"var": var, "label": p.label, "f": p.frequency_hz, "a": p.amplitude}
                       for p in find_peaks(run, var)[:6]]
-        points = poincare_section(run, setting.section).isel(k=slice(0, MAX_SECTION_POINTS))
+        points = poincare_section(run, classified_section(setting, system)).isel(
+            k=slice(0, MAX_SECTION_POINTS))
         for var in displacement_names(run):
             partner = default_partner(run, var)
             sections.append({"x": var, "y": partner, "xu": str(run[var].attrs.get("units", "")),
@@ -145,7 +138,7 @@ def explorer_data(chart: xr.Dataset, *, spectrum_bins: int = SPECTRUM_BINS, exec
     return {"model": str(chart.attrs["model"]), "x": xname, "y": yname, "xs": xs, "ys": ys,
             "x_units": units.get(xname, "balls" if xname.startswith("n_balls") else ""),
             "y_units": units.get(yname, "balls" if yname.startswith("n_balls") else ""),
-            "section": setting.section, "units": field_units, "points": points,
+            "section": str(chart.attrs["section"]), "units": field_units, "points": points,
             "provenance": provenance(chart)}
 
 
@@ -155,7 +148,8 @@ def explorer_html(data: dict[str, Any]) -> str:
     payload = payload.replace("</", "<\\/")  # never ends the script element
     title = f"bearingdyn chart explorer: {data['model']}"
     return (_PAGE.replace("__TITLE__", _escape(title))
-            .replace("__STYLE__", _STYLE).replace("__SCRIPT__", _SCRIPT)
+            .replace("__STYLE__", _STYLE)
+            .replace("__SCRIPT__", _SCRIPT.replace("__COLORS__", json.dumps(NATURE_COLORS)))
             .replace("__DATA__", payload))
 
 
@@ -216,14 +210,11 @@ _SCRIPT = r"""
 "use strict";
 const D = JSON.parse(document.getElementById("chart-data").textContent);
 const NS = "http://www.w3.org/2000/svg";
-const COLORS = {"periodic-1": "#2e8b57", "periodic-2": "#7cc47a", "periodic-n": "#4a7fc1",
-                "quasi-periodic": "#f0a030", "chaotic": "#c0392b"};
+const COLORS = __COLORS__;  // nature_code -> colour: analysis.stability.classify.NATURES
 const SCALES = {"m": [1e6, "µm"], "m/s": [1e3, "mm/s"], "rad": [1e6, "µrad"],
                 "rad/s": [1e3, "mrad/s"]};
 function colour(p) {
-  const n = p.nature || "";
-  if (COLORS[n]) return COLORS[n];
-  return n.startsWith("periodic") ? COLORS["periodic-n"] : "#999";
+  return COLORS[p.nature_code] || "#999";
 }
 function el(name, attrs, parent) {
   const e = document.createElementNS(NS, name);
@@ -278,7 +269,8 @@ function drawMap() {
   yl.textContent = axisName(D.y, D.y_units);
   const seen = [...new Set(D.points.map(p => p.nature))];
   document.getElementById("legend").innerHTML = seen.map(n =>
-    `<span><i style="background:${colour({nature: n})}"></i>${n}</span>`).join("");
+    `<span><i style="background:${colour(D.points.find(p => p.nature === n))}"></i>${n}</span>`
+  ).join("");
 }
 
 function plot(container, title, xs, ys, xlabel, ylabel, kind) {

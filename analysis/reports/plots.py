@@ -18,6 +18,7 @@ from analysis.provenance import displacement_names, is_velocity, state_names, vc
 from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
 from analysis.signal.poincare import poincare_section, section_period
 from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
+from analysis.stability.classify import NATURE_COLORS, NATURE_NAMES, default_figure_section
 
 MICRO = 1e6
 AXIS_NAMES = {"x": ("x", "vx", "X direction"), "y": ("y", "vy", "Y direction")}
@@ -282,15 +283,9 @@ def save_figure(fig: Figure, path) -> None:
     plt.close(fig)
 
 
-NATURE_COLORS = {0: "#9e9e9e", 1: "#2a9d8f", 2: "#8ab17d", 3: "#e9c46a", 4: "#5e7fd6",
-                 5: "#e76f51"}
-NATURE_NAMES = {0: "failed (the run blew up)", 1: "periodic-1", 2: "periodic-2",
-                3: "periodic-n (n ≥ 3)", 4: "quasi-periodic", 5: "chaotic"}
-
-
 def nature_colormap():
-    """(colormap, norm) that colour the chart codes 0 … 5 (``sweep.NATURE_CODES``) as
-    ``NATURE_COLORS``."""
+    """(colormap, norm) that colour the chart codes 0 … 5 as ``NATURE_COLORS`` (the class
+    vocabulary of ``analysis.stability.classify``)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     codes = sorted(NATURE_COLORS)
@@ -459,17 +454,7 @@ def any_figure(ds: xr.Dataset, variables: list[str] | None = None) -> Figure:
     if variables:
         fig = spectrum_figure(ds, variables)
         return fig
-    return paper_figure(ds, _default_section(ds))
-
-
-def _default_section(ds: xr.Dataset) -> str:
-    """The shaft section, or ``param:forcing_period`` for a model forced at a parameter's
-    period without a shaft (the Mathieu equation)."""
-    if float(ds.attrs.get("shaft_hz", 0.0)) > 0:
-        return "shaft"
-    if float(ds.attrs.get("forcing_period", 0.0)) > 0:
-        return "param:forcing_period"
-    return "shaft"
+    return paper_figure(ds, default_figure_section(ds))
 
 
 SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}

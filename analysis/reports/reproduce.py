@@ -31,8 +31,9 @@ from analysis.reports.paper import (
 from analysis.signal.spectrum import Peak
 from analysis.stability.classify import classify
 from analysis.stability.lyapunov import lyapunov
+from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.executors import Executor
-from analysis.sweeps.sweep import Axis, Setting, stability_chart
+from analysis.sweeps.grid import Axis, Setting
 
 
 @dataclass

@@ -30,7 +30,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, SimulationError
 from analysis.provenance import state_at, state_names, system_of_attrs
 from analysis.signal.poincare import poincare_section
 
@@ -55,19 +55,144 @@ class Classification:
         return asdict(self)
 
 
+# --- the class vocabulary ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Nature:
+    """One class of the chart: its integer ``code`` (a chart file's ``nature_code``), its
+    ``key`` (the ``nature`` a point is given; periodic-n stands for every n >= 3), the
+    ``label`` of a legend and the ``color`` every figure and the explorer draw it in."""
+
+    code: int
+    key: str
+    label: str
+    color: str
+
+
+NATURES: tuple[Nature, ...] = (
+    Nature(0, "failed", "failed (the run blew up)", "#9e9e9e"),
+    Nature(1, "periodic-1", "periodic-1", "#2a9d8f"),
+    Nature(2, "periodic-2", "periodic-2", "#8ab17d"),
+    Nature(3, "periodic-n", "periodic-n (n ≥ 3)", "#e9c46a"),
+    Nature(4, "quasi-periodic", "quasi-periodic", "#5e7fd6"),
+    Nature(5, "chaotic", "chaotic", "#e76f51"),
+)
+"""The chart classes, once: codes, names and colours (failed: the point's run blew up or its
+solver failed, its ``nature`` says how: ``failed: blew up at t = 0.52 s``)."""
+NATURE_CODES: dict[str, int] = {n.key: n.code for n in NATURES}
+"""Integer code of each class key (``periodic-n``: n >= 3)."""
+NATURE_COLORS: dict[int, str] = {n.code: n.color for n in NATURES}
+"""Colour (``#rrggbb``) of each class code."""
+NATURE_NAMES: dict[int, str] = {n.code: n.label for n in NATURES}
+"""Legend label of each class code."""
+
+
+def nature_code(nature: str) -> int:
+    """The code of a point's ``nature``: ``periodic-7`` → periodic-n's, ``failed: …`` →
+    failed's."""
+    if nature.startswith("failed"):
+        return NATURE_CODES["failed"]
+    return NATURE_CODES.get(nature, NATURE_CODES["periodic-n"])
+
+
+def failure_text(exc: SimulationError) -> str:
+    """``failed: <what happened>``: the class recorded for a point whose run failed."""
+    return "failed: " + str(exc).split(";")[0].replace("the motion ", "")
+
+
+# --- default sections: one table -----------------------------------------------------------
+
+@dataclass(frozen=True)
+class SectionRule:
+    """The section (or orbit period) each use takes when none is given, for one kind of
+    forcing, and why."""
+
+    classify: str
+    """``default_section``: the section a motion is classified on."""
+    orbit: str | None
+    """``analysis.stability.periodic.default_period``: the period an orbit is sought at
+    (None: no default, it must be given)."""
+    figure: str
+    """``analysis.reports.plots.any_figure``: the Poincaré map of a run's figure."""
+    reason: str
+
+
+SECTION_RULES: dict[str, SectionRule] = {
+    "one bearing, no unbalance": SectionRule(
+        "vc", "vc", "shaft",
+        "the only forcing frequency is VC, so its section reduces a periodic response to "
+        "points; the figure shows the shaft section, as every rotor's figure does"),
+    "one bearing, unbalance": SectionRule(
+        "shaft", "vc", "shaft",
+        "two forcings, X and VC: classify tests the two-frequency torus on the shaft "
+        "section; an orbit's default stays vc (give shaft or ratio:p/q with unbalance)"),
+    "several bearings": SectionRule(
+        "shaft", None, "shaft",
+        "one VC per bearing: neither shaft nor one bearing's vc is in general a period of "
+        "the forcing, so an orbit's period must be named; classify and figures use shaft"),
+    "no bearings, forcing_period": SectionRule(
+        "param:forcing_period", "param:forcing_period", "param:forcing_period",
+        "forced at a parameter's period (mathieu); a figure still shows the shaft section "
+        "when the model turns a shaft (shaft_hz > 0)"),
+    "no bearings": SectionRule(
+        "shaft", "shaft", "shaft", "the shaft speed is the forcing frequency (duffing)"),
+}
+"""Default sections by kind of forcing (``forcing_case``), one column per use. Where the
+columns differ each use keeps the rule it had before they were gathered here."""
+
+GRID_RECORD_SECTION = "shaft"
+"""The section whose periods a grid point records (``samples``, ``--revolutions``) when its
+setting names none: shaft revolutions. (A chart without a section still classifies each
+point on its ``default_section``; its record length stays counted in revolutions.)"""
+
+
+def forcing_case(bearings: int, unbalanced: bool, forcing_period: bool) -> str:
+    """The row of ``SECTION_RULES`` for a model of ``bearings`` bearings, with or without
+    unbalance, with or without a ``forcing_period`` parameter."""
+    if bearings == 1:
+        return "one bearing, unbalance" if unbalanced else "one bearing, no unbalance"
+    if bearings > 1:
+        return "several bearings"
+    return "no bearings, forcing_period" if forcing_period else "no bearings"
+
+
+def _bearings_of_attrs(attrs: Mapping) -> int:
+    if "n_balls" in attrs:
+        return 1 if int(attrs["n_balls"]) > 0 else 0
+    several = sum(1 for k in attrs if str(k).startswith("n_balls_"))
+    return several if several else int(attrs.get("vc_hz", 0.0) > 0)
+
+
 def default_section(ds: xr.Dataset | Mapping) -> str:
-    """'vc' for a balanced rotor in one bearing (single forcing frequency VC);
-    'param:forcing_period' for a model without bearings that has that parameter (e.g.
-    ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g. ``duffing``). ``ds``: a
-    run, or its attrs."""
+    """The section a motion is classified on when none is given (``SECTION_RULES``,
+    column ``classify``): 'vc' for a balanced rotor in one bearing (single forcing
+    frequency VC); 'param:forcing_period' for a model without bearings that has that
+    parameter (e.g. ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g.
+    ``duffing``). ``ds``: a run, or its attrs."""
     attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
-    balanced = attrs.get("unbalance_force", 0.0) == 0.0
-    if balanced and attrs.get("vc_hz", 0.0) > 0:
-        return "vc"
-    no_bearings = "n_balls" in attrs and int(attrs["n_balls"]) == 0
-    if no_bearings and "forcing_period" in attrs:
-        return "param:forcing_period"
-    return "shaft"
+    unbalanced = attrs.get("unbalance_force", 0.0) != 0.0
+    case = forcing_case(_bearings_of_attrs(attrs), unbalanced, "forcing_period" in attrs)
+    if case == "one bearing, no unbalance" and not attrs.get("vc_hz", 0.0) > 0:
+        return "shaft"  # the rotor at rest: no VC period
+    return SECTION_RULES[case].classify
+
+
+def default_orbit_section(bearing_names: tuple[str, ...], parameter_names) -> str | None:
+    """The period an orbit is sought at when none is given (``SECTION_RULES``, column
+    ``orbit``; None: it must be given) for a model of these bearings and parameters."""
+    case = forcing_case(len(bearing_names), False, "forcing_period" in parameter_names)
+    return SECTION_RULES[case].orbit
+
+
+def default_figure_section(ds: xr.Dataset | Mapping) -> str:
+    """The section of a run's figure (``SECTION_RULES``, column ``figure``): the shaft
+    section whenever the shaft turns, else ``param:forcing_period`` for a model forced at
+    a parameter's period (the Mathieu equation), else shaft."""
+    attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
+    if float(attrs.get("shaft_hz", 0.0)) > 0:
+        return "shaft"
+    forced = float(attrs.get("forcing_period", 0.0)) > 0
+    return SECTION_RULES["no bearings, forcing_period" if forced else "no bearings"].figure
 
 
 def _pairs(names: tuple[str, ...]) -> list[tuple[str, str]]:
@@ -149,7 +274,7 @@ def classify(
     ptp = {v: float(np.ptp(ds[v].values)) for v in state_names(ds)}
 
     def largest() -> tuple[float, float]:
-        found = exponents if exponents is not None else _exponents_of_run(ds, lyapunov_duration)
+        found = exponents if exponents is not None else exponents_of_run(ds, lyapunov_duration)
         return float(found.exponents[0]), float(found.ci95[0])
 
     return classify_section(pts, ptp, largest, rel_tol=rel_tol, max_period=max_period,
@@ -195,9 +320,11 @@ def classify_section(
                           largest_exponent=lam, ci95=ci, graph_ratio=ratio)
 
 
-def _exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
+def exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
     from analysis.stability.lyapunov import lyapunov
 
+    """λ1 (``lyapunov``) of the run's own model, parameters and final state over
+    ``duration`` s (None: the run's length)."""
     system = system_of_attrs(ds.attrs, state_at(ds, -1))
     length = float(ds.t[-1] - ds.t[0])
     return lyapunov(system, duration=duration or length, transient=0.0,

@@ -39,6 +39,7 @@ from analysis.integrate.flow import (
 from analysis.integrate.simulate import simulate
 from analysis.model import BallCounts, Model, Structure, System, as_system
 from analysis.provenance import state_at
+from analysis.stability.classify import default_orbit_section
 
 STABILITY_MARGIN = 1e-6
 """|μ| below 1 − margin counts as stable; within the margin the verdict is 'marginal'."""
@@ -174,12 +175,10 @@ def default_period(model: Model) -> Period:
     bearing's ``vc`` is in general a period of the forcing; name it, e.g. ``vc[left]:4``
     (= ``vc[right]:5`` for 8 and 10 balls on one cage speed).
     """
+    section = default_orbit_section(model.bearing_names, model.parameter_names)
+    if section is not None:  # the rule: analysis.stability.classify.SECTION_RULES
+        return Period.parse(section)
     bearings = model.bearing_names
-    if len(bearings) == 1:
-        return Period.parse("vc")
-    if not bearings:
-        return Period.parse("param:forcing_period" if "forcing_period" in
-                            model.parameter_names else "shaft")
     raise InputError(f"period: model '{model.name}' has bearings {', '.join(bearings)}, "
                      f"each with its own VC frequency; give the period (e.g. "
                      f"vc[{bearings[0]}]:k, shaft:k or param:NAME)")

@@ -158,3 +158,34 @@ def make_executor(kind: str = "processes", workers: int | None = None,
     if kind == "dask":
         return DaskExecutor(workers=workers)
     raise InputError(f"--executor: must be serial, processes or dask, got {kind!r}")
+
+
+def run_with_progress(executor: Executor, fn: Callable[[Any], Any], tasks: Iterable[Any],
+                      done: Callable[[], int], total: int,
+                      progress: Callable[[int, int], None] | None,
+                      on_result: Callable[[Any, Any], None] | None) -> None:
+    """Run ``tasks`` on ``executor`` in a background thread, handing each (task, result) to
+    ``on_result``; report ``progress(done(), total)`` meanwhile (``done``: the number of
+    stored points)."""
+    import threading
+
+    failure: list[BaseException] = []
+
+    def consume():
+        try:
+            for task, result in executor.run(fn, tasks):
+                if on_result:
+                    on_result(task, result)
+        except BaseException as exc:  # re-raised in the calling thread
+            failure.append(exc)
+
+    worker = threading.Thread(target=consume, daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(0.5)
+        if progress:
+            progress(done(), total)
+    if failure:
+        raise failure[0]
+    if progress:
+        progress(done(), total)

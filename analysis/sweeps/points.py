@@ -1,6 +1,6 @@
 """Stability-chart points in one pass: the states and the tangent of λ1 integrated together.
 
-``chart_point`` takes the place of the two-pass point of ``analysis.sweeps.sweep`` (simulate
+``chart_point`` takes the place of the two-pass point of ``analysis.sweeps.chart`` (simulate
 and keep every state, then integrate the states again with a tangent vector for λ1), with
 the same signature and result. One run covers the setting's transient and record:
 
@@ -25,7 +25,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cache
-from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -37,18 +36,19 @@ from analysis.integrate.compiled import Runner, compiled_functions, library, tes
 from analysis.integrate.lanes import LANES, Kernel
 from analysis.integrate.lanes import kernel as lane_kernel
 from analysis.integrate.simulate import (
-    _blow_up,
     blow_up_limit,
+    check_bounded,
     extremes,
 )
-from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.model import Model, Structure, System
 from analysis.provenance import completed_attrs, displacement_names, to_dataset
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.stability.classify import (
     Classification,
-    _exponents_of_run,
     classify_section,
     default_section,
+    exponents_of_run,
+    nature_code,
 )
 from analysis.stability.lyapunov import (
     BLOCKS,
@@ -57,9 +57,7 @@ from analysis.stability.lyapunov import (
     running_mean,
     tangent_block,
 )
-
-if TYPE_CHECKING:
-    from analysis.sweeps.sweep import Setting
+from analysis.sweeps.grid import Setting
 
 RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
@@ -126,7 +124,7 @@ class _Record:
         n = len(self.low)
         k = rows[:, n].astype(np.int64)
         bounds = extremes(rows, n)
-        _blow_up(rows[:, :n].T, k * self.dt, self.limit, self.pairs, bounds)  # every step
+        check_bounded(rows[:, :n].T, k * self.dt, self.limit, self.pairs, bounds)  # every step
         if k[0] < self.first:  # the block starts before the record
             kept = rows[np.searchsorted(k, self.first):, :n]
             bounds = extremes(kept, n) if len(kept) else None
@@ -273,7 +271,7 @@ def _finish(point: _Point, logs: np.ndarray | None) -> PointResult:
     def largest() -> tuple[float, float]:
         if point.tangent:
             return lam, ci
-        found = _exponents_of_run(run, None)
+        found = exponents_of_run(run, None)
         return float(found.exponents[0]), float(found.ci95[0])
 
     ptp = dict(zip(model.state_names, (record.high - record.low).tolist(), strict=True))
@@ -367,59 +365,37 @@ def one_pass_lanes(systems: list[System], durations: list[float], transient: flo
     return results
 
 
-def _chart_run(setting: Setting, n_balls: BallCounts,
-               values: dict[str, float]) -> tuple[System, float]:
-    """The System of one chart point and its run's duration (s): the setting's transient
-    and ``samples + 0.5`` periods of its section."""
-    system = as_system(setting.model, n_balls, None, **values)
-    full = dict(system.parameters)
-    freqs = system.model.frequencies(system.structure, full)
-    try:
-        period = period_of({**full, **freqs.as_dict()}, setting.section)
-    except InputError as exc:
-        raise InputError(f"section {setting.section}: no period here ({exc})") from None
-    return system, setting.transient + (setting.samples + 0.5) * period
-
-
 def _chart_result(out: PointResult) -> dict:
-    from analysis.sweeps.sweep import NATURE_CODES
-
     result = out.classification
-    return {"nature": result.nature,
-            "nature_code": NATURE_CODES.get(result.nature, NATURE_CODES["periodic-n"]),
+    return {"nature": result.nature, "nature_code": nature_code(result.nature),
             "period": result.period or 0, "lyapunov": out.lyapunov, "ci95": out.ci95,
             "graph_ratio": result.graph_ratio or np.nan,
             **{f"amplitude_{v}": out.ptp[v] / 2 for v in out.displacements}}
 
 
-def _section(setting: Setting) -> str | None:
-    return setting.section if setting.section != "shaft" else None
+def chart_point(setting: Setting, system: System) -> dict:
+    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point
+    (``setting.system_at``), in one pass (see the module docstring), classified on
+    ``setting.section`` (None: the model's own, ``default_section``);
+    ``chart.chart_point_two_pass`` is the same in two."""
+    return _chart_result(one_pass(system, setting.seconds(system), setting.transient,
+                                  setting.step(), setting.section, tangent=setting.lyapunov))
 
 
-def chart_point(setting: Setting, n_balls: BallCounts, values: dict[str, float]) -> dict:
-    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point, in
-    one pass (see the module docstring); ``sweep.chart_point_two_pass`` is the same in
-    two."""
-    system, duration = _chart_run(setting, n_balls, values)
-    return _chart_result(one_pass(system, duration, setting.transient, setting.dt,
-                                  _section(setting), tangent=setting.lyapunov))
-
-
-def chart_points(setting: Setting, points: list[tuple[BallCounts, dict[str, float]]]
-                 ) -> list[dict | SimulationError]:
+def chart_points(setting: Setting, systems: list[System]) -> list[dict | SimulationError]:
     """``chart_point`` of several points of one model and balls, their tangents in lockstep
     (``one_pass_lanes``): per point its result, bit for bit ``chart_point``'s, or the
     ``SimulationError`` of its blow-up."""
-    runs = [_chart_run(setting, n_balls, values) for n_balls, values in points]
+    durations = [setting.seconds(system) for system in systems]
+    dt = setting.step()
     if not setting.lyapunov:
         outs: list = []
-        for system, duration in runs:
+        for system, duration in zip(systems, durations, strict=True):
             try:
-                outs.append(one_pass(system, duration, setting.transient, setting.dt,
-                                     _section(setting), tangent=False))
+                outs.append(one_pass(system, duration, setting.transient, dt,
+                                     setting.section, tangent=False))
             except SimulationError as exc:
                 outs.append(exc)
     else:
-        outs = one_pass_lanes([r[0] for r in runs], [r[1] for r in runs],
-                              setting.transient, setting.dt, _section(setting))
+        outs = one_pass_lanes(systems, durations, setting.transient, dt, setting.section)
     return [out if isinstance(out, SimulationError) else _chart_result(out) for out in outs]

@@ -1,0 +1,212 @@
+"""Stability charts: a 2-D grid (``analysis.sweeps.grid``), each point classified
+(``analysis.stability.classify``) as periodic-n, quasi-periodic or chaotic, with its largest
+Lyapunov exponent and amplitude.
+
+Each point is computed in one pass (``analysis.sweeps.points``: states and tangent together,
+neighbouring points of the same balls in lockstep lanes); ``chart_point_two_pass`` is the
+former two-pass point, kept for comparison. A chart runs through one executor
+(``analysis.sweeps.executors``) and stores each finished point at once
+(``analysis.sweeps.store``, written by the calling process as points arrive): re-running an
+interrupted command computes only the missing points.
+
+A setting without a section classifies each point on its model's own section
+(``classify.default_section``: vc for a balanced rotor in one bearing) and records
+``samples`` shaft revolutions (``classify.GRID_RECORD_SECTION``); with a section, both are
+that section's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from analysis.errors import SimulationError
+from analysis.integrate.lanes import LANES
+from analysis.io import save_dataset
+from analysis.model import System, as_system
+from analysis.provenance import run_attrs, state_at
+from analysis.stability.classify import (
+    NATURE_CODES,
+    default_section,
+    failure_text,
+    nature_code,
+)
+from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.grid import (
+    Axis,
+    Setting,
+    amplitude_fields,
+    amplitudes,
+    axis_bearing,
+    check_grid,
+    record,
+)
+from analysis.sweeps.points import chart_points
+from analysis.sweeps.store import PointStore
+
+
+def classified_section(setting: Setting, system: System) -> str:
+    """The section ``system``'s point is classified on: the setting's, else the model's own
+    (``default_section`` of the run's attrs)."""
+    if setting.section is not None:
+        return setting.section
+    return default_section(run_attrs(system.model, system.structure, dict(system.parameters)))
+
+
+def chart_point_two_pass(setting: Setting, system: System) -> dict:
+    """Class, period, largest Lyapunov exponent (1/s) and amplitudes (m) at one point, in
+    two passes (simulate and keep every state, then ``lyapunov`` from the record's first
+    state): the former chart point, kept for comparison. The chart uses
+    ``analysis.sweeps.points.chart_point`` (one pass)."""
+    from analysis.stability.classify import classify
+    from analysis.stability.lyapunov import lyapunov
+
+    ds = record(setting, system)
+    exponents = None
+    if setting.lyapunov:
+        start = tuple(state_at(ds, 0))
+        exponents = lyapunov(as_system(system, None, start),
+                             duration=float(ds.t[-1] - ds.t[0]), transient=0.0,
+                             dt=setting.step(), n_exponents=1)
+    result = classify(ds, setting.section, exponents)
+    lam = float(exponents.exponents[0]) if exponents is not None else np.nan
+    ci = float(exponents.ci95[0]) if exponents is not None else np.nan
+    return {"nature": result.nature, "nature_code": nature_code(result.nature),
+            "period": result.period or 0, "lyapunov": lam, "ci95": ci,
+            "graph_ratio": result.graph_ratio or np.nan, **amplitudes(ds)}
+
+
+def _failed_point(setting: Setting, exc: SimulationError) -> dict:
+    """A point whose run blew up: recorded as its class, and the chart goes on."""
+    return {"nature": failure_text(exc), "nature_code": NATURE_CODES["failed"],
+            "period": 0, "lyapunov": np.nan, "ci95": np.nan, "graph_ratio": np.nan,
+            **dict.fromkeys(amplitude_fields(setting.loaded()), np.nan)}
+
+
+def _task_system(task: tuple) -> System:
+    setting, xname, xval, yname, yval, _ = task
+    return setting.system_at(**{xname: xval, yname: yval})
+
+
+def _chart_group_task(group: list[tuple]) -> list[tuple[str, dict]]:
+    """Chart points of one model and balls together (``points.chart_points``: their
+    tangents in lockstep, each result ``points.chart_point``'s bit for bit)."""
+    setting = group[0][0]
+    systems = [_task_system(task) for task in group]
+    return [(task[-1], out if isinstance(out, dict) else _failed_point(setting, out))
+            for task, out in zip(group, chart_points(setting, systems), strict=True)]
+
+
+def _chart_groups(setting: Setting, tasks: list[tuple]) -> list[list[tuple]]:
+    """Neighbouring pending points of the same balls in groups of ``LANES`` (one group per
+    point without a tangent: lanes only speed up the tangent)."""
+    if not setting.lyapunov:
+        return [[task] for task in tasks]
+    groups: list[list[tuple]] = []
+    previous = None
+    for task in tasks:
+        balls = _task_system(task).structure
+        if groups and balls == previous and len(groups[-1]) < LANES:
+            groups[-1].append(task)
+        else:
+            groups.append([task])
+        previous = balls
+    return groups
+
+
+def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
+                    executor: Executor | None = None,
+                    progress: Callable[[int, int], None] | None = None,
+                    on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """Classify every point of the grid y × x; writes and returns the netCDF Dataset.
+
+    Resumable as ``analysis.sweeps.diagram.bifurcation_diagram``; a point whose run fails is
+    classed ``failed: …`` (``nature_code`` 0) and the chart goes on."""
+    check_grid(setting, x, y)
+    definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
+                  "structure": list(setting.loaded().structure(setting.n_balls))}
+    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
+    try:
+        done = store.done()
+        tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
+                 for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
+                 if f"{iy:04d}-{ix:04d}" not in done]
+        run_with_progress(executor or SerialExecutor(), _chart_group_task,
+                          _chart_groups(setting, tasks), lambda: len(store.done()),
+                          len(x.values) * len(y.values), progress,
+                          lambda group, results: [store.save(*r) for r in results])
+        ds = _assemble_chart(store, setting, x, y)
+        save_dataset(ds, output)
+        store.remove()
+    finally:
+        store.close()
+    return ds
+
+
+def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis) -> xr.Dataset:
+    shape = (len(y.values), len(x.values))
+    first = store.load(f"{0:04d}-{0:04d}")
+    fields = ("nature_code", "period", "lyapunov", "ci95",
+              *(f for f in first if f.startswith("amplitude_")), "graph_ratio")
+    arrays = {f: np.full(shape, np.nan) for f in fields}
+    nature = np.empty(shape, dtype=object)
+    for iy in range(shape[0]):
+        for ix in range(shape[1]):
+            point = store.load(f"{iy:04d}-{ix:04d}")
+            for f in fields:
+                arrays[f][iy, ix] = point[f]
+            nature[iy, ix] = str(point["nature"])
+    dims = (y.name, x.name)
+    state_units = setting.loaded().state_units
+    units = {"lyapunov": "1/s", "ci95": "1/s",
+             **{f: state_units.get(f[len("amplitude_"):], "m") for f in fields
+                if f.startswith("amplitude_")}}
+    data = {f: (dims, arrays[f], {"units": units[f]} if f in units else {}) for f in fields}
+    data["nature_code"] = (dims, arrays["nature_code"].astype(int),
+                           {"legend": ", ".join(f"{v}: {k}" for k, v in NATURE_CODES.items())})
+    data["period"] = (dims, arrays["period"].astype(int))
+    data["nature"] = (dims, nature)
+    section = classified_section(setting, setting.system_at(**{x.name: x.values[0],
+                                                                y.name: y.values[0]}))
+    attrs = setting.attrs("chart", section, (x, y))
+    attrs.update(x=x.name, y=y.name)
+    return xr.Dataset(data, coords={y.name: y.coord(), x.name: x.coord()}, attrs=attrs)
+
+
+def _axis_heading(name: str) -> str:
+    bearing = axis_bearing(name)
+    return f"{name} (balls in bearing {bearing})" if bearing else name
+
+
+def chart_table(ds: xr.Dataset) -> str:
+    """Markdown table of a chart: the shape of the paper's Table 2 (a structure axis says
+    its bearing: ``n_balls[left] (balls in bearing left)``; amplitudes of the first body's
+    displacements in µm, or in their own unit when not metres)."""
+    xname, yname = ds.attrs["x"], ds.attrs["y"]
+    amplitude_names = [v for v in ds.data_vars if str(v).startswith("amplitude_")]
+
+    def heading(v: str) -> str:
+        unit = ds[v].attrs.get("units", "m")
+        return f"amplitude {v[len('amplitude_'):]} ({'µm' if unit == 'm' else unit})"
+
+    def value(p, v: str) -> str:
+        scale = 1e6 if ds[v].attrs.get("units", "m") == "m" else 1.0
+        return f"{float(p[v]) * scale:.3g}"
+
+    lines = [f"| {_axis_heading(yname)} | {_axis_heading(xname)} | nature | "
+             "largest Lyapunov exponent (1/s) | "
+             + " | ".join(map(heading, amplitude_names)) + " |",
+             "|---|---|---|---|" + "---|" * len(amplitude_names)]
+    for yv in ds[yname].values:
+        for xv in ds[xname].values:
+            p = ds.sel({yname: yv, xname: xv})
+            lam = float(p.lyapunov)
+            lam_text = "–" if math.isnan(lam) else f"{lam:.3g} ± {float(p.ci95):.2g}"
+            lines.append(f"| {yv:g} | {xv:g} | {p.nature.item()} | {lam_text} | "
+                         + " | ".join(value(p, v) for v in amplitude_names) + " |")
+    return "\n".join(lines) + "\n"

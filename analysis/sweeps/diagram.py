@@ -1,0 +1,269 @@
+"""Bifurcation diagrams: one runtime parameter of the model (speed, clearance, load,
+unbalance, damping, …) or its structure (``n_balls`` for a model with one bearing,
+``n_balls[left]`` for the bearing ``left`` of a model with several) on a grid
+(``analysis.sweeps.grid``); at each value the motion is simulated, the transient dropped and
+``samples`` Poincaré points of every state variable kept. With ``follow=True`` each value
+continues the previous one, up and/or down the grid (hysteresis shows as different
+branches).
+
+Following keeps the forcing phase. The model is non-autonomous: its forcing depends on time
+only through angles ω_j·t (each bearing's cage angle, the shaft angle of the unbalance, a
+forcing period of its own), so a state belongs with the angles at its time. A followed value
+starts from the previous value's end state z(t_end) at the time
+
+    t_start = t_end · T_new / T_old      (T: the period of the section, s)
+
+at which the new value has run as many section periods as the old one had at t_end. Its
+section angle is then exactly the old one, and so is every other forcing angle when the grid
+parameter scales all forcing frequencies by one factor (the speed: shaft, cages and VC are
+proportional to it) or leaves them unchanged (in the shipped models: load, damping,
+clearance, unbalance, …). Where it changes their ratios (``n_balls``, race diameters) only
+the section's angle is carried: no start time matches incommensurate angles all at once.
+
+Why not restart at t = 0 (what following did before): the end state lies at some fraction
+of a section period past a section time (and, with several forcing frequencies, at some
+phase of the others), so the restart kicks the rotor by about the orbit's size and lets it
+fall onto whatever attractor coexists (the period-3 orbit of the balanced rotor at 50 N,
+say). Why not keep t_end itself: at a new speed the angles at t_end differ from the old
+ones by Δω·t_end, many turns after a few values. Why not restart at t = 0 from the last
+section point: exact for a single forcing frequency, but it drops the phase of any other
+(the shaft angle of an unbalanced rotor on the VC section). Time runs on along a chain (a
+few tens of seconds for a hundred values: the angles lose no significant accuracy); each
+run's start time is stored with its point (``t_start`` in the result), so a resumed chain
+continues bit for bit.
+
+A diagram runs through one executor (``analysis.sweeps.executors``: serial, local processes
+or Dask) and stores each finished point at once (``analysis.sweeps.store``): re-running an
+interrupted command computes only the missing points. Followed chains write their points
+from the worker (a Dask cluster on several machines needs a shared file system for them).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from analysis.errors import InputError, SimulationError
+from analysis.integrate.checks import check_rk4_step
+from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.simulate import blow_up_limit, check_bounded
+from analysis.io import save_dataset
+from analysis.model import System, as_system
+from analysis.provenance import completed_attrs, state_at, to_dataset
+from analysis.signal.poincare import poincare_section
+from analysis.stability.classify import failure_text
+from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.grid import (
+    Axis,
+    Setting,
+    amplitude_fields,
+    amplitudes,
+    check_grid,
+    record,
+)
+from analysis.sweeps.store import PointStore
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a value's run starts: ``state`` (SI, the model's order) at time ``time`` (s)."""
+
+    state: tuple[float, ...]
+    time: float = 0.0
+
+
+def record_from(setting: Setting, system: System, start: Start) -> xr.Dataset:
+    """Like ``record`` but from ``start.state`` at t = ``start.time``: fixed-step RK4 on
+    t = start.time + n·dt (the integrator's own times), the transient dropped.
+    (``simulate`` always starts at t = 0.)"""
+    model = system.model
+    system = as_system(system, None, start.state)
+    duration, dt = setting.seconds(system), setting.step()
+    check_rk4_step(model, system.structure, dict(system.parameters), dt, "rk4")
+    n_steps = round(duration / dt)
+    states = run_rk4(library(model, system.structure), system.p, system.state, dt, n_steps,
+                     t0=start.time)
+    elapsed = np.arange(n_steps + 1) * dt
+    check_bounded(states, start.time + elapsed, blow_up_limit(dict(system.parameters)),
+                  model.centre_indices())
+    keep = elapsed >= setting.transient - 1e-12 * duration
+    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
+                            transient=setting.transient, t_start=start.time,
+                            initial_state=True)
+    return to_dataset(start.time + elapsed[keep], states[:, keep], attrs, model)
+
+
+def diagram_point(setting: Setting, system: System, start: Start | None = None) -> dict:
+    """Poincaré samples of every state variable, amplitudes, and the run's start and end
+    (``t_start``, ``t_final`` in s, ``final`` the end state) at one grid value; from the
+    spec's initial state at t = 0 without ``start``."""
+    if start is None:
+        ds, t_start = record(setting, system), 0.0
+    else:
+        ds, t_start = record_from(setting, system, start), start.time
+    pts = poincare_section(ds, setting.record_section)
+    k = setting.samples
+    out = {v: pts[v].values[:k] for v in ds.attrs["state_names"].split()}
+    out["final"] = state_at(ds, -1)
+    out["t_start"] = t_start
+    out["t_final"] = float(ds.t[-1])
+    out.update(amplitudes(ds))
+    return out
+
+
+def follow_start(setting: Setting, previous: System, point: Mapping, system: System) -> Start:
+    """Start of a followed value ``system`` after the ``previous`` one ended as ``point`` (a
+    result of ``diagram_point``): its end state at the time with the same section phase,
+    t = t_final·T_new/T_old (s; see the module docstring)."""
+    periods = float(point["t_final"]) / setting.period(previous)
+    return Start(tuple(np.asarray(point["final"], dtype=float)),
+                 periods * setting.period(system))
+
+
+FOLLOW_RESTART = "end state at the same section phase"
+"""How a followed value starts (``follow_start``); part of a diagram's stored definition
+and of its attrs (``follow_restart``)."""
+
+
+@dataclass(frozen=True)
+class Chain:
+    """One direction of a diagram: grid indices in order, run by one worker."""
+
+    setting: Setting
+    axis: Axis
+    direction: str
+    follow: bool
+    output: str
+    definition: dict = field(hash=False, compare=False)
+
+    def order(self) -> list[int]:
+        idx = list(range(len(self.axis.values)))
+        return idx if self.direction == "up" else idx[::-1]
+
+    def system(self, i: int) -> System:
+        """The System of grid index ``i``."""
+        return self.setting.system_at(**{self.axis.name: self.axis.values[i]})
+
+
+def run_chain(chain: Chain) -> int:
+    """Compute the missing points of one chain in order, storing each as it finishes; a
+    followed value starts where the previous one ended (``follow_start``)."""
+    store = PointStore(chain.output, chain.definition)
+    done, computed = store.done(), 0
+    previous, point = None, None
+    for i in chain.order():
+        key = f"{chain.direction}-{i:05d}"
+        system = chain.system(i)
+        if key in done:
+            point = store.load(key)
+        else:
+            start = follow_start(chain.setting, previous, point, system) \
+                if chain.follow and point is not None else None
+            point = safe_diagram_point(chain.setting, system, start)
+            store.save(key, point)
+            computed += 1
+        if str(point.get("status", "")):
+            point = None  # a failed value: the next one starts from the initial state
+        previous = system
+    return computed
+
+
+def safe_diagram_point(setting: Setting, system: System, start: Start | None = None) -> dict:
+    """``diagram_point``, or for a value whose run fails a record of it (``status``
+    ``failed: …``, no section points, NaN amplitudes) so the diagram goes on."""
+    try:
+        return {**diagram_point(setting, system, start), "status": ""}
+    except SimulationError as exc:
+        model = system.model
+        return {**{v: np.zeros(0) for v in model.state_names},
+                "final": np.full(model.n_state, np.nan), "t_start": np.nan,
+                "t_final": np.nan, "status": failure_text(exc),
+                **dict.fromkeys(amplitude_fields(model), np.nan)}
+
+
+def _point_task(args: tuple) -> tuple[str, dict]:
+    """A diagram point without state following (parallel over the grid)."""
+    chain, i = args
+    return f"{chain.direction}-{i:05d}", safe_diagram_point(chain.setting, chain.system(i))
+
+
+def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
+                        direction: str = "up", follow: bool = True,
+                        executor: Executor | None = None,
+                        progress: Callable[[int, int], None] | None = None,
+                        on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset.
+
+    Resumable (``analysis.sweeps.store``): a stored point that cannot be read is removed,
+    reported to ``on_damaged(key)`` and computed again. A value whose run fails is recorded
+    (``status``: ``failed: …``) and the diagram goes on."""
+    if direction not in ("up", "down", "both"):
+        raise InputError(f"direction: must be up, down or both, got {direction!r}")
+    directions = ["up", "down"] if direction == "both" else [direction]
+    check_grid(setting, axis)
+    definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
+                  "structure": list(setting.loaded().structure(setting.n_balls)),
+                  "directions": directions, "follow": follow}
+    if follow:  # stores of the former restarts at t = 0 are not resumed with these
+        definition["restart"] = FOLLOW_RESTART
+    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
+    try:
+        chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
+        total = len(chains) * len(axis.values)
+        executor = executor or SerialExecutor()
+        if follow:
+            run_with_progress(executor, run_chain, chains, lambda: len(store.done()), total,
+                              progress, None)
+        else:
+            todo = [(c, i) for c in chains for i in range(len(axis.values))
+                    if f"{c.direction}-{i:05d}" not in store.done()]
+            run_with_progress(executor, _point_task, todo, lambda: len(store.done()), total,
+                              progress, lambda task, result: store.save(*result))
+        ds = _assemble_diagram(store, setting, axis, directions, follow)
+        save_dataset(ds, output)
+        store.remove()
+    finally:
+        store.close()
+    return ds
+
+
+def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, directions: list[str],
+                      follow: bool) -> xr.Dataset:
+    n = len(axis.values)
+    model = setting.loaded()
+    units = model.state_units
+    section = setting.record_section
+    first = store.load(f"{directions[0]}-{0:05d}")
+    arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
+              for v in model.state_names}
+    amplitude_names = [v for v in first if v.startswith("amplitude_")]
+    per_value = {v: np.full((len(directions), n), np.nan)
+                 for v in [*amplitude_names, "t_start"]}
+    status = np.full((len(directions), n), "", dtype=object)
+    for d, direction in enumerate(directions):
+        for i in range(n):
+            point = store.load(f"{direction}-{i:05d}")
+            for v in arrays:
+                arrays[v][d, i, :len(point[v])] = point[v]
+            for v in per_value:
+                per_value[v][d, i] = point[v]
+            status[d, i] = str(point.get("status", ""))
+    data = {v: (("direction", axis.name, "k"), arrays[v],
+                {"units": units[v], "long_name": f"{v} on the {section} section"})
+            for v in arrays}
+    data.update({v: (("direction", axis.name), per_value[v],
+                     {"units": units.get(v[len("amplitude_"):], "m")}) for v in amplitude_names})
+    data["status"] = (("direction", axis.name), status.astype(str),
+                      {"long_name": "empty, or why the value's run failed (failed: …)"})
+    data["t_start"] = (("direction", axis.name), per_value["t_start"],
+                       {"units": "s", "long_name": "time at which the value's run starts"})
+    attrs = setting.attrs("diagram", section)
+    attrs.update(param=axis.name, follow=int(follow))
+    if follow:
+        attrs.update(follow_restart=FOLLOW_RESTART)
+    return xr.Dataset(data, coords={"direction": directions, axis.name: axis.coord(),
+                                    "k": np.arange(setting.samples)}, attrs=attrs)
