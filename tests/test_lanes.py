@@ -78,7 +78,7 @@ def test_a_lane_that_blows_up_leaves_its_neighbour_alone():
 
     from analysis.errors import SimulationError
     from analysis.stability.lyapunov import default_lengths
-    from analysis.sweeps.points import _plan
+    from analysis.sweeps.points import _schedule
 
     points = [DUFFING.system_at(cubic_stiffness=1.0),
               DUFFING.system_at(cubic_stiffness=-1.0, forcing_amplitude=2.0)]
@@ -88,7 +88,7 @@ def test_a_lane_that_blows_up_leaves_its_neighbour_alone():
         chart_point(DUFFING, points[1])
     assert isinstance(bad, SimulationError) and str(bad) == str(alone.value)
     system = points[1]
-    plan = _plan(DUFFING.seconds(system), DUFFING.transient, DUFFING.dt,
+    plan = _schedule(DUFFING.seconds(system), DUFFING.transient, DUFFING.dt,
                  default_lengths(system.model)[2])
     when = float(re.search(r"t = ([0-9.e+-]+) s", str(bad)).group(1))
     assert when > plan.start * DUFFING.dt

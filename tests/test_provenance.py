@@ -74,16 +74,17 @@ def test_a_cvodes_run_ends_with_its_tolerances():
 
 
 def test_a_chart_point_record_and_a_diagram_record_have_the_runs_attrs():
-    from analysis.sweeps import points, sweep
+    from analysis.sweeps import diagram, points
+    from analysis.sweeps.grid import Setting
 
     system = as_system("vakharia2015", 6, speed_rpm=5000)
     point = points._prepare(system, 0.05, 0.02, 1e-5, None, False, True)
     assert list(point.attrs) == PAPER_BASE + TIMES
     assert point.attrs["duration"] == 0.05 and point.attrs["transient"] == 0.02
-    setting = sweep.Setting("vakharia2015", 6, {"speed_rpm": 5000.0}, 0.01, 3, "shaft", 1e-5,
-                            False)
-    start = sweep.Start((1e-6, 1e-6, 0.0, 0.0), 0.003)
-    record = sweep._record_from(setting, 6, {"speed_rpm": 5000.0}, start)
+    setting = Setting("vakharia2015", 6, {"speed_rpm": 5000.0}, 0.01, 3, "shaft", 1e-5,
+                      False)
+    start = diagram.Start((1e-6, 1e-6, 0.0, 0.0), 0.003)
+    record = diagram.record_from(setting, setting.system_at(), start)
     assert list(record.attrs) == PAPER_BASE + TIMES + ["t_start"] + STATE0
     assert record.attrs["t_start"] == 0.003 and record.attrs["x0"] == 1e-6
     assert record.x.attrs == {"units": "m",

@@ -9,36 +9,23 @@ parameter value, method and step, the characteristic frequencies and the package
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError, Interrupt, SimulationError
-from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
+from analysis.errors import Interrupt, SimulationError
 from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.plan import Method, RunPlan
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.provenance import completed_attrs, state_variable_attrs, to_dataset
 
-Method = Literal["rk4", "cvodes"]
 BLOW_UP_FACTOR = 1000.0
 """A displacement beyond this many clearances is a blow-up (models without a clearance are
 only checked for non-finite states)."""
-
-
-def _check_times(duration: float, transient: float, dt: float) -> None:
-    check_seconds("duration", duration)
-    check_seconds("dt", dt)
-    if not (math.isfinite(transient) and 0 <= transient < duration):
-        raise InputError(f"transient: must be in [0, duration) = [0, {duration:g}) s, "
-                         f"got {transient!r}")
-    if dt > duration:
-        raise InputError(f"dt: must be <= duration ({duration:g} s), got {dt!r}")
 
 
 def simulate(
@@ -81,65 +68,43 @@ def simulate(
     run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
                    method, save_every, rtol, atol, in_memory=True)
     if method == "rk4":
-        states = _run_rk4(run.system, run.system.p, run.z0, run.dt, save_every, run.n_saved,
+        plan = run.plan
+        states = _run_rk4(run.system, run.system.p, run.z0, plan.dt, save_every, plan.n_saved,
                           run.limit, compiled)
     else:
-        states = _run_cvodes(run.system, run.system.p, run.z0, run.times(), rtol, atol,
+        states = _run_cvodes(run.system, run.system.p, run.z0, run.plan.times(), rtol, atol,
                              run.limit)
-    times = run.times()
-    return to_dataset(times[run.first:], states[:, run.first:], run.attrs, run.system.model)
+    times = run.plan.times()
+    first = run.plan.first
+    return to_dataset(times[first:], states[:, first:], run.attrs, run.system.model)
 
 
 @dataclass(frozen=True)
 class _Run:
-    """A checked run: its system, step, lengths, limit, provenance and first kept sample."""
+    """A checked run: its plan, provenance and blow-up limit (m)."""
 
-    system: System
-    z0: np.ndarray
-    dt: float
-    save_every: int
-    n_saved: int
-    first: int
-    limit: float
+    plan: RunPlan
     attrs: dict
+    limit: float
 
-    def times(self, start: int = 0, stop: int | None = None) -> np.ndarray:
-        """Times (s) of the saved samples ``start … stop − 1`` (all: 0 … n_saved)."""
-        stop = self.n_saved + 1 if stop is None else stop
-        return np.arange(start, stop) * (self.save_every * self.dt)
+    @property
+    def system(self) -> System:
+        return self.plan.system
+
+    @property
+    def z0(self) -> np.ndarray:
+        return self.plan.system.state
 
 
 def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt, method,
              save_every, rtol, atol, in_memory: bool) -> _Run:
-    """Every check of a run, before any step is taken."""
+    """Every check of a run (``RunPlan.make``), before any step is taken."""
     system = as_system(system, n_balls, initial_state, **parameters)
-    model, n, values = system.model, system.structure, dict(system.parameters)
-    sim = model.simulation_defaults
-    duration = float(sim["duration"] if duration is None else duration)
-    transient = float(sim["transient"] if transient is None else transient)
-    dt = float(sim["dt"] if dt is None else dt)
-    _check_times(duration, transient, dt)
-    if method not in ("rk4", "cvodes"):
-        raise InputError(f"method: must be 'rk4' or 'cvodes', got {method!r}")
-    if method == "cvodes":
-        if not (math.isfinite(rtol) and 0 < rtol < 1):
-            raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
-        if not (math.isfinite(atol) and 0 <= atol < 1):
-            raise InputError(f"atol: must be in [0, 1), got {atol!r}")
-    if not (isinstance(save_every, int) and save_every >= 1):
-        raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
-    check_resolution(model, n, values, dt, duration)
-    n_saved = round(duration / dt) // save_every
-    if in_memory:
-        _check_memory(model.n_state, n_saved, save_every)
-    check_rk4_step(model, n, values, dt, method)
-    z0 = system.state
-    first = _first_kept(transient - 1e-12 * duration, save_every * dt)
-    attrs = completed_attrs(system, method=method, dt=dt, save_every=save_every,
-                            duration=duration, transient=transient, initial_state=True,
+    plan = RunPlan.make(system, duration=duration, transient=transient, dt=dt, method=method,
+                        save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory)
+    attrs = completed_attrs(system, **plan.settings(), initial_state=True,
                             tolerances=(rtol, atol) if method == "cvodes" else None)
-    return _Run(system, z0, dt, save_every, n_saved, max(0, first), blow_up_limit(values),
-                attrs)
+    return _Run(plan, attrs, blow_up_limit(dict(system.parameters)))
 
 
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
@@ -150,17 +115,6 @@ def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *
     several runs (``bearingdyn run``) validates all of them before it writes anything."""
     _prepare(system, n_balls, None, parameters, duration, transient, dt, method, save_every,
              1e-10, 1e-16, in_memory=False)
-
-
-def _first_kept(threshold: float, step: float) -> int:
-    """Smallest k with k·step >= threshold, computed as ``np.arange(…) * step`` computes the
-    times (so the first kept sample is the same whichever way the run is stored)."""
-    k = max(0, math.ceil(threshold / step))
-    while k > 0 and float(np.float64(k - 1) * step) >= threshold:
-        k -= 1
-    while float(np.float64(k) * step) < threshold:
-        k += 1
-    return k
 
 
 def simulate_to_file(
@@ -188,7 +142,7 @@ def simulate_to_file(
     run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
                    "rk4", save_every, 1e-10, 1e-16, in_memory=False)
     model = run.system.model
-    size = run.n_saved + 1 - run.first
+    size = run.plan.n_saved + 1 - run.plan.first
 
     def write(tmp: Path) -> None:
         import h5netcdf
@@ -209,32 +163,19 @@ def simulate_to_file(
             def sink(start: int, kept: np.ndarray) -> None:
                 Interrupt.check()  # between blocks, outside HDF5's code
                 stop = start + kept.shape[1]
-                lo = max(start, run.first)
+                lo = max(start, run.plan.first)
                 if lo >= stop:
                     return
-                out = slice(lo - run.first, stop - run.first)
-                t_var[out] = run.times(lo, stop)
+                out = slice(lo - run.plan.first, stop - run.plan.first)
+                t_var[out] = run.plan.times(lo, stop)
                 for i, var in enumerate(variables):
                     var[out] = kept[i, lo - start:]
 
-            _run_rk4(run.system, run.system.p, run.z0, run.dt, run.save_every, run.n_saved,
+            plan = run.plan
+            _run_rk4(run.system, run.system.p, run.z0, plan.dt, plan.save_every, plan.n_saved,
                      run.limit, compiled, sink=sink)
 
     return atomic_write(path, write, size=8 * (model.n_state + 1) * size)
-
-
-MEMORY_BUDGET = 8 * 2**30
-"""Most bytes the states a run keeps in memory may take (their float64 values, twice: the
-blocks and the assembled array)."""
-
-
-def _check_memory(n_state: int, n_saved: int, save_every: int) -> None:
-    need = 2 * 8 * (n_state + 1) * (n_saved + 1)
-    if need > MEMORY_BUDGET:
-        raise InputError(f"save_every: the run would keep {n_saved + 1:.3g} samples "
-                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: raise "
-                         f"save_every to at least {math.ceil(save_every * need / MEMORY_BUDGET)} "
-                         "or shorten the run")
 
 
 BALL_FRACTION = 0.25

@@ -28,6 +28,7 @@ import xarray as xr
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.checks import MAX_STEPS, check_seconds
 from analysis.integrate.compiled import compiled_function
+from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
 from analysis.integrate.tangent import tangent_block
 from analysis.model import BallCounts, Model, Structure, System, as_system
@@ -145,6 +146,7 @@ def lyapunov(
     n_exponents = _check_options(n, n if n_exponents is None else n_exponents,
                                  renorm_every, duration, tangent_transient)
     _check_lengths(dt, renorm_every, transient, duration, tangent_transient)
+    RunPlan.step(system, dt)  # the step's resolution and RK4 stability, transient or not
     discarded, averaged = renorm_counts(dt, renorm_every, duration, tangent_transient)
     start = max(0, round(transient / dt) - discarded * renorm_every)
     z0 = _state_after(system, start, dt)

@@ -27,7 +27,6 @@ from typing import Literal
 import numpy as np
 
 from analysis.errors import InputError
-from analysis.integrate.checks import check_seconds
 from analysis.integrate.flow import (
     Period,
     evaluate,
@@ -36,6 +35,7 @@ from analysis.integrate.flow import (
     period_seconds,
     steps_per_period,
 )
+from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
 from analysis.model import BallCounts, Model, Structure, System, as_system
 from analysis.provenance import state_at
@@ -288,8 +288,7 @@ def shoot(
     system, per = _prepare(as_system(system, n_balls, **parameters), period)
     model, s, values = system.model, system.structure, dict(system.parameters)
     n = model.n_state
-    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
-    check_seconds("dt", dt)
+    dt = RunPlan.step(system, dt).dt
     if guess is None:
         guess, t0 = default_guess(system, per, settle, dt)
     t0 = 0.0 if t0 is None else float(t0)

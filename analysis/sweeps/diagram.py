@@ -48,7 +48,6 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.checks import check_rk4_step
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.io import save_dataset
@@ -82,18 +81,15 @@ def record_from(setting: Setting, system: System, start: Start) -> xr.Dataset:
     (``simulate`` always starts at t = 0.)"""
     model = system.model
     system = as_system(system, None, start.state)
-    duration, dt = setting.seconds(system), setting.step()
-    check_rk4_step(model, system.structure, dict(system.parameters), dt, "rk4")
-    n_steps = round(duration / dt)
+    run = setting.plan(system, start.time)
+    duration, dt, n_steps = run.duration, run.dt, run.n_steps
     states = run_rk4(library(model, system.structure), system.p, system.state, dt, n_steps,
                      t0=start.time)
     elapsed = np.arange(n_steps + 1) * dt
     check_bounded(states, start.time + elapsed, blow_up_limit(dict(system.parameters)),
                   model.centre_indices())
     keep = elapsed >= setting.transient - 1e-12 * duration
-    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
-                            transient=setting.transient, t_start=start.time,
-                            initial_state=True)
+    attrs = completed_attrs(system, **run.settings(), initial_state=True)
     return to_dataset(start.time + elapsed[keep], states[:, keep], attrs, model)
 
 

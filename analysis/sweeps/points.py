@@ -31,10 +31,10 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.checks import check_rk4_step
 from analysis.integrate.compiled import Runner, compiled_functions, library, test_state
 from analysis.integrate.lanes import LANES, Kernel
 from analysis.integrate.lanes import kernel as lane_kernel
+from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import (
     blow_up_limit,
     check_bounded,
@@ -137,7 +137,7 @@ class _Record:
 
 
 @dataclass(frozen=True)
-class _Plan:
+class _Schedule:
     """Steps of one chart point: the record from ``first`` to ``last`` (the samples of the
     two-pass run), the tangent from ``start`` over ``renorms`` renormalisations of which
     the last ``averaged`` are averaged, and the states alone after that up to ``last``."""
@@ -149,7 +149,7 @@ class _Plan:
     averaged: int
 
 
-def _plan(duration: float, transient: float, dt: float, tangent_transient: float) -> _Plan:
+def _schedule(duration: float, transient: float, dt: float, tangent_transient: float) -> _Schedule:
     """The steps of a run of ``duration`` s whose first ``transient`` s are dropped (the
     samples ``simulate`` keeps), λ1 averaged over the whole renormalisations of the
     record after ``tangent_transient`` s of discarded ones."""
@@ -166,10 +166,10 @@ def _plan(duration: float, transient: float, dt: float, tangent_transient: float
     discarded = math.ceil(tangent_transient / (RENORM_EVERY * dt) - 1e-9)
     renorms = min(averaged + discarded, last // RENORM_EVERY)
     start = last - renorms * RENORM_EVERY
-    return _Plan(first, last, start, renorms, averaged)
+    return _Schedule(first, last, start, renorms, averaged)
 
 
-def _section_steps(plan: _Plan, dt: float, period: float) -> np.ndarray:
+def _section_steps(plan: _Schedule, dt: float, period: float) -> np.ndarray:
     """The record's steps whose states ``poincare_section`` reads for the section of
     ``period`` s: the samples i − 1 … i + 2 around each section time (t_i ≤ t_k < t_i+1,
     the derivatives of the interpolation included) and the record's ends."""
@@ -184,7 +184,7 @@ def _section_steps(plan: _Plan, dt: float, period: float) -> np.ndarray:
 
 
 def _run_tangent(blocks: dict[int, ca.Function], p: np.ndarray, z0: np.ndarray,
-                 dt: float, plan: _Plan, record: _Record) -> np.ndarray:
+                 dt: float, plan: _Schedule, record: _Record) -> np.ndarray:
     """The states with one tangent vector from step ``plan.start`` over ``plan.renorms``
     renormalisations, fed to ``record``; returns the logs of every renormalisation."""
     n = len(z0)
@@ -225,7 +225,7 @@ class _Point:
     system: System
     attrs: dict
     section: str
-    plan: _Plan
+    schedule: _Schedule
     record: _Record
     z: np.ndarray
     tangent: bool
@@ -233,14 +233,15 @@ class _Point:
 
 def _prepare(system: System, duration: float, transient: float, dt: float,
              section: str | None, tangent: bool, compiled: bool) -> _Point:
-    """Check the run, plan it and integrate the states alone up to the tangent's start (or
-    to the end without ``tangent``)."""
+    """Check the run (``RunPlan.make``; a coarse step was reported by the grid's check),
+    schedule it and integrate the states alone up to the tangent's start (or to the end
+    without ``tangent``)."""
     model, structure, values = system.model, system.structure, dict(system.parameters)
-    check_rk4_step(model, structure, values, dt, "rk4")
-    attrs = completed_attrs(system, method="rk4", dt=dt, save_every=1, duration=duration,
-                            transient=transient)
+    run = RunPlan.make(system, duration=duration, transient=transient, dt=dt,
+                       warn=lambda message: None)
+    attrs = completed_attrs(system, **run.settings())
     section = section or default_section(attrs)
-    plan = _plan(duration, transient, dt, default_lengths(model)[2] if tangent else 0.0)
+    plan = _schedule(duration, transient, dt, default_lengths(model)[2] if tangent else 0.0)
     n = model.n_state
     record = _Record(plan.first, _section_steps(plan, dt, period_of(attrs, section)), dt,
                      blow_up_limit(values), model.centre_indices(), np.full(n, np.inf),
@@ -257,7 +258,7 @@ def _prepare(system: System, duration: float, transient: float, dt: float,
 def _finish(point: _Point, logs: np.ndarray | None) -> PointResult:
     """The point's verdict from its record and, with a tangent, the logs of its
     renormalisations (λ1 and its interval from the last ``plan.averaged``)."""
-    model, record, plan = point.system.model, point.record, point.plan
+    model, record, plan = point.system.model, point.record, point.schedule
     dt = point.attrs["dt"]
     lam = ci = np.nan
     if point.tangent:
@@ -295,7 +296,7 @@ def _scalar_tangent(point: _Point, compiled: bool) -> np.ndarray:
     every renormalisation, its states fed to the point's record."""
     system = point.system
     return _run_tangent(chart_blocks(system.model, system.structure, compiled), system.p,
-                        point.z, point.attrs["dt"], point.plan, point.record)
+                        point.z, point.attrs["dt"], point.schedule, point.record)
 
 
 def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
@@ -308,9 +309,9 @@ def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
     p = np.empty((kern.n_par, LANES))
     for k in range(LANES):  # lanes beyond the points repeat the first (results unused)
         point = points[min(k, lanes - 1)]
-        s[:, k] = np.concatenate([point.z, [point.plan.start], np.eye(n)[:, 0]])
+        s[:, k] = np.concatenate([point.z, [point.schedule.start], np.eye(n)[:, 0]])
         p[:, k] = point.system.p
-    left = [point.plan.renorms for point in points]
+    left = [point.schedule.renorms for point in points]
     logs: list[list[np.ndarray]] = [[] for _ in points]
     outcome: list = [None] * lanes
     while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):

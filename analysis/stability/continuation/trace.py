@@ -26,7 +26,8 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.integrate.flow import Period, steps_per_period
-from analysis.model import BallCounts, Model, Structure, System, as_system
+from analysis.integrate.plan import RunPlan
+from analysis.model import BallCounts, Model, System, as_system
 from analysis.provenance import system_of_attrs
 from analysis.stability.continuation.dataset import branch_dataset
 from analysis.stability.continuation.detect import fold_between, lp_test, points_between
@@ -133,8 +134,7 @@ def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
     model = first.system.model
     per = as_period(model, first.period)
     # the step must stay below dt along the whole range (the period depends on λ)
-    n_steps = _steps_for_range(model, first.structure, per, first.values, param,
-                               (start, stop), dt)
+    n_steps = _steps_for_range(first.system, per, param, (start, stop), dt)
     n = model.n_state
     prob = BranchProblem(model, first.structure, per, model.parameter_names.index(param),
                          dict(first.values), first.t0, n_steps, np.ones(n), abs(stop - start))
@@ -179,13 +179,17 @@ def start_point(prob: BranchProblem, z0: np.ndarray, lam: float, stop: float, to
     return first
 
 
-def _steps_for_range(model: Model, structure: Structure, per: Period, values: dict,
-                     param: str, ends: tuple[float, float], dt: float | None) -> int:
+def _steps_for_range(system: System, per: Period, param: str, ends: tuple[float, float],
+                     dt: float | None) -> int:
     """RK4 steps per period so that the step is at most ``dt`` (s; None: the spec's) at
-    both ends of the range of ``param``."""
-    dt = float(model.simulation_defaults["dt"] if dt is None else dt)
-    return max(steps_per_period(model, structure, per, {**values, param: end}, dt)
-               for end in ends)
+    both ends of the range of ``param``, the step checked at each (``RunPlan.step``)."""
+    steps = []
+    for end in ends:
+        at_end = system.replace(**{param: end})
+        plan = RunPlan.step(at_end, dt)
+        steps.append(steps_per_period(system.model, system.structure, per,
+                                      dict(at_end.parameters), plan.dt))
+    return max(steps)
 
 
 def _angle(u: np.ndarray, v: np.ndarray) -> float:
@@ -364,8 +368,7 @@ def _problem_of_branch(branch: xr.Dataset, lam: float, stop: float,
     per = as_period(model, str(attrs["period"]))
     values = dict(system.parameters)
     n_steps = max(int(attrs["steps_per_period"]),
-                  _steps_for_range(model, system.structure, per, values, param, (lam, stop),
-                                   dt))
+                  _steps_for_range(system, per, param, (lam, stop), dt))
     s_lam = float(attrs.get("param_scale", abs(stop - lam)))
     prob = BranchProblem(model, system.structure, per, model.parameter_names.index(param),
                          values, float(attrs["t0"]), n_steps, np.ones(model.n_state), s_lam)
