@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -152,7 +152,7 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
     attrs.update({f"{name}0": float(v) for name, v in zip(model.state_names, z0, strict=True)})
     if method == "cvodes":
         attrs.update(rtol=rtol, atol=atol)
-    return _Run(system, z0, dt, save_every, n_saved, max(0, first), blow_up_limit(values),
+    return _Run(system, z0, dt, save_every, n_saved, max(0, first), blow_up_limit(model, values),
                 attrs)
 
 
@@ -259,14 +259,14 @@ motion of the bearing the model describes (a static deflection under 1e5 N on th
 bearing is 0.12 of its ball diameter)."""
 
 
-def blow_up_limit(values: dict[str, float]) -> float:
-    """Displacement (m) beyond which a run has blown up: ``BLOW_UP_FACTOR`` times the largest
-    radial clearance of the model's bearings, or ``BALL_FRACTION`` of the largest ball
-    diameter, whichever is smaller (inf without either: non-finite values only)."""
-    clearance = max((abs(v) for k, v in values.items() if k.startswith("radial_clearance")),
-                    default=0.0)
-    ball = max((abs(v) for k, v in values.items() if k.startswith("ball_diameter")),
-               default=0.0)
+def blow_up_limit(model: Model, values: Mapping[str, float]) -> float:
+    """Displacement (m) beyond which a run of ``model`` with parameter ``values`` has blown
+    up: ``BLOW_UP_FACTOR`` times the largest radial clearance of its bearings, or
+    ``BALL_FRACTION`` of the largest ball diameter, whichever is smaller (the parameters
+    that play the ``clearance`` and ``ball_diameter`` roles, ``Model.role``; inf without
+    either: non-finite values only)."""
+    clearance = max((abs(v) for v in model.role_values("clearance", values)), default=0.0)
+    ball = max((abs(v) for v in model.role_values("ball_diameter", values)), default=0.0)
     limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
     limits += [BALL_FRACTION * ball] if ball > 0 else []
     return min(limits, default=np.inf)

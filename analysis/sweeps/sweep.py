@@ -299,7 +299,7 @@ def _record_from(setting: Setting, n_balls: BallCounts, values: dict[str, float]
 def _check_bounded(system: System, states: np.ndarray, times: np.ndarray) -> None:
     """``SimulationError`` when a state is not finite or a body's centre is beyond
     ``blow_up_limit`` (m), as ``simulate`` checks its runs."""
-    limit = blow_up_limit(dict(system.parameters))
+    limit = blow_up_limit(system.model, system.parameters)
     bad = ~np.all(np.isfinite(states), axis=0)
     for i, j in system.model.centre_indices():
         radius = np.abs(states[i]) if j is None else np.hypot(states[i], states[j])
