@@ -161,6 +161,9 @@ class Frequencies:
     cage: dict[str, float] = field(default_factory=dict)
     vc: dict[str, float] = field(default_factory=dict)
     faults: dict[str, FaultFrequencies] = field(default_factory=dict)
+    forcing_parameter: str = ""
+    """The parameter that holds the model's own forcing period (s; the ``forcing_period``
+    role), '' without one."""
 
     @property
     def cage_hz(self) -> float:
@@ -172,10 +175,11 @@ class Frequencies:
         """VC frequency of the first bearing (0 without bearings), Hz."""
         return next(iter(self.vc.values()), 0.0)
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | str]:
         """Result-file attributes: ``cage_hz``, ``vc_hz`` with one bearing (or none), else
-        ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing."""
-        out = {"shaft_hz": self.shaft_hz}
+        ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing; ``forcing_parameter`` (text)
+        for a model forced at a parameter's period."""
+        out: dict[str, float | str] = {"shaft_hz": self.shaft_hz}
         if len(self.vc) <= 1:
             out.update(cage_hz=self.cage_hz, vc_hz=self.vc_hz)
         else:
@@ -186,6 +190,8 @@ class Frequencies:
             suffix = "" if len(self.faults) == 1 else f"_{name}"
             out.update({f"{key.lower()}_hz{suffix}": value
                         for key, value in fault.as_dict().items()})
+        if self.forcing_parameter:
+            out["forcing_parameter"] = self.forcing_parameter
         return out
 
 
@@ -397,7 +403,8 @@ class Model:
     def frequencies(self, n_balls: BallCounts = None,
                     values: dict[str, float] | None = None) -> Frequencies:
         """Shaft frequency and each bearing's cage, VC and defect frequencies (FTF, BPFO,
-        BPFI, BSF: :class:`FaultFrequencies`), Hz."""
+        BPFI, BSF: :class:`FaultFrequencies`), Hz; the parameter of the model's own forcing
+        period."""
         s = self.structure(n_balls)
         p = self.parameter_vector(values or self.defaults)
         shaft = float(self.module.shaft_speed(p)) / (2 * math.pi)
@@ -408,7 +415,8 @@ class Model:
                       shaft, cage[b], n, named.get(f"contact_angle_{b}",
                                                    named.get("contact_angle", 0.0)))
                   for b, n in zip(self.bearing_names, s, strict=True)}
-        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults)
+        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults,
+                           forcing_parameter=next(iter(self.role("forcing_period")), ""))
 
     def centre_indices(self) -> list[tuple[int, int | None]]:
         """State indices (x, y) of every body's centre (y None for a body moving along x)."""

@@ -14,6 +14,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
+from analysis.forcing import run_period_parameter
 from analysis.model import balls_text
 from analysis.signal import displacement_names, is_velocity, run_state_names, vc_frequencies
 from analysis.signal.poincare import poincare_section, section_period
@@ -55,8 +56,9 @@ def _title(ds: xr.Dataset) -> str:
         freqs.append(f"X = {float(ds.attrs['shaft_hz']):.2f} Hz")
     for bearing, vc in vc_frequencies(ds.attrs).items():
         freqs.append(f"VC{f'[{bearing}]' if bearing else ''} = {vc:.2f} Hz")
-    if not freqs and float(ds.attrs.get("forcing_period", 0.0)) > 0:
-        freqs.append(f"F = 1/forcing_period = {1 / float(ds.attrs['forcing_period']):.4g} Hz")
+    forcing = run_period_parameter(ds.attrs)  # the forcing_period role
+    if not freqs and forcing is not None and float(ds.attrs[forcing]) > 0:
+        freqs.append(f"F = 1/{forcing} = {1 / float(ds.attrs[forcing]):.4g} Hz")
     return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
 
 
@@ -467,8 +469,9 @@ def _default_section(ds: xr.Dataset) -> str:
     period without a shaft (the Mathieu equation)."""
     if float(ds.attrs.get("shaft_hz", 0.0)) > 0:
         return "shaft"
-    if float(ds.attrs.get("forcing_period", 0.0)) > 0:
-        return "param:forcing_period"
+    forcing = run_period_parameter(ds.attrs)  # the forcing_period role
+    if forcing is not None and float(ds.attrs[forcing]) > 0:
+        return f"param:{forcing}"
     return "shaft"
 
 

@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.forcing import run_period_parameter
 from analysis.integrate.simulate import state_at, state_names
 from analysis.signal.poincare import poincare_section
 
@@ -65,8 +66,9 @@ def default_section(ds: xr.Dataset | Mapping) -> str:
     if balanced and attrs.get("vc_hz", 0.0) > 0:
         return "vc"
     no_bearings = "n_balls" in attrs and int(attrs["n_balls"]) == 0
-    if no_bearings and "forcing_period" in attrs:
-        return "param:forcing_period"
+    forcing = run_period_parameter(attrs)  # the forcing_period role
+    if no_bearings and forcing is not None:
+        return f"param:{forcing}"
     return "shaft"
 
 

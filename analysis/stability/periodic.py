@@ -27,6 +27,7 @@ from typing import Literal
 import numpy as np
 
 from analysis.errors import InputError
+from analysis.forcing import period_parameter
 from analysis.integrate.checks import check_seconds
 from analysis.integrate.flow import (
     Period,
@@ -196,8 +197,8 @@ def default_period(model: Model) -> Period:
     if len(bearings) == 1:
         return Period.parse("vc")
     if not bearings:
-        return Period.parse("param:forcing_period" if "forcing_period" in
-                            model.parameter_names else "shaft")
+        forcing = period_parameter(model)  # the forcing_period role
+        return Period.parse(f"param:{forcing}" if forcing is not None else "shaft")
     raise InputError(f"period: model '{model.name}' has bearings {', '.join(bearings)}, "
                      f"each with its own VC frequency; give the period (e.g. "
                      f"vc[{bearings[0]}]:k, shaft:k or param:NAME)")
