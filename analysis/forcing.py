@@ -12,8 +12,8 @@ A forcing is named ``KIND``, ``KIND[bearing]``, ``KIND:k`` or ``param:NAME``:
 
 Two vocabularies use the grammar: ``PERIOD`` (periodic orbits and flow maps,
 ``analysis.integrate.flow.Period``) and ``SECTION`` (stroboscopic sections,
-``analysis.signal.poincare``). Each parses with its own words and messages. Standard
-library only; nothing here imports above ``analysis.model``.
+``analysis.signal.poincare``). Each parses with its own words and messages. The standard
+library and ``analysis.model`` only: nothing here imports above the model layer.
 """
 
 from __future__ import annotations
