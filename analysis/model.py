@@ -53,9 +53,20 @@ BallCounts = int | Mapping[str, int] | Sequence[int] | None
 bearing name -> number, a sequence in bearing order, or None (the spec's defaults)."""
 
 
+LEGACY_ROLES: dict[str, tuple[str, bool]] = {
+    "clearance": ("radial_clearance", True), "ball_diameter": ("ball_diameter", True),
+    "contact_stiffness": ("contact_stiffness", False), "radial_load": ("radial_load", False),
+    "unbalance_force": ("unbalance_force", False),
+    "forcing_period": ("forcing_period", False),
+}
+"""The roles of a generated module without ``ROLES`` (written by ``generate --out`` before
+modules said which parameter plays which role): role -> (the parameter name the analysis
+layer read, whether names that begin with it count too, as ``radial_clearance_left``)."""
+
+
 @runtime_checkable
-class GeneratedModel(Protocol):
-    """What a generated model module provides (``generated/<model>/__init__.py``)."""
+class GeneratedModelCore(Protocol):
+    """What every generated model module provides, also one written before ``ROLES``."""
 
     NAME: str
     TITLE: str
@@ -79,6 +90,14 @@ class GeneratedModel(Protocol):
     def shaft_speed(self, p: Any) -> Any: ...
 
     def build(self, n_balls: Structure | None = None) -> Any: ...
+
+
+@runtime_checkable
+class GeneratedModel(GeneratedModelCore, Protocol):
+    """What a generated model module provides (``generated/<model>/__init__.py``): also
+    ``ROLES``, role -> the parameters that play it (``Model.role``)."""
+
+    ROLES: dict[str, tuple[str, ...]]
 
 
 @dataclass(frozen=True)
@@ -142,6 +161,9 @@ class Frequencies:
     cage: dict[str, float] = field(default_factory=dict)
     vc: dict[str, float] = field(default_factory=dict)
     faults: dict[str, FaultFrequencies] = field(default_factory=dict)
+    forcing_parameter: str = ""
+    """The parameter that holds the model's own forcing period (s; the ``forcing_period``
+    role), '' without one."""
 
     @property
     def cage_hz(self) -> float:
@@ -153,10 +175,11 @@ class Frequencies:
         """VC frequency of the first bearing (0 without bearings), Hz."""
         return next(iter(self.vc.values()), 0.0)
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | str]:
         """Result-file attributes: ``cage_hz``, ``vc_hz`` with one bearing (or none), else
-        ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing."""
-        out = {"shaft_hz": self.shaft_hz}
+        ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing; ``forcing_parameter`` (text)
+        for a model forced at a parameter's period."""
+        out: dict[str, float | str] = {"shaft_hz": self.shaft_hz}
         if len(self.vc) <= 1:
             out.update(cage_hz=self.cage_hz, vc_hz=self.vc_hz)
         else:
@@ -167,6 +190,8 @@ class Frequencies:
             suffix = "" if len(self.faults) == 1 else f"_{name}"
             out.update({f"{key.lower()}_hz{suffix}": value
                         for key, value in fault.as_dict().items()})
+        if self.forcing_parameter:
+            out["forcing_parameter"] = self.forcing_parameter
         return out
 
 
@@ -217,6 +242,38 @@ class Model:
     @property
     def parameter_names(self) -> list[str]:
         return [row[0] for row in self.module.PARAMETERS]
+
+    @property
+    def roles(self) -> dict[str, tuple[str, ...]]:
+        """Role -> the parameters that play it: the module's ``ROLES`` (written from what
+        its terms read, ``modelgen.codegen.parameter_roles``). A module generated before
+        ``ROLES`` existed falls back to the names the analysis layer used to assume
+        (``LEGACY_ROLES``): the parameters so named that the model has."""
+        written = getattr(self.module, "ROLES", None)
+        if written is not None:
+            return {role: tuple(names) for role, names in written.items()}
+        names = self.parameter_names
+        return {role: tuple(n for n in names if n == base or (prefix and n.startswith(base)))
+                for role, (base, prefix) in LEGACY_ROLES.items()}
+
+    def role(self, role: str) -> tuple[str, ...]:
+        """The parameters that play ``role`` (``clearance``, ``ball_diameter``,
+        ``contact_stiffness``, ``radial_load``, ``unbalance_force``, ``forcing_period``), in
+        the order of the bodies and bearings; () when none does."""
+        roles = self.roles
+        if role not in roles:
+            raise ValueError(f"role: must be one of {', '.join(roles)}, got {role!r}")
+        return roles[role]
+
+    def role_values(self, role: str, values: Mapping[str, float]) -> tuple[float, ...]:
+        """The values (SI units) in ``values`` of the parameters that play ``role``."""
+        return tuple(float(values[n]) for n in self.role(role) if n in values)
+
+    def role_value(self, role: str, values: Mapping[str, float],
+                   default: float | None = None) -> float | None:
+        """The value of the first parameter that plays ``role`` (the first body's or
+        bearing's), else ``default``."""
+        return next(iter(self.role_values(role, values)), default)
 
     @property
     def defaults(self) -> dict[str, float]:
@@ -342,7 +399,8 @@ class Model:
     def frequencies(self, n_balls: BallCounts = None,
                     values: dict[str, float] | None = None) -> Frequencies:
         """Shaft frequency and each bearing's cage, VC and defect frequencies (FTF, BPFO,
-        BPFI, BSF: :class:`FaultFrequencies`), Hz."""
+        BPFI, BSF: :class:`FaultFrequencies`), Hz; the parameter of the model's own forcing
+        period."""
         s = self.structure(n_balls)
         p = self.parameter_vector(values or self.defaults)
         shaft = float(self.module.shaft_speed(p)) / (2 * math.pi)
@@ -353,7 +411,8 @@ class Model:
                       shaft, cage[b], n, named.get(f"contact_angle_{b}",
                                                    named.get("contact_angle", 0.0)))
                   for b, n in zip(self.bearing_names, s, strict=True)}
-        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults)
+        return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults,
+                           forcing_parameter=next(iter(self.role("forcing_period")), ""))
 
     def centre_indices(self) -> list[tuple[int, int | None]]:
         """State indices (x, y) of every body's centre (y None for a body moving along x)."""
@@ -619,7 +678,7 @@ def _import_folder(root: Path, module: str) -> Any:
         sys.modules[package] = pkg
         spec.loader.exec_module(pkg)
     loaded = importlib.import_module(f"{package}.{module}")
-    if not isinstance(loaded, GeneratedModel):
+    if not isinstance(loaded, GeneratedModelCore):  # without ROLES: Model.roles falls back
         raise InputError(f"model: {root / module} was generated by an older bearingdyn; "
                          "regenerate it with `bearingdyn generate`")
     return loaded

@@ -117,7 +117,7 @@ class Equations:
         ctx = self.bearing_context(bearing)
         terms = [t for t in self.spec.terms
                  if self.spec.attachment(t).get("bearing") == bearing.name]
-        offsets = [t.deflection_offset(ctx, self.spec.contacts()[bearing.name])
+        offsets = [t.deflection_offset(t.bound(ctx), self.spec.contacts()[bearing.name])
                    for t in terms if hasattr(t, "deflection_offset")]
         if offsets:  # defects and waviness: δ_i → δ_i − h_i inside the contact law
             ctx = dataclasses.replace(ctx, offset=sp.Add(*offsets))
@@ -145,7 +145,7 @@ class Equations:
                 if self.spec.attachment(term).get("bearing") != bearing.name or \
                         "body" in self.spec.attachment(term):
                     continue
-                force = term.body_force(ctx)
+                force = term.body_force(term.bound(ctx))
                 if force is not None:
                     for j, ax, ay in self.station_map(bearing):
                         forces[j] += ax * force[0] + ay * force[1]
@@ -156,7 +156,7 @@ class Equations:
         for term in self.spec.terms:
             if self.spec.attachment(term).get("body") != body.name:
                 continue
-            force = term.body_force(ctx)
+            force = term.body_force(term.bound(ctx))
             if force is not None:
                 out.append(force)
         if body.support is not None:
@@ -266,7 +266,8 @@ def ball_load(terms: list, ctx: Context, skip: type | None = None) -> sp.Expr:
     at zero when more than the bare Hertz load (non-negative by itself) is gated."""
     gated, free = [], []
     for term in terms:
-        load = None if skip is not None and isinstance(term, skip) else term.ball_load(ctx)
+        skipped = skip is not None and isinstance(term, skip)
+        load = None if skipped else term.ball_load(term.bound(ctx))
         if load is not None:
             (gated if term.is_gated() else free).append((term, load))
     gated_sum = sp.Add(*(load for _, load in gated))
@@ -283,7 +284,8 @@ def assemble(spec: Spec, display: bool = False) -> Equations:
     for bearing in eq.bearings:
         scoped = ctx.scoped(bearing.name)
         eq.cage[bearing.name] = (sp.Symbol("omega_cage", real=True) if display
-                                 else contacts[bearing.name].cage_speed(scoped))
+                                 else contacts[bearing.name].cage_speed(
+                                     contacts[bearing.name].bound(scoped)))
     ctx.omega_cage = eq.cage_speed  # the first bearing's, for one-bearing callers of eq.ctx
     return eq
 

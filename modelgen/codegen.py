@@ -37,6 +37,7 @@ from modelgen.assemble import Equations, assemble, latex_equations
 from modelgen.locations import cached_model_root, is_shipped
 from modelgen.spec import Spec, load_spec, n_balls_range, spec_hash
 from modelgen.symbols import Context
+from modelgen.terms.base import ROLE_NAMES
 from modelgen.unrolled import helper_sources
 
 RUNTIME_TEMPLATE = "runtime.py.tmpl"
@@ -161,6 +162,24 @@ def _tuple(comment: str, items: list[str]) -> str:
     return f"(\n    # {comment}\n" + "".join(f"    {item},\n" for item in items) + ")"
 
 
+def parameter_roles(spec: Spec, ctx: Context) -> dict[str, tuple[str, ...]]:
+    """Role (``ROLE_NAMES``) -> the parameters that play it, from what the terms read: the
+    contact term of each bearing its clearance, ball diameter and Hertz constant, the load
+    terms their loads, an expression its forcing period; in the order of the bodies and
+    bearings, each parameter once (a role no term plays: an empty tuple)."""
+    owners = spec.owner_names()
+    found: dict[str, list[tuple[int, str]]] = {role: [] for role in ROLE_NAMES}
+    for term in spec.terms:
+        scope = next(iter(spec.attachment(term).values()), "")
+        seen = term.bound(ctx.scoped(scope))
+        for role, quantity in term.role_quantities().items():
+            if seen.has(quantity):
+                order = owners.index(scope) if scope in owners else len(owners)
+                found[role].append((order, seen.parameter_name(quantity)))
+    return {role: tuple(dict.fromkeys(name for _, name in sorted(pairs, key=lambda p: p[0])))
+            for role, pairs in found.items()}
+
+
 def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
     ctx = eq.ctx
     loads = {b.name: eq.ball_load_of(b) for b in eq.bearings}
@@ -209,6 +228,8 @@ def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
     bodies = [repr((b.name, b.motion, b.coordinates)) for b in eq.bodies]
     bearings = [repr((b.name, b.inner, b.outer, b.n_balls, n_balls_range(spec, b)))
                 for b in eq.bearings]
+    roles = "".join(f"    {role!r}: {names!r},\n"
+                    for role, names in parameter_roles(spec, ctx).items())
     constants = [
         f"NAME = {spec.model.name!r}",
         f"TITLE = {spec.model.title!r}",
@@ -226,6 +247,7 @@ def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
         f"TERMS = (\n{terms})",
         f"PARAMETERS = (\n    # name, default value, unit, source\n{params})",
         f"RANGES = {{\n    # name: (low, high, low inclusive); high is inclusive\n{ranges}}}",
+        f"ROLES = {{\n    # role: the parameters that play it (Model.role)\n{roles}}}",
     ]
     header = "\n".join(prov.lines())
     return (f'"""{spec.model.title}\n\n{header}\n"""\n\n' + "".join(imports) + "\n"

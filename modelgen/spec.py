@@ -528,10 +528,12 @@ def _term_problems(spec: Spec) -> list[str]:
         scope = next(iter(spec.attachment(term).values()), "")
         names = (term.required_parameters(state) if isinstance(term, ExpressionTerm)
                  else term.required_parameters())
+        problems.extend(_bind_problems(i, term, names))
         if isinstance(term, ExpressionTerm):
             by_expression.update(names)
+            names = (*names, *([term.period] if term.period is not None else []))
         for name in names:
-            needed.setdefault((name, scope), f"terms[{i}] ({term.kind})")
+            needed.setdefault((term.bound_name(name), scope), f"terms[{i}] ({term.kind})")
     for (name, scope), user in needed.items():
         if name in spec.parameters or f"{name}_{scope}" in spec.parameters:
             continue
@@ -543,6 +545,16 @@ def _term_problems(spec: Spec) -> list[str]:
             problems.append(f"parameters.{name}: missing; {user} needs it (declare it with "
                             "value, unit, source, low and high)")
     return problems
+
+
+def _bind_problems(i: int, term: Term, names: tuple[str, ...]) -> list[str]:
+    """A term binds only quantities it reads (an expression names its parameters itself)."""
+    if isinstance(term, ExpressionTerm) and term.bind:
+        return [f"terms[{i}] (expression).bind: an expression names its parameters itself; "
+                "remove bind"]
+    return [f"terms[{i}] ({term.kind}).bind.{name}: the term reads no parameter "
+            f"'{name}'{_suggest(name, names)}; it reads: {', '.join(names)}"
+            for name in (term.bind or {}) if name not in names]
 
 
 def _contact_problems(spec: Spec) -> list[str]:

@@ -63,21 +63,29 @@ class Context:
     offset: sp.Expr = field(default_factory=lambda: sp.Integer(0))
     """Offset h_i (m) of the ball's deflection, δ_i → δ_i − h_i: the sum of the bearing's
     defect and waviness terms (``modelgen/terms/defects.py``), 0 without them."""
+    aliases: dict[str, str] = field(default_factory=dict)
+    """Quantity -> the spec's parameter that holds it for the term in scope (a term's
+    ``bind``): ``p("radial_clearance")`` then reads ``gap``."""
 
     @property
     def state(self) -> tuple[sp.Symbol, ...]:
         """The state symbols in the order of the state vector."""
         return tuple(self.named.values())
 
+    def parameter_name(self, name: str) -> str:
+        """The spec's parameter that holds quantity ``name`` here: the term's bound name,
+        else ``<name>_<scope>`` when the spec declares it, else ``name``."""
+        if name in self.aliases:
+            return self.aliases[name]
+        scoped = f"{name}_{self.scope}"
+        return scoped if self.scope and scoped in self.params else name
+
     def p(self, name: str) -> sp.Symbol:
         """The parameter ``name`` as this body or bearing sees it (``<name>_<scope>`` first)."""
-        scoped = f"{name}_{self.scope}"
-        if self.scope and scoped in self.params:
-            return self.params[scoped]
-        return self.params[name]
+        return self.params[self.parameter_name(name)]
 
     def has(self, name: str) -> bool:
-        return f"{name}_{self.scope}" in self.params or name in self.params
+        return self.parameter_name(name) in self.params
 
     def scoped(self, scope: str, **symbols: sp.Expr) -> Context:
         """This context seen from body or bearing ``scope`` with its own x, y, vx, vy…"""

@@ -261,7 +261,7 @@ def test_a_blow_up_inside_a_block_is_found_at_its_first_sample(monkeypatch):
     limit = float(np.quantile(r, 0.999))
     first = int(np.argmax(r > limit))
     assert r[(first // 10_000 + 1) * 10_000] <= limit, "the block's last sample is inside"
-    monkeypatch.setattr(simulate_module, "blow_up_limit", lambda values: limit)
+    monkeypatch.setattr(simulate_module, "blow_up_limit", lambda model, values: limit)
     with pytest.raises(SimulationError, match=rf"blew up at t = {run.t.values[first]:.6g} s"):
         simulate_module.simulate("vakharia2015", 8, duration=0.3, transient=0.0)
 

@@ -217,6 +217,7 @@ def check_out_dir(path: Path, option: str = "--out-dir") -> Path:
 def frequency_words(attrs) -> str:
     """``X = 83.33 Hz, VC = 199.34 Hz`` (``VC[left] = …`` per bearing; ``F = …`` for a model
     forced at a parameter's period)."""
+    from analysis.forcing import run_period_parameter
     from analysis.provenance import cage_frequencies, vc_frequencies
 
     words = []
@@ -227,8 +228,9 @@ def frequency_words(attrs) -> str:
         name = f"VC[{bearing}]" if bearing else "VC"
         cage = cages.get(bearing)
         words.append(f"{name} = {vc:.2f} Hz" + (f" (cage {cage:.2f} Hz)" if cage else ""))
-    if not words and float(attrs.get("forcing_period", 0.0)) > 0:
-        words.append(f"F = 1/forcing_period = {1 / float(attrs['forcing_period']):.4g} Hz")
+    forcing = run_period_parameter(attrs)  # the forcing_period role
+    if not words and forcing is not None and float(attrs[forcing]) > 0:
+        words.append(f"F = 1/{forcing} = {1 / float(attrs[forcing]):.4g} Hz")
     return ", ".join(words) or "no characteristic frequency"
 
 

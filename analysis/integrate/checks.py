@@ -58,16 +58,18 @@ def probe_states(model: Model, structure: tuple[int, ...],
                  values: dict[str, float]) -> list[np.ndarray]:
     """States where the linearised model is at its stiffest: every body at rest at the
     centre and, with a Hertz contact, the first body displaced into the balls (see the
-    module)."""
+    module). The contact's stiffness k, clearance, radial load and unbalance are the
+    parameters that play those roles (``Model.role``; the first bearing's)."""
     states = [np.zeros(model.n_state)]
     structure = model.structure(structure)
     n_balls = structure[0] if structure else 1
     (ix, iy), *_ = model.centre_indices()
-    k = values.get("contact_stiffness")
-    clearance = values.get("radial_clearance")
+    k = model.role_value("contact_stiffness", values)
+    clearance = model.role_value("clearance", values)
     if k is None or clearance is None or k <= 0:
         return states
-    load = abs(values.get("radial_load", 0.0)) + abs(values.get("unbalance_force", 0.0))
+    load = abs(model.role_value("radial_load", values, 0.0)) + \
+        abs(model.role_value("unbalance_force", values, 0.0))
     static = (load / k) ** (2 / 3)
     radius = clearance + abs(clearance) + static  # deflection |γ0| + δ_s of the nearest ball
     for sector in range(PROBE_SECTORS):
@@ -139,14 +141,15 @@ MAX_STEPS = 10**10
 
 def fastest_forcing(model: Model, structure, values: dict[str, float]) -> tuple[str, float]:
     """(name, frequency in Hz) of the fastest periodic forcing: the shaft (X), each
-    bearing's varying compliance (VC, VC[name]) and a ``forcing_period`` parameter (F);
-    ("", 0.0) for an autonomous model."""
+    bearing's varying compliance (VC, VC[name]) and each parameter that plays the
+    ``forcing_period`` role (F = 1/period); ("", 0.0) for an autonomous model."""
     freqs = model.frequencies(structure, values)
     named = [("X", freqs.shaft_hz)]
     named += [(f"VC[{b}]" if len(freqs.vc) > 1 else "VC", f) for b, f in freqs.vc.items()]
-    period = values.get("forcing_period", 0.0)
-    if period > 0:
-        named.append(("F = 1/forcing_period", 1.0 / period))
+    for name in model.role("forcing_period"):
+        period = values.get(name, 0.0)
+        if period > 0:
+            named.append((f"F = 1/{name}", 1.0 / period))
     return max(named, key=lambda item: item[1], default=("", 0.0))
 
 

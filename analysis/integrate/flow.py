@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from analysis.errors import InputError
+from analysis.forcing import PERIOD
 from analysis.integrate.checks import check_seconds
 from analysis.integrate.tangent import (
     Carry,
@@ -30,9 +31,8 @@ from analysis.integrate.tangent import (
 )
 from analysis.model import Model
 
-PERIOD_KINDS = ("vc", "shaft", "ratio", "param")
-PERIOD_SYNTAX = ("vc, shaft, vc:k, shaft:k, ratio:p/q, vc[bearing] (a model with several "
-                 "bearings) or param:NAME (the period in s held by parameter NAME)")
+PERIOD_KINDS = PERIOD.kinds
+PERIOD_SYNTAX = PERIOD.syntax
 
 
 @dataclass(frozen=True)
@@ -53,29 +53,10 @@ class Period:
     @classmethod
     def parse(cls, text: str) -> Period:
         """``"vc"``, ``"shaft"``, ``"vc:2"``, ``"shaft:3"``, ``"ratio:37/15"``,
-        ``"vc[left]"``, ``"vc[left]:2"`` or ``"param:forcing_period"``."""
-        head, _, arg = text.strip().partition(":")
-        kind, _, bracket = head.partition("[")
-        name = bracket.removesuffix("]") or None
-        if kind not in PERIOD_KINDS or (bracket and (kind != "vc" or not bracket.endswith("]"))):
-            raise InputError(f"period: must be {PERIOD_SYNTAX}, got {text!r}")
-        if kind == "param":
-            if not arg.isidentifier():
-                raise InputError(f"period: param:NAME needs a parameter name, got {text!r}")
-            return cls("param", 1, name=arg)
-        try:
-            if kind == "ratio":
-                ratio = Fraction(arg)
-                if ratio <= 0:
-                    raise ValueError
-                return cls("ratio", 1, ratio)
-            count = int(arg) if arg else 1
-            if count < 1:
-                raise ValueError
-        except (ValueError, ZeroDivisionError):
-            raise InputError(f"period: the number in {text!r} must be a positive integer "
-                             "(or p/q with p, q > 0 for ratio)") from None
-        return cls(kind, count, name=name)
+        ``"vc[left]"``, ``"vc[left]:2"`` or ``"param:forcing_period"`` (the grammar of
+        ``analysis.forcing.PERIOD``)."""
+        forcing = PERIOD.parse(text)
+        return cls(forcing.kind, forcing.count, forcing.ratio, name=forcing.name)
 
     def __str__(self) -> str:
         if self.kind == "ratio":

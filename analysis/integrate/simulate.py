@@ -9,7 +9,7 @@ parameter value, method and step, the characteristic frequencies and the package
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,7 +104,7 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
                         save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory)
     attrs = completed_attrs(system, **plan.settings(), initial_state=True,
                             tolerances=(rtol, atol) if method == "cvodes" else None)
-    return _Run(plan, attrs, blow_up_limit(dict(system.parameters)))
+    return _Run(plan, attrs, blow_up_limit(system.model, dict(system.parameters)))
 
 
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
@@ -185,14 +185,14 @@ motion of the bearing the model describes (a static deflection under 1e5 N on th
 bearing is 0.12 of its ball diameter)."""
 
 
-def blow_up_limit(values: dict[str, float]) -> float:
-    """Displacement (m) beyond which a run has blown up: ``BLOW_UP_FACTOR`` times the largest
-    radial clearance of the model's bearings, or ``BALL_FRACTION`` of the largest ball
-    diameter, whichever is smaller (inf without either: non-finite values only)."""
-    clearance = max((abs(v) for k, v in values.items() if k.startswith("radial_clearance")),
-                    default=0.0)
-    ball = max((abs(v) for k, v in values.items() if k.startswith("ball_diameter")),
-               default=0.0)
+def blow_up_limit(model: Model, values: Mapping[str, float]) -> float:
+    """Displacement (m) beyond which a run of ``model`` with parameter ``values`` has blown
+    up: ``BLOW_UP_FACTOR`` times the largest radial clearance of its bearings, or
+    ``BALL_FRACTION`` of the largest ball diameter, whichever is smaller (the parameters
+    that play the ``clearance`` and ``ball_diameter`` roles, ``Model.role``; inf without
+    either: non-finite values only)."""
+    clearance = max((abs(v) for v in model.role_values("clearance", values)), default=0.0)
+    ball = max((abs(v) for v in model.role_values("ball_diameter", values)), default=0.0)
     limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
     limits += [BALL_FRACTION * ball] if ball > 0 else []
     return min(limits, default=np.inf)

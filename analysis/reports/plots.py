@@ -13,6 +13,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.errors import InputError
+from analysis.forcing import run_period_parameter
 from analysis.model import balls_text
 from analysis.provenance import displacement_names, is_velocity, state_names, vc_frequencies
 from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
@@ -56,8 +57,9 @@ def _title(ds: xr.Dataset) -> str:
         freqs.append(f"X = {float(ds.attrs['shaft_hz']):.2f} Hz")
     for bearing, vc in vc_frequencies(ds.attrs).items():
         freqs.append(f"VC{f'[{bearing}]' if bearing else ''} = {vc:.2f} Hz")
-    if not freqs and float(ds.attrs.get("forcing_period", 0.0)) > 0:
-        freqs.append(f"F = 1/forcing_period = {1 / float(ds.attrs['forcing_period']):.4g} Hz")
+    forcing = run_period_parameter(ds.attrs)  # the forcing_period role
+    if not freqs and forcing is not None and float(ds.attrs[forcing]) > 0:
+        freqs.append(f"F = 1/{forcing} = {1 / float(ds.attrs[forcing]):.4g} Hz")
     return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
 
 

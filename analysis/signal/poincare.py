@@ -25,11 +25,12 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.forcing import SECTION
 from analysis.provenance import cage_frequencies, state_names, vc_frequencies
 
-SECTIONS = ("shaft", "cage", "vc")
+SECTIONS = SECTION.kinds
 """The sections every model with a shaft and a bearing has (see ``SECTION_SYNTAX``)."""
-SECTION_SYNTAX = "shaft, cage, vc, cage[bearing], vc[bearing] or param:NAME"
+SECTION_SYNTAX = SECTION.syntax
 
 _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
 
@@ -39,19 +40,10 @@ _SNAP_FRACTION = 1e-9
 
 def parse_section(section: str) -> tuple[str, str | None]:
     """(kind, bearing or parameter name) of a section's text; ``InputError`` when it is not
-    valid syntax (checked before any file is read)."""
-    text = str(section).strip()
-    if text.startswith("param:"):
-        name = text[len("param:"):]
-        if not name.isidentifier():
-            raise InputError(f"section: param:NAME needs a parameter name, got {section!r}")
-        return "param", name
-    kind, bracket, rest = text.partition("[")
-    bearing = rest.removesuffix("]") if bracket else None
-    if kind not in SECTIONS or (bracket and (kind == "shaft" or not rest.endswith("]")
-                                             or not bearing)):
-        raise InputError(f"section: must be {SECTION_SYNTAX}, got {section!r}")
-    return kind, bearing
+    valid syntax (checked before any file is read; the grammar of
+    ``analysis.forcing.SECTION``)."""
+    forcing = SECTION.parse(section)
+    return forcing.kind, forcing.name
 
 
 def _section_frequency(attrs: Mapping, section: str) -> tuple[str, float]:

@@ -29,6 +29,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.forcing import run_period_parameter
 from analysis.provenance import displacement_names, vc_frequencies
 
 _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
@@ -289,8 +290,9 @@ def label_frequencies(attrs: dict) -> tuple[float, dict[str, float], str]:
         raise InputError("shaft_hz: missing from the dataset attrs")
     shaft = float(attrs["shaft_hz"])
     vcs = vc_frequencies(attrs)
-    if not shaft > 0 and float(attrs.get("forcing_period", 0.0)) > 0:
-        return 1.0 / float(attrs["forcing_period"]), vcs, "F"
+    forcing = run_period_parameter(attrs)  # the forcing_period role
+    if not shaft > 0 and forcing is not None and float(attrs[forcing]) > 0:
+        return 1.0 / float(attrs[forcing]), vcs, "F"
     return shaft, vcs, "X"
 
 

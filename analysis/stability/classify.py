@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
+from analysis.forcing import run_period_parameter
 from analysis.provenance import state_at, state_names, system_of_attrs
 from analysis.signal.poincare import poincare_section
 
@@ -131,13 +132,14 @@ SECTION_RULES: dict[str, SectionRule] = {
         "one VC per bearing: neither shaft nor one bearing's vc is in general a period of "
         "the forcing, so an orbit's period must be named; classify and figures use shaft"),
     "no bearings, forcing_period": SectionRule(
-        "param:forcing_period", "param:forcing_period", "param:forcing_period",
+        "param:{forcing}", "param:{forcing}", "param:{forcing}",
         "forced at a parameter's period (mathieu); a figure still shows the shaft section "
         "when the model turns a shaft (shaft_hz > 0)"),
     "no bearings": SectionRule(
         "shaft", "shaft", "shaft", "the shaft speed is the forcing frequency (duffing)"),
 }
-"""Default sections by kind of forcing (``forcing_case``), one column per use. Where the
+"""Default sections by kind of forcing (``forcing_case``), one column per use
+(``{forcing}``: the parameter that plays the ``forcing_period`` role, ``Model.role``). Where the
 columns differ each use keeps the rule it had before they were gathered here."""
 
 GRID_RECORD_SECTION = "shaft"
@@ -171,17 +173,20 @@ def default_section(ds: xr.Dataset | Mapping) -> str:
     ``duffing``). ``ds``: a run, or its attrs."""
     attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
     unbalanced = attrs.get("unbalance_force", 0.0) != 0.0
-    case = forcing_case(_bearings_of_attrs(attrs), unbalanced, "forcing_period" in attrs)
+    forcing = run_period_parameter(attrs)  # the forcing_period role
+    case = forcing_case(_bearings_of_attrs(attrs), unbalanced, forcing is not None)
     if case == "one bearing, no unbalance" and not attrs.get("vc_hz", 0.0) > 0:
         return "shaft"  # the rotor at rest: no VC period
-    return SECTION_RULES[case].classify
+    return SECTION_RULES[case].classify.format(forcing=forcing)
 
 
-def default_orbit_section(bearing_names: tuple[str, ...], parameter_names) -> str | None:
+def default_orbit_section(bearing_names: tuple[str, ...], forcing: str | None) -> str | None:
     """The period an orbit is sought at when none is given (``SECTION_RULES``, column
-    ``orbit``; None: it must be given) for a model of these bearings and parameters."""
-    case = forcing_case(len(bearing_names), False, "forcing_period" in parameter_names)
-    return SECTION_RULES[case].orbit
+    ``orbit``; None: it must be given) for a model of these bearings whose forcing period
+    parameter (the ``forcing_period`` role) is ``forcing`` (None: it has none)."""
+    case = forcing_case(len(bearing_names), False, forcing is not None)
+    rule = SECTION_RULES[case].orbit
+    return None if rule is None else rule.format(forcing=forcing)
 
 
 def default_figure_section(ds: xr.Dataset | Mapping) -> str:
@@ -191,8 +196,10 @@ def default_figure_section(ds: xr.Dataset | Mapping) -> str:
     attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
     if float(attrs.get("shaft_hz", 0.0)) > 0:
         return "shaft"
-    forced = float(attrs.get("forcing_period", 0.0)) > 0
-    return SECTION_RULES["no bearings, forcing_period" if forced else "no bearings"].figure
+    forcing = run_period_parameter(attrs)  # the forcing_period role
+    forced = forcing is not None and float(attrs[forcing]) > 0
+    case = "no bearings, forcing_period" if forced else "no bearings"
+    return SECTION_RULES[case].figure.format(forcing=forcing)
 
 
 def _pairs(names: tuple[str, ...]) -> list[tuple[str, str]]:

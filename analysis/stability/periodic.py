@@ -27,6 +27,7 @@ from typing import Literal
 import numpy as np
 
 from analysis.errors import InputError
+from analysis.forcing import period_parameter
 from analysis.integrate.flow import (
     Period,
     evaluate,
@@ -175,7 +176,7 @@ def default_period(model: Model) -> Period:
     bearing's ``vc`` is in general a period of the forcing; name it, e.g. ``vc[left]:4``
     (= ``vc[right]:5`` for 8 and 10 balls on one cage speed).
     """
-    section = default_orbit_section(model.bearing_names, model.parameter_names)
+    section = default_orbit_section(model.bearing_names, period_parameter(model))
     if section is not None:  # the rule: analysis.stability.classify.SECTION_RULES
         return Period.parse(section)
     bearings = model.bearing_names

@@ -109,8 +109,8 @@ def _periods(model: Model, p: ca.SX) -> list[ca.SX]:
     zero speed: no averaging needed), and ``forcing_period`` when the model has one."""
     omega = model.module.shaft_speed(p)
     periods = [ca.if_else(omega > 0, 2 * math.pi / ca.fmax(omega, 1e-300), 0)]
-    if "forcing_period" in model.parameter_names:
-        periods.append(p[model.parameter_names.index("forcing_period")])
+    for name in model.role("forcing_period"):
+        periods.append(p[model.parameter_names.index(name)])
     return periods
 
 

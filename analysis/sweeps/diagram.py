@@ -86,7 +86,7 @@ def record_from(setting: Setting, system: System, start: Start) -> xr.Dataset:
     states = run_rk4(library(model, system.structure), system.p, system.state, dt, n_steps,
                      t0=start.time)
     elapsed = np.arange(n_steps + 1) * dt
-    check_bounded(states, start.time + elapsed, blow_up_limit(dict(system.parameters)),
+    check_bounded(states, start.time + elapsed, blow_up_limit(model, dict(system.parameters)),
                   model.centre_indices())
     keep = elapsed >= setting.transient - 1e-12 * duration
     attrs = completed_attrs(system, **run.settings(), initial_state=True)

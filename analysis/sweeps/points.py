@@ -244,7 +244,7 @@ def _prepare(system: System, duration: float, transient: float, dt: float,
     plan = _schedule(duration, transient, dt, default_lengths(model)[2] if tangent else 0.0)
     n = model.n_state
     record = _Record(plan.first, _section_steps(plan, dt, period_of(attrs, section)), dt,
-                     blow_up_limit(values), model.centre_indices(), np.full(n, np.inf),
+                     blow_up_limit(model, values), model.centre_indices(), np.full(n, np.inf),
                      np.full(n, -np.inf))
     lib, z = library(model, structure, compiled), np.asarray(system.state, float)
     start = plan.start if tangent else plan.last

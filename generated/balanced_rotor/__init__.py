@@ -57,6 +57,15 @@ RANGES = {
     'inner_race_diameter': (0.0, 10.0, False),
     'outer_race_diameter': (0.0, 10.0, False),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': ('radial_clearance',),
+    'ball_diameter': (),
+    'contact_stiffness': ('contact_stiffness',),
+    'radial_load': ('radial_load',),
+    'unbalance_force': (),
+    'forcing_period': (),
+}
 
 
 def external_force(z, t, p):

@@ -54,6 +54,15 @@ RANGES = {
     'cubic_stiffness': (-1e+25, 1e+25, True),
     'forcing_amplitude': (0.0, 10000000.0, True),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': (),
+    'ball_diameter': (),
+    'contact_stiffness': (),
+    'radial_load': (),
+    'unbalance_force': (),
+    'forcing_period': (),
+}
 
 
 def external_force(z, t, p):

@@ -51,6 +51,15 @@ RANGES = {
     'forcing_period': (1e-09, 1000000000.0, True),
     'damping': (0.0, 10000000.0, True),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': (),
+    'ball_diameter': (),
+    'contact_stiffness': (),
+    'radial_load': (),
+    'unbalance_force': (),
+    'forcing_period': ('forcing_period',),
+}
 
 
 def external_force(z, t, p):

@@ -72,6 +72,15 @@ RANGES = {
     'defect_length': (0.0, 0.05, False),
     'defect_angle': (-7.0, 7.0, True),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': ('radial_clearance',),
+    'ball_diameter': ('ball_diameter',),
+    'contact_stiffness': ('contact_stiffness',),
+    'radial_load': ('radial_load',),
+    'unbalance_force': (),
+    'forcing_period': (),
+}
 
 
 def external_force(z, t, p):

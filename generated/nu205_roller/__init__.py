@@ -68,6 +68,15 @@ RANGES = {
     'roller_length': (0.0, 1.0, False),
     'contact_angle': (0.0, 1.5, True),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': ('radial_clearance',),
+    'ball_diameter': ('ball_diameter',),
+    'contact_stiffness': (),
+    'radial_load': ('radial_load',),
+    'unbalance_force': ('unbalance_force',),
+    'forcing_period': (),
+}
 
 
 def external_force(z, t, p):

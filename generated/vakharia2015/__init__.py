@@ -67,6 +67,15 @@ RANGES = {
     'pitch_diameter': (0.0, 10.0, False),
     'ball_diameter': (0.0, 1.0, False),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': ('radial_clearance',),
+    'ball_diameter': ('ball_diameter',),
+    'contact_stiffness': ('contact_stiffness',),
+    'radial_load': ('radial_load',),
+    'unbalance_force': ('unbalance_force',),
+    'forcing_period': (),
+}
 
 
 def external_force(z, t, p):

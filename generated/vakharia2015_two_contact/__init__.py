@@ -74,6 +74,15 @@ RANGES = {
     'youngs_modulus': (0.0, 10000000000000.0, False),
     'poisson_ratio': (0.0, 0.5, True),
 }
+ROLES = {
+    # role: the parameters that play it (Model.role)
+    'clearance': ('radial_clearance',),
+    'ball_diameter': ('ball_diameter',),
+    'contact_stiffness': (),
+    'radial_load': ('radial_load',),
+    'unbalance_force': ('unbalance_force',),
+    'forcing_period': (),
+}
 
 
 def inner_race_load(delta, k_i, k_o, f_c):

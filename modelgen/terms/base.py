@@ -14,6 +14,7 @@ spec; left out when the model has one body or one bearing). It contributes
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar, Literal
 
 import sympy as sp
@@ -24,6 +25,11 @@ from modelgen.symbols import Context
 Owner = Literal["body", "bearing"]
 OWNER_NAME = r"^[a-z][a-z0-9_]{0,23}$"
 """Names of bodies and bearings: lower case letters, digits and '_' (at most 24)."""
+ROLE_NAMES = ("clearance", "ball_diameter", "contact_stiffness", "radial_load",
+              "unbalance_force", "forcing_period")
+"""What a parameter can be to the analysis layer: the radial clearance γ_0 (m), the ball
+diameter D_b (m), the Hertz constant k of Q = k δ^{3/2} (N/m^1.5), the constant radial load
+P_r (N), the unbalance force P_u (N) and the period of a forcing held by a parameter (s)."""
 
 
 class Term(BaseModel):
@@ -33,6 +39,9 @@ class Term(BaseModel):
     """The body the term acts on (default: the model's only body)."""
     bearing: str | None = Field(None, pattern=OWNER_NAME)
     """The bearing the term belongs to (default: the model's only bearing)."""
+    bind: dict[str, str] | None = None
+    """Parameters of other names: ``bind = { radial_clearance = "gap" }`` reads the quantity
+    ``radial_clearance`` from the spec's parameter ``gap`` (declared with its unit and range)."""
 
     needs: ClassVar[tuple[str, ...]] = ()
     """Runtime parameters the term's expressions use."""
@@ -55,6 +64,20 @@ class Term(BaseModel):
     def required_parameters(self) -> tuple[str, ...]:
         """Runtime parameters this term, as configured, needs."""
         return self.needs
+
+    def bound_name(self, name: str) -> str:
+        """The spec's parameter this term reads for quantity ``name`` (its ``bind``)."""
+        return (self.bind or {}).get(name, name)
+
+    def bound(self, ctx: Context) -> Context:
+        """``ctx`` reading this term's bound parameters (``bind``)."""
+        if not self.bind:
+            return ctx
+        return dataclasses.replace(ctx, aliases={**ctx.aliases, **self.bind})
+
+    def role_quantities(self) -> dict[str, str]:
+        """Role (``ROLE_NAMES``) -> the quantity this term, as configured, reads for it."""
+        return {}
 
     def is_gated(self) -> bool:
         """Whether this term's ball load acts only while the ball is in contact."""

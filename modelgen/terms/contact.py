@@ -105,6 +105,16 @@ class HertzContact(Term):
                  *self.needs, *cage, *DAMPING_PARAMETERS[self.damping])
         return tuple(dict.fromkeys(names))
 
+    def role_quantities(self) -> dict[str, str]:
+        """The radial clearance γ_0 (not a diametral one), the ball diameter of the bearing
+        (its geometry, whether or not the cage reads it) and a given Hertz constant k."""
+        roles = {"ball_diameter": "ball_diameter"}
+        if self.clearance == "radial":
+            roles["clearance"] = "radial_clearance"
+        if self.stiffness == "given":
+            roles["contact_stiffness"] = "contact_stiffness"
+        return roles
+
     def cage_speed(self, ctx: Context) -> sp.Expr:
         """Cage angular speed ω_cage (rad/s)."""
         if self.cage == "race_diameters":

@@ -53,6 +53,9 @@ class ExpressionTerm(Term):
     """Force on the rotor in y, N."""
     ball: str | None = None
     """Radial load of each ball in contact, N (gated)."""
+    period: str | None = None
+    """The parameter that holds the period (s) of the forcing the expressions describe, for
+    the analysis layer (sections, spectra; default ``forcing_period`` when they use it)."""
 
     summary: ClassVar[str] = "custom expression"
 
@@ -94,6 +97,12 @@ class ExpressionTerm(Term):
         implied = {IMPLIED_PARAMETERS[n] for n in used if n in IMPLIED_PARAMETERS}
         symbols = {*state, *TIME_SYMBOLS, *BALL_SYMBOLS}
         return tuple(sorted((used - symbols) | implied))
+
+    def role_quantities(self) -> dict[str, str]:
+        """The forcing period: ``period``, or ``forcing_period`` when the expressions use it."""
+        used = set(self.required_parameters(()))
+        name = self.period or ("forcing_period" if "forcing_period" in used else None)
+        return {"forcing_period": name} if name is not None else {}
 
     def _symbols(self, ctx: Context, ball: bool) -> dict[str, sp.Expr]:
         table: dict[str, sp.Expr] = dict(ctx.named)

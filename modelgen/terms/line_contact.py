@@ -61,6 +61,13 @@ class LineContact(HertzContact):
         return tuple(dict.fromkeys((*LINE_STIFFNESS[self.stiffness],
                                     CLEARANCE_PARAMETER[self.clearance], *self.needs, *cage)))
 
+    def role_quantities(self) -> dict[str, str]:
+        """As ``hertz_contact``, but no Hertz constant: K of a line contact is no k of
+        Q = k δ^{3/2}."""
+        roles = super().role_quantities()
+        roles.pop("contact_stiffness", None)
+        return roles
+
     def stiffness_constant(self, ctx: Context) -> sp.Expr:
         """K of Q = K δ^{10/9} (N/m^(10/9)): given, or Palmgren's two contacts in series."""
         if self.stiffness == "given":

@@ -17,6 +17,9 @@ class RadialLoad(Term):
     needs: ClassVar[tuple[str, ...]] = ("radial_load",)
     summary: ClassVar[str] = "constant radial load P_r in +x"
 
+    def role_quantities(self) -> dict[str, str]:
+        return {"radial_load": "radial_load"}
+
     def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         return (ctx.p("radial_load"), sp.Integer(0))
 
@@ -26,6 +29,9 @@ class Unbalance(Term):
 
     needs: ClassVar[tuple[str, ...]] = ("unbalance_force", "speed_rpm")
     summary: ClassVar[str] = "rotating unbalance P_u·(cos ωt, sin ωt)"
+
+    def role_quantities(self) -> dict[str, str]:
+        return {"unbalance_force": "unbalance_force"}
 
     def body_force(self, ctx: Context) -> tuple[sp.Expr, sp.Expr]:
         p_u, wt = ctx.p("unbalance_force"), ctx.omega * ctx.t
