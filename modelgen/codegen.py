@@ -210,7 +210,7 @@ def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
         ]
     functions.append(
         "def build(n_balls=None) -> ModelFunctions:\n"
-        '    """CasADi Functions (rhs, jac, rk4_step, simulator) for the numbers of balls\n'
+        '    """CasADi Functions (rhs, jac, rk4_step) for the numbers of balls\n'
         "    of the bearings (a tuple in the order of BEARINGS; default: DEFAULT_N_BALLS).\n"
         '    """\n'
         "    return ModelFunctions(sys.modules[__name__], n_balls or DEFAULT_N_BALLS)\n")
@@ -366,7 +366,7 @@ Simulation defaults: {sim} (SI units); initial state {initial}.
 ## Files
 
 - `__init__.py`: the expressions above as CasADi code; `build(n_balls)` returns the
-  CasADi Functions `rhs`, `jac`, `rk4_step` and `simulator`.
+  CasADi Functions `rhs`, `jac` and `rk4_step`.
 - `{spec.model.module}.c`: CasADi's C source of `rhs`, `jac`, `rk4_step`
   (balls: {default_balls}).
 

@@ -103,7 +103,7 @@ def parse_sets(items: list[str] | None) -> dict[str, float]:
     return values
 
 
-def _parameters(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
+def parameter_values(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
     """``--set`` values with ``--speed-rpm`` merged in (refused when both give the speed)."""
     params = parse_sets(sets)
     if speed_rpm is not None:
@@ -235,7 +235,7 @@ def frequency_words(attrs) -> str:
 
 
 
-def _save_figure(fig, output: Path | None, err: bool = False) -> None:
+def write_figure(fig, output: Path | None, err: bool = False) -> None:
     if output:
         from analysis.reports.plots import save_figure
 
@@ -254,12 +254,12 @@ PERIOD_HELP = ("vc, shaft, vc:k, shaft:k, ratio:p/q (VC/X = p/q made exact), vc[
 PeriodOption = Annotated[str | None, typer.Option(help=PERIOD_HELP)]
 
 
-def _given(**options) -> dict:
+def given_options(**options) -> dict:
     """The options the user gave (None: leave the API's default)."""
     return {k: v for k, v in options.items() if v is not None}
 
 
-def _orbit_structure(orbit) -> str:
+def orbit_structure(orbit) -> str:
     structure = getattr(orbit, "structure", None)
     if structure is None:
         return f"N_b = {getattr(orbit, 'n_balls', '?')}"
@@ -276,7 +276,7 @@ SchedulerOption = Annotated[str | None, typer.Option(
 QuietOption = Annotated[bool, typer.Option("--quiet", help="No progress output.")]
 
 
-def _executor(kind: str, workers: int | None, scheduler: str | None):
+def executor_of(kind: str, workers: int | None, scheduler: str | None):
     from analysis.sweeps.executors import make_executor
 
     return make_executor(kind, workers, scheduler)

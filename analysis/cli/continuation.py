@@ -14,14 +14,14 @@ from analysis.cli.common import (
     NBallsOption,
     PeriodOption,
     SetOption,
-    _given,
-    _save_figure,
     app,
     figure_output,
+    given_options,
     netcdf_output,
     parse_n_balls,
     parse_sets,
     reports_errors,
+    write_figure,
 )
 from analysis.errors import InputError
 
@@ -75,7 +75,7 @@ def continue_(
         typer.echo(text, err=as_json)
 
     progress = None if quiet else say
-    common = dict(max_points=max_points, ds_max=ds_max, progress=progress, **_given(dt=dt))
+    common = dict(max_points=max_points, ds_max=ds_max, progress=progress, **given_options(dt=dt))
     branch = _first_branch(model, param, start, stop, from_branch, point, n_balls, sets,
                            period, settle, common)
     branches = [branch]
@@ -94,7 +94,7 @@ def continue_(
     if plot:
         from analysis.reports.plots import branch_figure
 
-        _save_figure(branch_figure(branches), plot, err=as_json)
+        write_figure(branch_figure(branches), plot, err=as_json)
     if as_json:
         from analysis.provenance import provenance
         from analysis.stability.continuation import branch_summary
@@ -126,7 +126,7 @@ def _first_branch(model, param, start, stop, from_branch, point, n_balls, sets, 
     if missing:
         raise InputError(f"continue: give {', '.join(missing)} (or --from-branch BRANCH.nc)")
     return cont.continue_orbits(model, parse_n_balls(n_balls), param=param, start=start,
-                                stop=stop, period=period, **_given(settle=settle), **common,
+                                stop=stop, period=period, **given_options(settle=settle), **common,
                                 **parse_sets(sets))
 
 

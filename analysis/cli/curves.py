@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from analysis.cli.common import _save_figure, app, figure_output, netcdf_output, reports_errors
+from analysis.cli.common import app, figure_output, netcdf_output, reports_errors, write_figure
 
 
 @app.command("curve")
@@ -56,4 +56,4 @@ def curve(
     if plot:
         from analysis.reports.curve_plots import curve_figure
 
-        _save_figure(curve_figure([ds], chart_ds), plot)
+        write_figure(curve_figure([ds], chart_ds), plot)

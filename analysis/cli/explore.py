@@ -12,8 +12,8 @@ from analysis.cli.common import (
     QuietOption,
     SchedulerOption,
     WorkersOption,
-    _executor,
     app,
+    executor_of,
     reports_errors,
 )
 
@@ -37,7 +37,7 @@ def explore(
     from analysis.reports.explorer import write_explorer
     from analysis.reports.progress import ProgressReporter
 
-    ex = _executor(executor, workers, scheduler)
+    ex = executor_of(executor, workers, scheduler)
     try:
         path = write_explorer(chart_file, output, spectrum_bins=spectrum_bins, executor=ex,
                               progress=ProgressReporter("explore", quiet))

@@ -14,9 +14,9 @@ from analysis.cli.common import (
     SchedulerOption,
     SetOption,
     WorkersOption,
-    _executor,
     app,
     check_out_dir,
+    executor_of,
     parse_sets,
     reports_errors,
 )
@@ -50,7 +50,7 @@ def reproduce(
         kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
                       sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()},
                       quick=True)
-    ex = _executor(executor, workers, scheduler)
+    ex = executor_of(executor, workers, scheduler)
     try:
         rep = run_reproduce(out_dir, model, executor=ex, log=None if quiet else typer.echo,
                             progress_factory=lambda label: ProgressReporter(label, quiet),

@@ -13,14 +13,14 @@ from analysis.cli.common import (
     ModelArgument,
     NBallsOption,
     SetOption,
-    _parameters,
-    _save_figure,
     app,
     figure_output,
     frequency_words,
     netcdf_output,
+    parameter_values,
     parse_n_balls,
     reports_errors,
+    write_figure,
 )
 from analysis.errors import InputError
 
@@ -54,7 +54,7 @@ def simulate(
     from analysis.model import balls_text
     from analysis.provenance import state_names
 
-    params = _parameters(speed_rpm, sets)
+    params = parameter_values(speed_rpm, sets)
     start = time.perf_counter()
     options = dict(duration=duration, transient=transient, dt=dt, save_every=save_every,
                    compiled=not no_compile, **params)
@@ -271,4 +271,4 @@ def plot(
     from analysis.io import open_result
     from analysis.reports.plots import any_figure
 
-    _save_figure(any_figure(open_result(result), var), output)
+    write_figure(any_figure(open_result(result), var), output)

@@ -16,14 +16,14 @@ from analysis.cli.common import (
     PeriodOption,
     SetOption,
     SpeedOption,
-    _given,
-    _orbit_structure,
-    _parameters,
-    _save_figure,
     app,
     figure_output,
+    given_options,
+    orbit_structure,
+    parameter_values,
     parse_n_balls,
     reports_errors,
+    write_figure,
 )
 
 RUNNING_ROWS = 200
@@ -56,9 +56,9 @@ def lyapunov(
     from analysis.stability.lyapunov import lyapunov as run_lyapunov
 
     res = run_lyapunov(model, parse_n_balls(n_balls), renorm_every=renorm_every,
-                       **_given(duration=duration, transient=transient,
+                       **given_options(duration=duration, transient=transient,
                                 tangent_transient=tangent_transient, dt=dt),
-                       **_parameters(speed_rpm, sets))
+                       **parameter_values(speed_rpm, sets))
     data = {"exponents": res.exponents.values.tolist(), "ci95": res.ci95.values.tolist(),
             "sum_of_exponents": res.attrs["sum_of_exponents"],
             "mean_divergence": res.attrs["mean_divergence"],
@@ -75,7 +75,7 @@ def lyapunov(
     else:
         _echo_lyapunov(res, data)
     if output:
-        _save_figure(_lyapunov_figure(res), output, err=as_json)
+        write_figure(_lyapunov_figure(res), output, err=as_json)
 
 
 def _running_json(running, dim: str) -> dict:
@@ -142,14 +142,14 @@ def floquet(
     from analysis.stability.periodic import shoot
 
     orbit = shoot(model, parse_n_balls(n_balls), period, segments=segments,
-                  **_given(dt=dt, settle=settle), **_parameters(speed_rpm, sets))
+                  **given_options(dt=dt, settle=settle), **parameter_values(speed_rpm, sets))
     if as_json:
         from analysis.provenance import provenance
 
         typer.echo(json.dumps({**orbit.as_dict(), "provenance": provenance(orbit.system)},
                               indent=2))
         return
-    typer.echo(f"{orbit.model}, {_orbit_structure(orbit)}, period {orbit.period} = "
+    typer.echo(f"{orbit.model}, {orbit_structure(orbit)}, period {orbit.period} = "
                f"{orbit.period_s:.6g} s ({orbit.n_steps} RK4 steps): {orbit.message}")
     names = getattr(orbit, "state_names", ()) or ()
     typer.echo(f"z0 = {np.array2string(orbit.z0, precision=6)}"

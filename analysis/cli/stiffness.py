@@ -16,11 +16,11 @@ from analysis.cli.common import (
     NBallsOption,
     SetOption,
     SpeedOption,
-    _parameters,
-    _save_figure,
     app,
+    parameter_values,
     parse_n_balls,
     reports_errors,
+    write_figure,
 )
 from analysis.errors import InputError
 
@@ -108,7 +108,7 @@ def stiffness(
     if not 1 <= angles <= 3600:
         raise InputError(f"--angles: must be an integer in [1, 3600], got {angles}")
     balls = parse_n_balls(n_balls)
-    params = _parameters(speed_rpm, sets)
+    params = parameter_values(speed_rpm, sets)
     system = as_system(model, balls, **params)
     rpm = None
     if ross:  # checked before any work
@@ -137,7 +137,7 @@ def stiffness(
     if output:
         from analysis.reports.plots import stiffness_figure
 
-        _save_figure(stiffness_figure(ds), output, err=as_json)
+        write_figure(stiffness_figure(ds), output, err=as_json)
 
 
 def _echo(data: dict) -> None:

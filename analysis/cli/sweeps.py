@@ -15,8 +15,8 @@ from analysis.cli.common import (
     SchedulerOption,
     SetOption,
     WorkersOption,
-    _executor,
     app,
+    executor_of,
     netcdf_output,
     parse_n_balls,
     parse_sets,
@@ -66,7 +66,7 @@ def sweep(
                       section, dt)
     axis = Axis.linear(param, start, stop, num)
     check_grid(setting, axis)  # every input, before a worker starts or a file is made
-    ex = _executor(executor, workers, scheduler)
+    ex = executor_of(executor, workers, scheduler)
     try:
         ds = bifurcation_diagram(setting, axis, output,
                                  direction=direction, follow=follow, executor=ex,
@@ -120,7 +120,7 @@ def chart(
                       section, dt, lyapunov)
     axes = Axis.parse(x), Axis.parse(y)
     check_grid(setting, *axes)  # every input, before a worker starts or a file is made
-    ex = _executor(executor, workers, scheduler)
+    ex = executor_of(executor, workers, scheduler)
     try:
         ds = stability_chart(setting, *axes, output, executor=ex,
                              progress=ProgressReporter("chart", quiet),

@@ -7,7 +7,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from analysis.reports.plots import _title, display_label, plt, scale_of
+from analysis.reports.plots import display_label, plt, run_title, scale_of
 from analysis.signal.envelope import Band
 from analysis.signal.spectrum import Peak, fault_frequencies
 
@@ -64,7 +64,7 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
     note = ("; names joined by '|' fall within one bin" if shared else "")
     ax.set_title(f"envelope spectrum, band {band.low_hz:.0f}–{band.high_hz:.0f} Hz ({how}, "
                  f"K = {band.kurtosis:.3g}){note}\n{fault_words(attrs)}", fontsize=8)
-    fig.suptitle(_title(xr.Dataset(attrs=attrs)), fontsize=10)
+    fig.suptitle(run_title(xr.Dataset(attrs=attrs)), fontsize=10)
     return fig
 
 
@@ -93,5 +93,5 @@ def impulse_figure(ds: xr.Dataset, passes: np.ndarray, window_s: float, what: st
         axes[0].legend(fontsize=8, loc="upper right")
     axes[-1].set_xlabel(f"t − {t[0]:g} s (ms)")
     axes[0].set_title(fault_words(ds.attrs), fontsize=8)
-    fig.suptitle(_title(ds), fontsize=10)
+    fig.suptitle(run_title(ds), fontsize=10)
     return fig

@@ -45,7 +45,8 @@ def _axis_label(ds: xr.Dataset, var: str) -> str:
     return var + (f" ({unit})" if unit else "")
 
 
-def _title(ds: xr.Dataset) -> str:
+def run_title(ds: xr.Dataset) -> str:
+    """A figure's title for a run: model, balls, speed and its forcing frequencies."""
     parts = [str(ds.attrs.get("model", "?"))]
     structure = balls_text(ds.attrs, "$N_b$", "")
     if structure:
@@ -61,10 +62,6 @@ def _title(ds: xr.Dataset) -> str:
     if not freqs and forcing is not None and float(ds.attrs[forcing]) > 0:
         freqs.append(f"F = 1/{forcing} = {1 / float(ds.attrs[forcing]):.4g} Hz")
     return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
-
-
-def _f_max(ds: xr.Dataset) -> float | None:
-    return f_max_of(ds.attrs)
 
 
 def f_max_of(attrs) -> float | None:
@@ -102,7 +99,7 @@ def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
     ``separate_peak_labels`` (called by the figure functions once the layout is fixed)."""
     spec = amplitude_spectrum(ds, var)
     peaks = find_peaks(ds, var) if peaks is None else peaks
-    f_max = f_max or _f_max(ds) or float(spec.frequency[-1])
+    f_max = f_max or f_max_of(ds.attrs) or float(spec.frequency[-1])
     factor, unit = scale_of(ds, var)
     sel = spec.sel(frequency=slice(0, f_max))
     ax.semilogy(sel.frequency, sel * factor, lw=0.8, color="C0")
@@ -244,7 +241,7 @@ def paper_figure(ds: xr.Dataset, section: str = "shaft", f_max: float | None = N
         name = AXIS_NAMES[var][2] if var in AXIS_NAMES else var
         axes[row, 0].set_title(f"({'abcdefgh'[row % 8]}) {name}: FFT", fontsize=9)
         plot_poincare(axes[row, 1], ds, var, section)
-    fig.suptitle(_title(ds), fontsize=10)
+    fig.suptitle(run_title(ds), fontsize=10)
     separate_peak_labels(fig)
     return fig
 
@@ -259,7 +256,7 @@ def spectrum_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | Non
     for ax, var in zip(axes[:, 0], variables, strict=True):
         plot_spectrum(ax, ds, var, f_max=f_max)
         ax.set_title(AXIS_NAMES[var][2] if var in AXIS_NAMES else var, fontsize=9)
-    fig.suptitle(_title(ds), fontsize=10)
+    fig.suptitle(run_title(ds), fontsize=10)
     separate_peak_labels(fig)
     return fig
 
@@ -273,7 +270,7 @@ def poincare_figure(ds: xr.Dataset, section: str = "shaft",
                              layout="constrained", squeeze=False)
     for ax, (var, against) in zip(axes[0], pairs, strict=True):
         plot_poincare(ax, ds, var, section, against)
-    fig.suptitle(_title(ds), fontsize=10)
+    fig.suptitle(run_title(ds), fontsize=10)
     return fig
 
 
@@ -507,7 +504,7 @@ def lyapunov_figure(result: xr.Dataset) -> Figure:
     ax.set_ylabel("running estimate (1/s)")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    ax.set_title(_title(result) + f"; Σλ = {result.attrs['sum_of_exponents']:.5g}, "
+    ax.set_title(run_title(result) + f"; Σλ = {result.attrs['sum_of_exponents']:.5g}, "
                  f"mean divergence {result.attrs['mean_divergence']:.5g} 1/s", fontsize=8)
     return fig
 
@@ -535,7 +532,7 @@ def stiffness_figure(ds: xr.Dataset) -> Figure:
         ax.set_xlabel("cage angle ψ (degrees; one ball pitch)")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(_title(ds) + ": static equilibrium and stiffness", fontsize=10)
+    fig.suptitle(run_title(ds) + ": static equilibrium and stiffness", fontsize=10)
     return fig
 
 

@@ -38,10 +38,10 @@ from analysis.errors import InputError
 from analysis.provenance import displacement_names
 from analysis.signal.spectrum import (
     Peak,
-    _time_step,
     amplitude_spectrum,
     fault_frequencies,
     find_peaks,
+    time_step,
 )
 
 ORDER = 4
@@ -96,7 +96,7 @@ def _signal(ds: xr.Dataset, var: str) -> tuple[np.ndarray, float]:
         raise InputError(f"var: no variable '{var}' in the dataset; "
                          f"variables: {', '.join(map(str, ds.data_vars))}")
     values = np.asarray(ds[var].values, dtype=float)
-    return values - values.mean(), 1.0 / _time_step(ds)
+    return values - values.mean(), 1.0 / time_step(ds)
 
 
 def _default_min_width(ds: xr.Dataset, fs: float) -> float:

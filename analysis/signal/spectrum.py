@@ -46,7 +46,7 @@ _SCALLOPING_BOUND = 0.84
 _LABEL_TOLERANCE_BINS = 1.5
 
 
-def _time_step(ds: xr.Dataset) -> float:
+def time_step(ds: xr.Dataset) -> float:
     """The uniform time step of ``ds.t`` (s); raises InputError if ``t`` is not uniform."""
     t = np.asarray(ds["t"].values, dtype=float)
     if t.size < 3:
@@ -73,7 +73,7 @@ def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> 
     if var not in ds.data_vars:
         raise InputError(f"var: no variable '{var}' in the dataset; "
                          f"variables: {', '.join(map(str, ds.data_vars))}")
-    dt = _time_step(ds)
+    dt = time_step(ds)
     values = np.asarray(ds[var].values, dtype=float)
     n = values.size
     w = scipy.signal.get_window(window, n)
@@ -376,7 +376,7 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
 def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray:
     """Window-corrected amplitude of the Hann-windowed, mean-free ``ds[var]`` at each
     ``frequency`` (Hz): 2·|Σ w_j x_j exp(-2πi f j dt)| / Σ w_j."""
-    dt = _time_step(ds)
+    dt = time_step(ds)
     values = np.asarray(ds[var].values, dtype=float)
     w = scipy.signal.get_window("hann", values.size)
     weighted = (values - values.mean()) * w

@@ -140,7 +140,7 @@ def station_map_bearing(p):
 
 
 def build(n_balls=None) -> ModelFunctions:
-    """CasADi Functions (rhs, jac, rk4_step, simulator) for the numbers of balls
+    """CasADi Functions (rhs, jac, rk4_step) for the numbers of balls
     of the bearings (a tuple in the order of BEARINGS; default: DEFAULT_N_BALLS).
     """
     return ModelFunctions(sys.modules[__name__], n_balls or DEFAULT_N_BALLS)
