@@ -23,3 +23,15 @@ def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
 @pytest.fixture
 def cli():
     return run_cli
+
+
+@pytest.fixture
+def user_cache(tmp_path, monkeypatch):
+    """An empty user cache (``BEARINGDYN_CACHE``) for the test, with ``load_model``'s memo
+    cleared before and after; yields ``tmp_path``."""
+    from analysis.model import load_model
+
+    monkeypatch.setenv("BEARINGDYN_CACHE", str(tmp_path / "cache"))
+    load_model.cache_clear()
+    yield tmp_path
+    load_model.cache_clear()

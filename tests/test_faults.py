@@ -36,14 +36,6 @@ def textbook(fs: float, d: float, big_d: float, n: int, alpha: float = 0.0) -> d
             "BPFI": n * fs / 2 * (1 + g), "BSF": big_d / (2 * d) * fs * (1 - g * g)}
 
 
-@pytest.fixture
-def cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("BEARINGDYN_CACHE", str(tmp_path / "cache"))
-    load_model.cache_clear()
-    yield tmp_path
-    load_model.cache_clear()
-
-
 def defect_free_spec(race: str, folder) -> str:
     """The shipped 6205-<race>-defect spec without its defect term and parameters."""
     data = tomllib.loads((SPECS / f"6205-{race}-defect.toml").read_text())
@@ -57,8 +49,8 @@ def defect_free_spec(race: str, folder) -> str:
 
 
 @pytest.mark.parametrize("race", RACES)
-def test_depth_zero_is_the_defect_free_model_bit_for_bit(race, cache):
-    free = simulate(defect_free_spec(race, cache), duration=0.03, transient=0.0)
+def test_depth_zero_is_the_defect_free_model_bit_for_bit(race, user_cache):
+    free = simulate(defect_free_spec(race, user_cache), duration=0.03, transient=0.0)
     zero = simulate(f"6205-{race}-defect", duration=0.03, transient=0.0, defect_depth=0.0)
     hit = simulate(f"6205-{race}-defect", duration=0.03, transient=0.0)
     for name in ("x", "y", "vx", "vy"):
@@ -326,7 +318,7 @@ def test_ball_defect_labels_follow_another_geometry_through_set(tmp_path):
         assert abs(labels[label] - _formula(label, table)) <= 1.0 / 0.6, (label, labels)
 
 
-def test_a_pit_on_ball_seven_needs_seven_balls(cache):
+def test_a_pit_on_ball_seven_needs_seven_balls(user_cache):
     """A pit on ball 7 raises the bearing's fewest balls to 7: six balls are refused with the
     allowed range (no ball would carry the pit), seven are built."""
     from analysis.errors import InputError
@@ -335,7 +327,7 @@ def test_a_pit_on_ball_seven_needs_seven_balls(cache):
     data = tomllib.loads((SPECS / "6205-ball-defect.toml").read_text())
     data["model"]["name"] = "pit-on-ball-seven"
     next(t for t in data["terms"] if t["kind"] == "localized_defect")["ball"] = 7
-    path = cache / "pit-on-ball-seven.toml"
+    path = user_cache / "pit-on-ball-seven.toml"
     path.write_text(tomli_w.dumps(data))
     model = load_model(str(path))
     assert model.module.BEARINGS[0][4] == (7, model.module.BEARINGS[0][4][1])

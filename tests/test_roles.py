@@ -20,14 +20,6 @@ from modelgen.terms.base import ROLE_NAMES
 from tests.conftest import SPECS
 
 
-@pytest.fixture
-def cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("BEARINGDYN_CACHE", str(tmp_path / "cache"))
-    load_model.cache_clear()
-    yield tmp_path
-    load_model.cache_clear()
-
-
 def renamed_clearance(folder: Path, name: str = "gap-rotor") -> Path:
     """balanced-rotor with its clearance parameter called ``gap``, bound to the contact."""
     data = tomllib.loads((SPECS / "balanced-rotor.toml").read_text())
@@ -56,8 +48,8 @@ def test_shipped_models_say_which_parameter_plays_which_role():
         balanced.role("gap")
 
 
-def test_a_renamed_clearance_keeps_the_blow_up_bound_and_the_rk4_probe(cache):
-    model = load_model(renamed_clearance(cache))
+def test_a_renamed_clearance_keeps_the_blow_up_bound_and_the_rk4_probe(user_cache):
+    model = load_model(renamed_clearance(user_cache))
     assert model.role("clearance") == ("gap",)
     reference = load_model("balanced-rotor")
     values, ref_values = model.defaults, reference.defaults
@@ -78,11 +70,11 @@ def test_a_binding_names_a_parameter_the_term_reads(tmp_path):
         load_spec(path)
 
 
-def test_a_folder_generated_before_roles_falls_back_to_the_old_names(cache):
+def test_a_folder_generated_before_roles_falls_back_to_the_old_names(user_cache):
     from modelgen.codegen import generate
 
-    out = cache / "old"
-    spec = cache / "old-rotor.toml"
+    out = user_cache / "old"
+    spec = user_cache / "old-rotor.toml"
     data = tomllib.loads((SPECS / "balanced-rotor.toml").read_text())
     data["model"]["name"] = "old-rotor"
     spec.write_text(tomli_w.dumps(data))
