@@ -88,8 +88,7 @@ def test_a_lane_that_blows_up_leaves_its_neighbour_alone():
         chart_point(DUFFING, points[1])
     assert isinstance(bad, SimulationError) and str(bad) == str(alone.value)
     system = points[1]
-    plan = _schedule(DUFFING.seconds(system), DUFFING.transient, DUFFING.dt,
-                 default_lengths(system.model)[2])
+    plan = _schedule(DUFFING.plan(system), default_lengths(system.model)[2])
     when = float(re.search(r"t = ([0-9.e+-]+) s", str(bad)).group(1))
     assert when > plan.start * DUFFING.dt
 

@@ -149,14 +149,11 @@ class _Schedule:
     averaged: int
 
 
-def _schedule(duration: float, transient: float, dt: float, tangent_transient: float) -> _Schedule:
-    """The steps of a run of ``duration`` s whose first ``transient`` s are dropped (the
-    samples ``simulate`` keeps), λ1 averaged over the whole renormalisations of the
-    record after ``tangent_transient`` s of discarded ones."""
-    last = round(duration / dt)
-    threshold = transient - 1e-12 * duration
-    first = next(k for k in range(max(0, round(transient / dt) - 2), last + 1)
-                 if k * dt >= threshold)
+def _schedule(run: RunPlan, tangent_transient: float) -> _Schedule:
+    """The steps of a planned run whose transient is dropped (the samples ``simulate``
+    keeps: ``run.first`` to ``run.n_steps``), λ1 averaged over the whole renormalisations of
+    the record after ``tangent_transient`` s of discarded ones."""
+    dt, last, first = run.dt, run.n_steps, run.first
     averaged = (last - first) // RENORM_EVERY
     averaged -= averaged % BLOCKS
     if averaged < BLOCKS:
@@ -241,7 +238,7 @@ def _prepare(system: System, duration: float, transient: float, dt: float,
                        warn=lambda message: None)
     attrs = completed_attrs(system, **run.settings())
     section = section or default_section(attrs)
-    plan = _schedule(duration, transient, dt, default_lengths(model)[2] if tangent else 0.0)
+    plan = _schedule(run, default_lengths(model)[2] if tangent else 0.0)
     n = model.n_state
     record = _Record(plan.first, _section_steps(plan, dt, period_of(attrs, section)), dt,
                      blow_up_limit(model, values), model.centre_indices(), np.full(n, np.inf),
