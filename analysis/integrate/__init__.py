@@ -4,5 +4,11 @@
 with provenance; ``compiled`` builds the RK4 blocks (C through CasADi, or the CasADi VM) and
 caches the compiled libraries; ``checks`` validates the RK4 step against the model's time
 scales; ``flow`` gives flow maps over a period and their derivatives (shooting, continuation,
-Lyapunov exponents build on them). Nothing here prints or draws.
+Lyapunov exponents build on them); ``ensemble`` runs many initial states or parameter
+points of one System together (``StroboscopicMap``, ``ensemble``), each member ``simulate``'s
+run bit for bit. Nothing here prints or draws.
 """
+
+from analysis.integrate.ensemble import StroboscopicMap, ensemble
+
+__all__ = ["StroboscopicMap", "ensemble"]

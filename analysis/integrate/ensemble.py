@@ -1,0 +1,236 @@
+"""Many runs of one System at once: initial states or parameter points, one compiled call.
+
+An *ensemble* is K members of one model and balls, each its own initial state and
+parameter values, all integrated with fixed-step RK4 by the same steps ``simulate`` takes:
+the model's RK4 step with its parameter-only subexpressions computed once per call
+(``tangent.tangent_step(rk4_step, Carry(constants=True))``, the step of the compiled blocks
+of ``analysis.integrate.compiled``), step k running from ``k·h`` to ``(k + 1)·h`` (s). So
+member i is ``simulate`` of its own System bit for bit (``np.array_equal``), whatever
+members share its call.
+
+- ``StroboscopicMap``: the System sampled once per forcing period T, z_{j+1} = F(z_j) with
+  N fixed RK4 steps of h = T/N; ``advance`` moves K rows ``[z, k]`` by whole periods.
+- ``ensemble``: K members over a duration, as an ``xarray.Dataset`` over (member, t).
+
+Members never stop each other: one that blows up carries NaN or inf to the end of the
+call, its neighbours unchanged; ``StroboscopicMap.diverged`` flags it (the blow-up rule of
+``simulate.check_bounded``) and ``ensemble`` records when (``diverged_at``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from analysis.errors import InputError
+from analysis.integrate.compiled import Library, block_plan, library
+from analysis.integrate.flow import Period, period_seconds, steps_per_period
+from analysis.integrate.plan import RunPlan, check_memory
+from analysis.integrate.simulate import blow_up_limit
+from analysis.model import System
+from analysis.provenance import completed_attrs, to_dataset
+
+
+def run_scalar(lib: Library, p: np.ndarray, h: float, s: np.ndarray, n_out: int,
+               every: int) -> np.ndarray:
+    """``n_out · every`` RK4 steps of ``h`` s of one member through ``lib``'s blocks (t0 = 0,
+    so step k from ``k·h``); ``s`` (n + 1: ``[z, k]``) is changed in place to the state
+    after the last step. Returns the states z after every ``every`` steps, (n_out × n)."""
+    n = len(s) - 1
+    out = np.empty((n_out, n))
+    zn, done = np.array(s, dtype=float), 0
+    for size in block_plan(n_out * every):
+        block = np.asarray(lib.blocks[size](zn, p, h, 0.0))  # (n + 1) × size
+        first = -(done + 1) % every  # column of the first step to keep
+        kept = block[:n, first::every].T
+        start = (done + first + 1) // every - 1  # kept sample 0 is after step `every`
+        out[start:start + len(kept)] = kept
+        zn = block[:, -1]
+        done += size
+    s[:] = zn
+    return out
+
+
+def bad_points(points: np.ndarray, limit: float,
+               pairs: Sequence[tuple[int, int | None]]) -> np.ndarray:
+    """``points`` (… × n states, SI units) that have blown up, by the rule of
+    ``simulate.check_bounded``: a value not finite, or a body's centre displacement
+    (``hypot(x, y)``, ``|x|`` for a body moving along x) beyond ``limit`` (m)."""
+    bad = ~np.all(np.isfinite(points), axis=-1)
+    with np.errstate(invalid="ignore", over="ignore"):
+        for i, j in pairs:
+            shift = np.abs(points[..., i]) if j is None else \
+                np.hypot(points[..., i], points[..., j])
+            bad |= shift > limit
+    return bad
+
+
+@dataclass(frozen=True)
+class StroboscopicMap:
+    """A System sampled once per forcing period: z_{j+1} = F(z_j), N fixed RK4 steps of
+    h = T/N (the steps of ``simulate`` with ``dt = h``: a member's section points are the
+    run's states every N steps, bit for bit). Make it with ``make``."""
+
+    system: System
+    """The model, balls and parameter values (SI units, speed in rpm) every member shares."""
+    period: Period
+    """The forcing period (``analysis.integrate.flow.Period``)."""
+    period_s: float
+    """T, s."""
+    steps: int
+    """N = ceil(T / dt_max − 1e-9) RK4 steps per period."""
+    dt: float
+    """h = T / N, s."""
+    limit: float
+    """Blow-up bound of a centre displacement, m (``simulate.blow_up_limit``; inf: only
+    non-finite values count)."""
+    compiled: bool = True
+    """Run compiled C (the RK4 blocks' cache); False: the CasADi virtual machine."""
+
+    @classmethod
+    def make(cls, system: System, period: str | Period, dt: float | None = None,
+             compiled: bool = True) -> StroboscopicMap:
+        """The map of ``system`` over ``period`` (a ``Period`` or its name: ``vc``,
+        ``shaft``, ``vc[left]:4``, ``ratio:p/q``, ``param:NAME``; required here, since the
+        default period's rule lives in ``analysis.stability``, a layer above:
+        ``stability.periodic.as_period(model, None)`` gives it). ``dt``: the largest RK4
+        step in s (None: the spec's), checked as a flow map's step is (``RunPlan.step``:
+        finite and > 0, resolving the fastest forcing, RK4-stable; ``InputError``
+        otherwise)."""
+        per = period if isinstance(period, Period) else Period.parse(period)
+        per.check(system.model)
+        plan = RunPlan.step(system, dt)
+        values = dict(system.parameters)
+        seconds = period_seconds(system.model, system.structure, per, values)
+        steps = steps_per_period(system.model, system.structure, per, values, plan.dt)
+        return cls(system, per, seconds, steps, seconds / steps,
+                   blow_up_limit(system.model, values), compiled)
+
+    def advance(self, s: np.ndarray, n_periods: int) -> np.ndarray:
+        """Move every member ``n_periods`` periods on.
+
+        ``s``: (K, n + 1) rows ``[z, k]``, z the state (SI units) after RK4 step k, so at
+        time ``k·h`` s (k a whole number, members may differ); changed in place to the rows
+        after ``n_periods · N`` more steps. Returns (K, n_periods, n): each member's state
+        after each period (the section points). A member that blows up carries NaN or inf;
+        the others are not affected."""
+        if s.ndim != 2 or s.shape[1] != self.system.n_state + 1:
+            raise InputError(f"s: rows [z, k] of {self.system.n_state + 1} numbers, got an "
+                             f"array of shape {s.shape}")
+        if isinstance(n_periods, bool) or not isinstance(n_periods, (int, np.integer)) \
+                or n_periods < 0:
+            raise InputError(f"n_periods: must be a whole number >= 0, got {n_periods!r}")
+        lib = library(self.system.model, self.system.structure, self.compiled)
+        p = self.system.p
+        out = np.empty((len(s), n_periods, self.system.n_state))
+        for i in range(len(s)):
+            row = np.ascontiguousarray(s[i], dtype=float)
+            out[i] = run_scalar(lib, p, self.dt, row, n_periods, self.steps)
+            s[i] = row
+        return out
+
+    def diverged(self, points: np.ndarray) -> np.ndarray:
+        """(K,) bool: whether any of a member's ``points`` ((K, m, n) as ``advance``
+        returns, or (K, n)) is not finite or has a centre displacement beyond ``limit``
+        (the rule of ``simulate.check_bounded``)."""
+        points = np.asarray(points, dtype=float)
+        bad = bad_points(points, self.limit, self.system.model.centre_indices())
+        return bad.reshape(len(points), -1).any(axis=1)
+
+
+def _members(system: System, states: np.ndarray | None,
+             parameters: Sequence[Mapping[str, float]] | None) -> list[System]:
+    """One System per member: ``system`` with ``states[i]`` and ``parameters[i]``."""
+    if states is None and parameters is None:
+        raise InputError("ensemble: give the members' states, parameters or both")
+    count = {len(x) for x in (states, parameters) if x is not None}
+    if len(count) != 1:
+        raise InputError(f"ensemble: {len(states)} states but {len(parameters)} parameter "
+                         "sets; give one of each per member")
+    (k,) = count
+    if k == 0:
+        raise InputError("ensemble: no members")
+    members = []
+    for i in range(k):
+        overrides = dict(parameters[i]) if parameters is not None else {}
+        unknown = sorted(set(overrides) - set(system.model.parameter_names))
+        if unknown:
+            raise InputError(f"parameters[{i}]: {', '.join(unknown)}: not parameters of model "
+                             f"'{system.model.name}' (balls and state are per ensemble and "
+                             "per member state)")
+        state = None if states is None else system.model.check_state(states[i],
+                                                                     f"states[{i}]")
+        members.append(system.replace(state=state, **overrides))
+    return members
+
+
+def ensemble(system: System, states: np.ndarray | None = None,
+             duration: float | None = None, *,
+             parameters: Sequence[Mapping[str, float]] | None = None,
+             dt: float | None = None, save_every: int = 1,
+             compiled: bool = True) -> xr.Dataset:
+    """K runs of ``system`` from t = 0 (no transient), one per member.
+
+    ``states`` (K, n): the members' initial states (SI units; None: the system's);
+    ``parameters``: K mappings of parameter overrides (SI units, speed in rpm; None: the
+    system's); ``duration`` (s; None: the spec's), ``dt`` (s; None: the spec's) and
+    ``save_every`` as in ``simulate``, each member's run checked as ``simulate`` checks it
+    (``RunPlan.make``; ``InputError``).
+
+    Returns a Dataset over (member, t): one variable per state (units as ``simulate``'s),
+    ``diverged_at`` (member; s): the time of the first saved sample that is not finite or
+    beyond the blow-up limit (``simulate.check_bounded``'s rule), NaN for a member that
+    stayed bounded; that member's later samples are NaN (no error is raised). The varied
+    parameters and the initial states are variables over member; ``attrs`` are the
+    provenance of ``system`` (``provenance.completed_attrs``) with ``members`` = K. A
+    bounded member equals ``simulate(member system, duration=duration, transient=0, dt=dt,
+    save_every=save_every)`` bit for bit."""
+    members = _members(system, None if states is None else np.asarray(states, dtype=float),
+                       parameters)
+    plans = [RunPlan.make(m, duration=duration, transient=0.0, dt=dt,
+                          save_every=save_every) for m in members]
+    plan = plans[0]
+    n, k = system.n_state, len(members)
+    check_memory(k * (n + 1) - 1, plan.n_saved, save_every)
+    lib = library(system.model, system.structure, compiled)
+    states_out = np.empty((k, plan.n_saved + 1, n))
+    for i, member in enumerate(members):
+        s = np.append(member.state, 0.0)
+        states_out[i, 0] = member.state
+        states_out[i, 1:] = run_scalar(lib, member.p, plan.dt, s, plan.n_saved, save_every)
+    return _dataset(system, members, plan, states_out)
+
+
+def _dataset(system: System, members: list[System], plan: RunPlan,
+             states: np.ndarray) -> xr.Dataset:
+    """The Dataset of ``ensemble`` from the members' saved states (K × samples × n)."""
+    model = system.model
+    times = plan.times()
+    limits = np.array([blow_up_limit(model, dict(m.parameters)) for m in members])
+    bad = np.stack([bad_points(states[i], limits[i], model.centre_indices())
+                    for i in range(len(members))])
+    first = np.where(bad.any(axis=1), bad.argmax(axis=1), -1)
+    diverged_at = np.where(first >= 0, times[np.maximum(first, 0)], np.nan)
+    for i, j in enumerate(first):
+        if j >= 0:
+            states[i, j + 1:] = np.nan
+    attrs = {**completed_attrs(system, **plan.settings()), "members": len(members)}
+    runs = [to_dataset(times, states[i].T, attrs, model) for i in range(len(members))]
+    ds = xr.concat(runs, dim="member", combine_attrs="override")
+    ds = ds.assign_coords(member=np.arange(len(members)))
+    ds["diverged_at"] = ("member", diverged_at,
+                         {"units": "s", "long_name": "time of the first sample beyond the "
+                          "blow-up limit (NaN: bounded)"})
+    for name in model.parameter_names:
+        values = np.array([float(m.parameters[name]) for m in members])
+        if np.any(values != values[0]):
+            ds[name] = ("member", values, {"units": model.units.get(name, ""),
+                                           "long_name": f"{name} of each member"})
+    for i, name in enumerate(model.state_names):
+        ds[f"{name}0"] = ("member", np.array([m.state[i] for m in members]),
+                          {"units": model.state_units[name],
+                           "long_name": f"initial {name} of each member"})
+    return ds
