@@ -1,0 +1,220 @@
+"""Attractor studies as Datasets (netCDF with provenance) and as JSON.
+
+Three kinds (attr ``kind``):
+
+- ``basins``: ``basin`` (Y, X), the attractor id of every initial state of a grid over two
+  state coordinates (dims named after them), and the attractors' table;
+- ``attractors``: the table with each attractor's basin fraction among ``samples`` random
+  initial states of a box, ``label`` (sample) and ``initial_state`` (sample, state);
+- ``attractor-continuation``: the table at every value of a parameter (dims ``value``,
+  ``attractor``), ids matched across values.
+
+The table (dim ``attractor``, coordinate ``attractor`` = the id; ``DIVERGED`` = −1 and
+``UNDECIDED`` = −2 when such states occur): ``nature`` (periodic-n, quasi-periodic, chaotic,
+diverged, undecided), ``period`` (forcing periods; 0: not periodic), ``lambda1`` and
+``lambda1_ci95`` (1/s), ``fraction`` and ``fraction_stderr``, ``amplitude`` (attractor,
+state; (max − min)/2 in the state's unit), ``representative`` (attractor, state) and
+``section_points`` (attractor, point, state; NaN-padded).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict
+
+import numpy as np
+import xarray as xr
+
+from analysis.model import System
+from analysis.provenance import completed_attrs, plain, provenance, state_variable_attrs
+from analysis.stability.attractors.continuation import Step
+from analysis.stability.attractors.label import Attractor
+from analysis.stability.attractors.mapper import SPECIAL_LABELS
+from analysis.stability.attractors.sampling import Box, Range
+from analysis.stability.attractors.study import AttractorStudy, Result
+
+KINDS = ("basins", "attractors", "attractor-continuation")
+
+
+def study_attrs(study: AttractorStudy, kind: str, **extra) -> dict:
+    """Provenance of a study: the System's run attrs, the map (period, section, its RK4
+    step ``dt`` in s and steps per period), the mapper's and the description's settings,
+    ``kind`` and ``extra``."""
+    smap = study.map
+    attrs = completed_attrs(study.system, method="rk4", dt=smap.dt, save_every=smap.steps,
+                            duration=0.0, transient=0.0)
+    for key in ("duration", "transient"):
+        attrs.pop(key)
+    attrs.update(kind=kind, period=str(study.period), section=study.section,
+                 period_s=smap.period_s, steps_per_period=smap.steps,
+                 one_forcing=int(study.autonomous),
+                 cell_scale=study.scale.size,
+                 **{f"mapper_{k}": v for k, v in asdict(study.options).items()},
+                 **{f"label_{k}": v for k, v in asdict(study.label_options).items()})
+    attrs.update(extra)
+    return attrs
+
+
+def _rows(attractors: Sequence[Attractor], ids: Sequence[int],
+          fractions: Mapping[int, tuple[float, float]], n: int) -> dict[str, list]:
+    """Column lists of the table: the attractors (with their ``ids``), then the special
+    labels that have a fraction."""
+    cols: dict[str, list] = {k: [] for k in ("id", "nature", "period", "lambda1",
+                                              "lambda1_ci95", "fraction", "fraction_stderr",
+                                              "amplitude", "representative", "points")}
+    nan = np.full(n, np.nan)
+    rows = [(i, a) for i, a in zip(ids, attractors, strict=True)]
+    rows += [(k, None) for k in SPECIAL_LABELS if k in fractions]
+    for i, a in rows:
+        f, e = fractions.get(i, (0.0, 0.0))
+        cols["id"].append(i)
+        cols["nature"].append(SPECIAL_LABELS[i] if a is None else a.nature)
+        cols["period"].append(0 if a is None or a.period is None else a.period)
+        cols["lambda1"].append(np.nan if a is None else a.lambda1)
+        cols["lambda1_ci95"].append(np.nan if a is None else a.lambda1_ci95)
+        cols["fraction"].append(f)
+        cols["fraction_stderr"].append(e)
+        names = None if a is None else list(a.amplitude)
+        cols["amplitude"].append(nan if a is None else np.array([a.amplitude[k] for k in names]))
+        cols["representative"].append(nan if a is None else a.representative)
+        cols["points"].append(np.empty((0, n)) if a is None else a.points)
+    return cols
+
+
+def table(system: System, attractors: Sequence[Attractor], ids: Sequence[int],
+          fractions: Mapping[int, tuple[float, float]]) -> xr.Dataset:
+    """The attractors' table (see the module) over dimension ``attractor``."""
+    n, names = system.n_state, list(system.state_names)
+    cols = _rows(attractors, ids, fractions, n)
+    longest = max([len(p) for p in cols["points"]] + [1])
+    points = np.full((len(cols["id"]), longest, n), np.nan)
+    for k, p in enumerate(cols["points"]):
+        points[k, :len(p)] = p
+    ds = xr.Dataset(
+        {"nature": ("attractor", np.array(cols["nature"], dtype=str)),
+         "period": ("attractor", np.array(cols["period"], dtype=np.int64),
+                    {"units": "forcing periods", "long_name": "period (0: not periodic)"}),
+         "lambda1": ("attractor", np.array(cols["lambda1"]),
+                     {"units": "1/s", "long_name": "largest Lyapunov exponent"}),
+         "lambda1_ci95": ("attractor", np.array(cols["lambda1_ci95"]),
+                          {"units": "1/s", "long_name": "95 % half-width of lambda1"}),
+         "fraction": ("attractor", np.array(cols["fraction"]),
+                      {"long_name": "basin fraction"}),
+         "fraction_stderr": ("attractor", np.array(cols["fraction_stderr"]),
+                             {"long_name": "standard error of the basin fraction"}),
+         "amplitude": (("attractor", "state"), np.array(cols["amplitude"]).reshape(-1, n),
+                       {"long_name": "(max - min)/2 of each state on the attractor"}),
+         "representative": (("attractor", "state"),
+                            np.array(cols["representative"]).reshape(-1, n),
+                            {"long_name": "a state on the attractor at a section time"}),
+         "section_points": (("attractor", "point", "state"), points,
+                            {"long_name": "section points recorded by the mapper"})},
+        coords={"attractor": np.array(cols["id"], dtype=np.int64), "state": names})
+    ds["state_units"] = ("state", [system.model.state_units[k] for k in names])
+    return ds
+
+
+def basins_dataset(study: AttractorStudy, result: Result, x: Range, y: Range) -> xr.Dataset:
+    """The ``basins`` Dataset of a grid study (``result.labels`` in grid order, x
+    fastest)."""
+    system = study.system
+    ds = table(system, result.attractors, [a.id for a in result.attractors],
+               result.fractions())
+    grid = result.labels.reshape(y.num, x.num).astype(np.int32)
+    ds[y.coordinate + "_grid"] = (y.coordinate + "_grid", y.points,
+                                  state_variable_attrs(system.model, y.coordinate))
+    ds[x.coordinate + "_grid"] = (x.coordinate + "_grid", x.points,
+                                  state_variable_attrs(system.model, x.coordinate))
+    ds["basin"] = ((y.coordinate + "_grid", x.coordinate + "_grid"), grid,
+                   {"long_name": "attractor id (-1 diverged, -2 undecided)"})
+    ds.attrs = study_attrs(study, "basins", basin_x=x.coordinate, basin_y=y.coordinate,
+                           periods_integrated=result.periods)
+    return ds
+
+
+def fractions_dataset(study: AttractorStudy, result: Result, states: np.ndarray, box: Box,
+                      seed: int) -> xr.Dataset:
+    """The ``attractors`` Dataset of random initial states."""
+    system = study.system
+    ds = table(system, result.attractors, [a.id for a in result.attractors],
+               result.fractions())
+    ds["label"] = ("sample", result.labels.astype(np.int32))
+    ds["initial_state"] = (("sample", "state"), states)
+    ds.attrs = study_attrs(study, "attractors", samples=len(states), seed=seed,
+                           box=box.text,
+                           periods_integrated=result.periods)
+    return ds
+
+
+def continuation_dataset(study: AttractorStudy, steps: Sequence[Step], parameter: str,
+                         box: Box, samples: int, seed: int) -> xr.Dataset:
+    """The ``attractor-continuation`` Dataset: the table at each value, one id axis."""
+    system = study.system
+    tables = [table(system, [a for _, a in s.attractors()],
+                    [g for g, _ in s.attractors()], s.fractions()) for s in steps]
+    ids = sorted({int(i) for t in tables for i in t.attractor.values},
+                 key=lambda i: (i < 0, abs(i)))
+    merged = xr.concat([t.drop_vars("state_units").reindex(attractor=ids) for t in tables],
+                       dim="value", join="outer")
+    merged["nature"] = merged.nature.fillna("").astype(str)
+    merged["period"] = merged.period.fillna(0).astype(np.int64)
+    merged["present"] = (("value", "attractor"),
+                         np.array([[i in set(t.attractor.values.tolist()) for i in ids]
+                                   for t in tables]))
+    merged = merged.assign_coords(value=[s.value for s in steps])
+    merged["value"].attrs = {"long_name": parameter,
+                             "units": system.model.units.get(parameter, "")}
+    merged["state_units"] = ("state", [system.model.state_units[k]
+                                       for k in system.state_names])
+    merged.attrs = study_attrs(study, "attractor-continuation", param=parameter,
+                               samples=samples, seed=seed,
+                               box=box.text,
+                               periods_integrated=sum(s.result.periods for s in steps))
+    return merged
+
+
+def attractor_json(ds: xr.Dataset) -> list[dict]:
+    """The table's rows as JSON: ``{"id", "class", "period", "fraction",
+    "fraction_stderr", "lambda1", "lambda1_ci95", "amplitude": {state: value}}`` (period
+    null unless periodic; NaN as null)."""
+    rows = []
+    for i in ds.attractor.values:
+        row = ds.sel(attractor=i)
+        period = int(row.period)
+        rows.append({
+            "id": int(i), "class": str(row.nature.values),
+            "period": period if period > 0 else None,
+            "fraction": plain(float(row.fraction), finite=True),
+            "fraction_stderr": plain(float(row.fraction_stderr), finite=True),
+            "lambda1": plain(float(row.lambda1), finite=True),
+            "lambda1_ci95": plain(float(row.lambda1_ci95), finite=True),
+            "amplitude": {str(k): plain(float(v), finite=True)
+                          for k, v in zip(ds.state.values, row.amplitude.values,
+                                          strict=True)}})
+    return rows
+
+
+def study_json(ds: xr.Dataset) -> dict:
+    """The ``--json`` of ``basins`` and ``attractors`` (``{"attractors": [...],
+    "provenance": {...}}``) and of a continuation (``{"values": [{PARAM: value,
+    "attractors": [...]}, ...], "provenance": {...}}``: at each value the attractors
+    present there)."""
+    if ds.attrs.get("kind") != "attractor-continuation":
+        return {"attractors": attractor_json(ds), "provenance": provenance(ds)}
+    param = str(ds.attrs["param"])
+    values = []
+    for k, value in enumerate(ds.value.values):
+        here = ds.isel(value=k)
+        here = here.sel(attractor=here.attractor[here.present.values])
+        values.append({param: float(value), "attractors": attractor_json(here)})
+    return {"values": values, "provenance": provenance(ds)}
+
+
+def existence(ds: xr.Dataset) -> dict[int, tuple[float, float]]:
+    """Attractor id -> (first, last) parameter value at which a continuation found it."""
+    out = {}
+    for i in ds.attractor.values:
+        where = ds.value.values[ds.present.sel(attractor=i).values]
+        if int(i) > 0 and len(where):
+            out[int(i)] = (float(where.min()), float(where.max()))
+    return out
