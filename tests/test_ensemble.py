@@ -1,6 +1,7 @@
 """Ensembles (``analysis.integrate.ensemble``) against ``simulate``, member by member, bit for
 bit: the stroboscopic map's section points and ``ensemble``'s records, whatever members
-share a call, at different step counters, through a blow-up beside them."""
+share a call of the state lane kernel (``lanes.state_kernel``), at different step counters,
+through a blow-up beside them, and the same without a kernel (the scalar blocks)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,9 @@ import pytest
 
 from analysis import simulate
 from analysis.errors import InputError, SimulationError
+from analysis.integrate import lanes
 from analysis.integrate.ensemble import StroboscopicMap, ensemble
+from analysis.integrate.lanes import Unsupported, rk4_state_step, state_kernel, vector_c
 from analysis.integrate.simulate import check_bounded
 from analysis.model import System
 
@@ -54,6 +57,7 @@ def test_each_member_is_simulate_at_the_section_times(name):
     section points are ``simulate``'s states every N steps, bit for bit; the rows come back
     at their counters plus PERIODS·N."""
     smap = _map(name)
+    assert state_kernel(smap.system.model, smap.system.structure) is not None
     n, big_n = smap.system.n_state, smap.steps
     starts = _starts(smap, 5)
     offsets = [0, 0, 3 * big_n + 17, 0, 5]
@@ -82,12 +86,13 @@ def test_save_every_n_matches_simulate_with_save_every():
 
 
 def test_a_member_does_not_depend_on_its_neighbours():
-    """The same member beside other members, in another position: the same bits."""
+    """The same member beside other members, in the other lane: the same bits."""
     smap = _map("duffing")
     starts = _starts(smap, 4)
     first = smap.advance(_rows(starts[:3], np.zeros(3)), PERIODS)
-    again = smap.advance(_rows(starts[[3, 1, 0]], np.zeros(3)), PERIODS)
-    assert np.array_equal(first[0], again[2]) and np.array_equal(first[1], again[1])
+    again = smap.advance(_rows(starts[[1, 3, 0, 2]], np.zeros(4)), PERIODS)
+    assert np.array_equal(first[0], again[2]) and np.array_equal(first[1], again[0])
+    assert np.array_equal(first[2], again[3])
 
 
 def test_a_member_that_blows_up_leaves_its_neighbours_exact():
@@ -162,3 +167,27 @@ def test_ensemble_records_a_blow_up_without_raising():
     good = simulate(system.replace(**members[0]), duration=60.0, transient=0.0)
     assert np.isnan(ds["diverged_at"].values[0])
     assert np.array_equal(good["x"].values, ds["x"].values[0])
+
+
+def test_without_a_kernel_the_members_run_one_by_one_with_the_same_bits(monkeypatch):
+    """An operation the writer does not know (sqrt taken away) means no state kernel; the
+    map and ``ensemble`` then run member by member in the scalar blocks: the same bits."""
+    smap = _map("balanced-rotor")
+    model, structure = smap.system.model, smap.system.structure
+    starts = _starts(smap, 3)
+    rows = _rows(starts, np.array([0.0, 11.0, 0.0]))
+    with_lanes = smap.advance(rows.copy(), PERIODS)
+    speeds = [{"speed_rpm": 7000.0}, {"speed_rpm": 9000.0}, {"speed_rpm": 8000.0}]
+    ds_lanes = ensemble(smap.system, starts, 0.002, parameters=speeds)
+    monkeypatch.delitem(lanes.UNARY, "SQRT")
+    state_kernel.cache_clear()
+    try:
+        with pytest.raises(Unsupported, match="SQRT"):
+            vector_c(rk4_state_step(model, structure)[0], "step")
+        assert state_kernel(model, structure) is None
+        assert np.array_equal(smap.advance(rows.copy(), PERIODS), with_lanes)
+        ds_scalar = ensemble(smap.system, starts, 0.002, parameters=speeds)
+        for v in smap.system.state_names:
+            assert np.array_equal(ds_scalar[v].values, ds_lanes[v].values)
+    finally:
+        state_kernel.cache_clear()

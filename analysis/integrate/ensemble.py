@@ -8,6 +8,12 @@ of ``analysis.integrate.compiled``), step k running from ``k·h`` to ``(k + 1)·
 member i is ``simulate`` of its own System bit for bit (``np.array_equal``), whatever
 members share its call.
 
+Compiled, the members run ``lanes.LANES`` at a time in the state lane kernel
+(``lanes.state_kernel``: the step written for SSE2/NEON vector lanes, each lane's numbers
+those of the scalar step); without it (``compiled=False``, an operation the kernel writer
+does not know, no compiler, a failed self-test) one by one through the RK4 blocks, with the
+same results.
+
 - ``StroboscopicMap``: the System sampled once per forcing period T, z_{j+1} = F(z_j) with
   N fixed RK4 steps of h = T/N; ``advance`` moves K rows ``[z, k]`` by whole periods.
 - ``ensemble``: K members over a duration, as an ``xarray.Dataset`` over (member, t).
@@ -28,6 +34,7 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.compiled import Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
+from analysis.integrate.lanes import LANES, state_kernel
 from analysis.integrate.plan import RunPlan, check_memory
 from analysis.integrate.simulate import blow_up_limit
 from analysis.model import System
@@ -51,6 +58,40 @@ def run_scalar(lib: Library, p: np.ndarray, h: float, s: np.ndarray, n_out: int,
         zn = block[:, -1]
         done += size
     s[:] = zn
+    return out
+
+
+def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_out: int,
+                every: int, compiled: bool = True) -> np.ndarray:
+    """``n_out · every`` RK4 steps of every member of ``system``'s model and balls: ``p``
+    (K × n_par) and ``h`` (K, s) per member, ``s`` (K × (n + 1) rows ``[z, k]``, changed in
+    place), step k from ``k·h``. Returns (K, n_out, n): each member's z after every
+    ``every`` steps.
+
+    Compiled: ``LANES`` members per call of the state lane kernel
+    (``lanes.state_kernel``; an odd last member beside a copy of itself, whose results are
+    dropped); without a kernel (``compiled=False``, an operation it does not write, no
+    compiler, a failed self-test) member by member through the RK4 blocks
+    (``run_scalar``). Both give ``simulate``'s steps bit for bit."""
+    k, n = s.shape[0], s.shape[1] - 1
+    out = np.empty((k, n_out, n))
+    kern = state_kernel(system.model, system.structure) if compiled else None
+    if kern is None:
+        lib = library(system.model, system.structure, compiled)
+        for i in range(k):
+            row = np.ascontiguousarray(s[i], dtype=float)
+            out[i] = run_scalar(lib, p[i], float(h[i]), row, n_out, every)
+            s[i] = row
+        return out
+    zeros = np.zeros(LANES)
+    for start in range(0, k, LANES):
+        group = [min(i, k - 1) for i in range(start, start + LANES)]
+        lanes = np.ascontiguousarray(s[group].T, dtype=float)
+        states = kern.run(lanes, np.ascontiguousarray(p[group].T), h[group], zeros,
+                          n_out, every)
+        count = min(LANES, k - start)
+        out[start:start + count] = states[:count]
+        s[start:start + count] = lanes[:, :count].T
     return out
 
 
@@ -123,14 +164,10 @@ class StroboscopicMap:
         if isinstance(n_periods, bool) or not isinstance(n_periods, (int, np.integer)) \
                 or n_periods < 0:
             raise InputError(f"n_periods: must be a whole number >= 0, got {n_periods!r}")
-        lib = library(self.system.model, self.system.structure, self.compiled)
-        p = self.system.p
-        out = np.empty((len(s), n_periods, self.system.n_state))
-        for i in range(len(s)):
-            row = np.ascontiguousarray(s[i], dtype=float)
-            out[i] = run_scalar(lib, p, self.dt, row, n_periods, self.steps)
-            s[i] = row
-        return out
+        k = len(s)
+        p = np.repeat(self.system.p[None, :], k, axis=0)
+        return run_members(self.system, p, np.full(k, self.dt), s, n_periods, self.steps,
+                           self.compiled)
 
     def diverged(self, points: np.ndarray) -> np.ndarray:
         """(K,) bool: whether any of a member's ``points`` ((K, m, n) as ``advance``
@@ -195,12 +232,11 @@ def ensemble(system: System, states: np.ndarray | None = None,
     plan = plans[0]
     n, k = system.n_state, len(members)
     check_memory(k * (n + 1) - 1, plan.n_saved, save_every)
-    lib = library(system.model, system.structure, compiled)
     states_out = np.empty((k, plan.n_saved + 1, n))
-    for i, member in enumerate(members):
-        s = np.append(member.state, 0.0)
-        states_out[i, 0] = member.state
-        states_out[i, 1:] = run_scalar(lib, member.p, plan.dt, s, plan.n_saved, save_every)
+    s = np.array([np.append(m.state, 0.0) for m in members])
+    states_out[:, 0] = s[:, :n]
+    states_out[:, 1:] = run_members(system, np.array([m.p for m in members]),
+                                    np.full(k, plan.dt), s, plan.n_saved, save_every, compiled)
     return _dataset(system, members, plan, states_out)
 
 

@@ -17,6 +17,12 @@ those of ``tangent.tangent_block`` bit for bit, whichever points share its call
 operation the writer does not know (listed in ``UNARY``/``BINARY``), no working compiler, or
 a library that does not reproduce the CasADi block on a test state. Callers then use the
 scalar blocks.
+
+``state_kernel(model, structure)`` is the same for the state alone: the RK4 step of the
+compiled blocks (``compiled.rk4_blocks``: ``tangent.tangent_step`` with
+``Carry(constants=True)``) on ``LANES`` runs of their own parameters, step and start time,
+in a C loop that keeps the state after every ``every`` steps (the stroboscopic maps and
+ensembles of ``analysis.integrate.ensemble``): each lane is ``simulate``'s run bit for bit.
 """
 
 from __future__ import annotations
@@ -38,7 +44,7 @@ from analysis.integrate.compiled import (
     library_stem,
     test_state,
 )
-from analysis.integrate.tangent import lyapunov_step, qr_logs, tangent_block
+from analysis.integrate.tangent import Carry, lyapunov_step, qr_logs, tangent_block, tangent_step
 
 LANES = 2
 """Points per vector: two doubles fill the 128-bit registers every x86-64 and ARM64 CPU
@@ -116,6 +122,26 @@ void bd_lanes_run(double *s_, const double *p_, const double *h_, const double *
 """
 
 
+_STATE_RUN = """
+/* s: [z; k] per lane, lane fastest (s[i * L + k]); p: parameters per lane; h, t0: one per
+   lane. n_out times `every` steps; out[(k * n_out + j) * N + i] is z_i of lane k after
+   (j + 1) * every steps of the call (each lane's rows in one piece). */
+void bd_state_lanes_run(double *s_, const double *p_, const double *h_, const double *t0_,
+                        long n_out, long every, double *out) {{
+  V s[{ns}], next[{ns}], p[{np}], h[1], t0[1], c[{nc}];
+  memcpy(s, s_, sizeof s); memcpy(p, p_, sizeof p); memcpy(h, h_, sizeof h);
+  memcpy(t0, t0_, sizeof t0);
+  constants(p, h, t0, c);
+  for (long j = 0; j < n_out; j++) {{
+    for (long i = 0; i < every; i++) {{ step(s, p, h, t0, c, next); memcpy(s, next, sizeof s); }}
+    for (int k = 0; k < L; k++)
+      for (int m = 0; m < {n}; m++) out[(k * n_out + j) * {n} + m] = s[m][k];
+  }}
+  memcpy(s_, s, sizeof s);
+}}
+"""
+
+
 class Unsupported(ValueError):
     """An operation ``vector_c`` does not write."""
 
@@ -159,15 +185,43 @@ def kernel_source(step: ca.Function, constants: ca.Function, renorm: ca.Function
                     n1=n + 1)])
 
 
+def state_kernel_source(step: ca.Function, constants: ca.Function) -> str:
+    """C of the state-only lane kernel: ``step(s, p, h, t0, c) -> s'`` (s = ``[z; k]``) and
+    ``constants(p, h, t0) -> c``, run by ``bd_state_lanes_run``."""
+    return "\n".join([
+        _HEADER.format(lanes=LANES), vector_c(constants, "constants"), vector_c(step, "step"),
+        _STATE_RUN.format(ns=step.size1_in(0), np=step.size1_in(1), nc=step.size1_in(4),
+                          n=step.size1_in(0) - 1)])
+
+
+def _pointer(a: np.ndarray) -> ctypes.c_void_p:
+    return a.ctypes.data_as(ctypes.c_void_p)
+
+
+def _lane_arrays(s: np.ndarray, p: np.ndarray, h: np.ndarray,
+                 t0: np.ndarray) -> list[ctypes.c_void_p]:
+    """Pointers to ``s`` (checked: changed in place) and contiguous float copies of the
+    per-lane ``p``, ``h`` and ``t0``, in the order every run function takes them."""
+    if not s.flags.c_contiguous or s.dtype != np.float64:
+        raise ValueError("s: a C-contiguous float64 array")
+    arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, h, t0)]
+    return [_pointer(s), *(_pointer(a) for a in arrays)]
+
+
 @dataclass
-class Kernel:
-    """One model's lane kernel: ``run`` advances ``LANES`` points together."""
+class LaneLibrary:
+    """A loaded lane library of one model and balls: its run function ``_fn``."""
 
     n: int
     """The model's state size."""
     n_par: int
     path: Path
     _fn: Any
+
+
+@dataclass
+class Kernel(LaneLibrary):
+    """One model's lane kernel: ``run`` advances ``LANES`` points together."""
 
     def run(self, s: np.ndarray, p: np.ndarray, h: np.ndarray, t0: np.ndarray,
             n_renorm: int, every: int) -> tuple[np.ndarray, np.ndarray]:
@@ -178,13 +232,25 @@ class Kernel:
         (LANES) in SI units."""
         logs = np.empty((n_renorm, LANES))
         states = np.empty((LANES, n_renorm * every, self.n + 1))
-        arrays = [np.ascontiguousarray(a, dtype=float) for a in (p, h, t0)]
-        if not s.flags.c_contiguous or s.dtype != np.float64:
-            raise ValueError("s: a C-contiguous float64 array")
-        self._fn(*(a.ctypes.data_as(ctypes.c_void_p) for a in (s, *arrays)),
-                 ctypes.c_int(n_renorm), ctypes.c_int(every),
-                 logs.ctypes.data_as(ctypes.c_void_p), states.ctypes.data_as(ctypes.c_void_p))
+        self._fn(*_lane_arrays(s, p, h, t0), ctypes.c_int(n_renorm), ctypes.c_int(every),
+                 _pointer(logs), _pointer(states))
         return logs, states
+
+
+@dataclass
+class StateKernel(LaneLibrary):
+    """One model's state-only lane kernel: ``run`` advances ``LANES`` runs together."""
+
+    def run(self, s: np.ndarray, p: np.ndarray, h: np.ndarray, t0: np.ndarray,
+            n_out: int, every: int) -> np.ndarray:
+        """Advance ``s`` ((n + 1) × LANES: ``[z; k]`` per lane, z in SI units after step k,
+        whose time is ``t0 + k·h``; changed in place) by ``n_out · every`` RK4 steps;
+        returns the states (LANES × n_out × n: lane k's z after every ``every`` steps).
+        ``p`` (n_par × LANES), ``h`` and ``t0`` (LANES, s)."""
+        states = np.empty((LANES, n_out, self.n))
+        self._fn(*_lane_arrays(s, p, h, t0), ctypes.c_long(n_out), ctypes.c_long(every),
+                 _pointer(states))
+        return states
 
 
 @cache
@@ -198,18 +264,80 @@ def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel 
         source = kernel_source(step, constants, qr_logs(n, 1))
     except Unsupported:
         return None
+    loaded = _load(source, library_stem("bd_lanes", model, structure), "bd_lanes_run")
+    if loaded is None:
+        return None
+    built = Kernel(n, len(model.parameter_names), *loaded)
+    return built if _agrees(built, tangent_block(model, structure, 1, renorm_every, 1),
+                            model, renorm_every) else None
+
+
+def _load(source: str, stem: str, symbol: str) -> tuple[Path, Any] | None:
+    """The library of ``source`` from the cache of ``analysis.integrate.compiled`` (built
+    there once) and its function ``symbol``, or None when it cannot be built or loaded."""
     command = compiler_command()
-    path = cached_path(library_stem("bd_lanes", model, structure), source, command)
+    path = cached_path(stem, source, command)
     try:
         if not path.exists():
             compile_library(source, path, command)
-        fn = ctypes.CDLL(str(path)).bd_lanes_run
+        fn = getattr(ctypes.CDLL(str(path)), symbol)
     except (CompileError, OSError, AttributeError):
         return None
     fn.restype = None
-    built = Kernel(n, len(model.parameter_names), path, fn)
-    return built if _agrees(built, tangent_block(model, structure, 1, renorm_every, 1),
-                            model, renorm_every) else None
+    return path, fn
+
+
+def rk4_state_step(model: Any, structure: tuple[int, ...]) -> tuple[ca.Function, ca.Function]:
+    """The RK4 step of the compiled blocks (``compiled.rk4_blocks``) and its constants:
+    ``rk4_steps1(s, p, h, t0, c) -> s'`` with ``s = [z; k]``, ``rk4_constants(p, h, t0)``
+    (the same memoised Functions, so the same operations)."""
+    return tuple(tangent_step(model.functions(structure).rk4_step, Carry(constants=True),
+                              "rk4_steps1", "rk4_constants"))
+
+
+@cache
+def state_kernel(model: Any, structure: tuple[int, ...]) -> StateKernel | None:
+    """The state-only lane kernel of ``model`` with these balls, compiled and self-tested
+    against the CasADi step it is written from (bit for bit over ``SELF_TEST_STEPS`` steps
+    from different states, counters, parameters and steps), or None (see the module).
+    Memoised per process."""
+    step, constants = rk4_state_step(model, structure)
+    try:
+        source = state_kernel_source(step, constants)
+    except Unsupported:
+        return None
+    loaded = _load(source, library_stem("bd_state_lanes", model, structure),
+                   "bd_state_lanes_run")
+    if loaded is None:
+        return None
+    built = StateKernel(model.n_state, len(model.parameter_names), *loaded)
+    return built if _state_agrees(built, step, constants, model) else None
+
+
+SELF_TEST_STEPS = 6
+"""Steps of the state kernel's self-test, kept after every 2nd (so both loops run)."""
+
+
+def _state_agrees(built: StateKernel, step: ca.Function, constants: ca.Function,
+                  model: Any) -> bool:
+    """Every lane's states equal the CasADi step's (the VM), bit for bit."""
+    n = built.n
+    p = model.parameter_vector(model.defaults)
+    h = float(model.simulation_defaults["dt"])
+    lanes = [np.append(test_state(n) * (1 + 0.1 * k), 3.0 + k) for k in range(LANES)]
+    ps = [p * (1 + 0.01 * k) for k in range(LANES)]
+    hs, t0s = h * (1 + 0.05 * np.arange(LANES)), 0.1 * np.arange(LANES)
+    s = np.ascontiguousarray(np.stack(lanes, axis=1))
+    got = built.run(s, np.stack(ps, axis=1), hs, t0s, SELF_TEST_STEPS // 2, 2)
+    for k, start in enumerate(lanes):
+        c = constants(ps[k], hs[k], t0s[k])
+        want = [start]
+        for _ in range(SELF_TEST_STEPS):
+            want.append(np.asarray(step(want[-1], ps[k], hs[k], t0s[k], c)).ravel())
+        if not (np.array_equal(np.array(want[2::2])[:, :n], got[k])
+                and np.array_equal(want[-1], s[:, k])):
+            return False
+    return True
 
 
 def _agrees(built: Kernel, block: ca.Function, model: Any, renorm_every: int) -> bool:
