@@ -969,6 +969,41 @@ CLI_CASES += _cases("jobs", ("reproduce", "vakharia2015", "--quick"), [
      _spec_file("f.txt", "a file")),
 ])
 
+CLI_CASES += _cases("checked before any write", ("stiffness", "vakharia2015"), [
+    ("stiffness-ross-folder-missing", "--ross into a folder that does not exist (refused "
+     "before the coefficients are computed)", ("--ross", "nowhere/r.json"),
+     ["--ross: folder 'nowhere' does not exist"]),
+    ("stiffness-ross-suffix", "--ross to a file that is not JSON", ("--ross", "r.txt"),
+     ["--ross: 'r.txt' must end in one of .json, got '.txt'"]),
+    ("stiffness-ross-is-folder", "--ross naming a folder", ("--ross", "sub.json"),
+     ["--ross: 'sub.json' is a folder"], _folder("sub.json")),
+    ("stiffness-figure-suffix", "a stiffness figure with a result suffix", ("-o", "f.nc"),
+     ["--output: 'f.nc' must end in one of .png"]),
+    ("stiffness-speeds-alone", "--speeds without --ross", ("--speeds", "1000:2000:3"),
+     ["--speeds: only with --ross"]),
+])
+CLI_CASES += _cases("checked before any write", ("reproduce",), [
+    ("reproduce-model-unknown", "an unknown model (used to leave empty report folders)",
+     ("vakharia", "--quick", "-o", "rep"), ["model: no model named 'vakharia'"]),
+    ("reproduce-out-deep", "a report folder inside a folder that does not exist",
+     ("vakharia2015", "--quick", "-o", "no/rep"), ["--out-dir: folder 'no' does not exist"]),
+])
+CLI_CASES += _cases("checked before any write", (), [
+    ("explore-output-suffix", "an explorer page that is not HTML",
+     ("explore", "c.nc", "-o", "page.txt"), ["--output: 'page.txt' must end in one of .html"]),
+    ("cite-output-folder-missing", "a citation into a folder that does not exist",
+     ("cite", "vakharia2015", "-o", "nowhere/x.bib"), ["--output: folder 'nowhere' does not "
+                                                       "exist"]),
+    ("sweep-step-no-parts", "a sweep refused for its step (used to leave d.nc.parts, which "
+     "blocked the corrected command)", (*SWEEP, "--dt", "0.002"),
+     ["dt: must resolve the fastest forcing VC"]),
+    ("chart-step-no-parts", "a chart refused for its step", (*CHART, "--dt", "0.002"),
+     ["dt: must resolve the fastest forcing VC"]),
+    ("generate-out-deep", "generate into a folder inside one that does not exist",
+     ("generate", "vakharia2015.toml", "--out", "gen/model"),
+     ["--out: folder 'gen' does not exist"], _bad_spec),
+])
+
 
 @dataclass
 class Outcome:
@@ -1107,7 +1142,7 @@ def test_crash_mid_write_leaves_nothing(tmp_path):
 GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "user parameters",
           "custom expressions", "bodies and bearings", "command line", "simulate", "files",
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
-          "jobs", "numerical failures"]
+          "jobs", "checked before any write", "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:

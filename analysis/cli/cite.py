@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from analysis.cli.common import ModelArgument, app, reports_errors
+from analysis.cli.common import ModelArgument, any_output, app, reports_errors
 
 
 @app.command()
@@ -19,8 +19,8 @@ def cite(
                          "the model is built on it) or cff (CITATION.cff, CFF 1.2.0).")
     ] = "bibtex",
     output: Annotated[Path | None, typer.Option(
-        "-o", "--output", help="Write the citation to this file (default: print it).")
-    ] = None,
+        "-o", "--output", help="Write the citation to this file (default: print it).",
+        callback=any_output)] = None,
 ):
     """The citation of a model: its title, spec path and SHA-256, the versions that
     generated its code and the paper its equations come from."""

@@ -194,6 +194,16 @@ def figure_output(param: typer.CallbackParam, value: Path | None) -> Path | None
     return _check_output_option(param, value, FIGURE_SUFFIXES)
 
 
+def json_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
+    """Option callback: a JSON file can be written at ``value``."""
+    return _check_output_option(param, value, (".json",))
+
+
+def html_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
+    """Option callback: an HTML page can be written at ``value``."""
+    return _check_output_option(param, value, (".html", ".htm"))
+
+
 def any_output(param: typer.CallbackParam, value: Path | None) -> Path | None:
     """Option callback: a file of any kind can be written at ``value``."""
     return _check_output_option(param, value, None)

@@ -14,6 +14,7 @@ from analysis.cli.common import (
     WorkersOption,
     app,
     executor_of,
+    html_output,
     reports_errors,
 )
 
@@ -22,7 +23,8 @@ from analysis.cli.common import (
 @reports_errors
 def explore(
     chart_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn chart`.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="HTML file to write.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="HTML file to write.",
+                                         callback=html_output)],
     spectrum_bins: Annotated[int, typer.Option(
         help="Spectrum bins kept per variable (the largest of each group: no peak lost).")
     ] = 400,

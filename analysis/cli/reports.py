@@ -42,19 +42,20 @@ def reproduce(
     from analysis.reports.paper import SENSITIVITY
     from analysis.reports.progress import ProgressReporter
     from analysis.reports.report import write_reproduction
+    from analysis.reports.reproduce import check_reproduction
     from analysis.reports.reproduce import reproduce as run_reproduce
 
     check_out_dir(out_dir)
     kwargs = {}
     if quick:
         kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
-                      sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()},
-                      quick=True)
+                      sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()})
+    check_reproduction(model, **kwargs)  # every input, before a worker starts or a file is made
     ex = executor_of(executor, workers, scheduler)
     try:
         rep = run_reproduce(out_dir, model, executor=ex, log=None if quiet else typer.echo,
                             progress_factory=lambda label: ProgressReporter(label, quiet),
-                            **kwargs)
+                            quick=quick, **kwargs)
     finally:
         ex.close()
     paths = write_reproduction(rep, out_dir)

@@ -17,6 +17,8 @@ from analysis.cli.common import (
     SetOption,
     SpeedOption,
     app,
+    figure_output,
+    json_output,
     parameter_values,
     parse_n_balls,
     reports_errors,
@@ -92,12 +94,14 @@ def stiffness(
     as_json: JsonOption = False,
     ross: Annotated[Path | None, typer.Option(
         "--ross", help="Write cage-averaged coefficients over --speeds as the keywords of "
-                       "ROSS's BearingElement (JSON; frequency in rad/s).")] = None,
+                       "ROSS's BearingElement (JSON; frequency in rad/s).",
+        callback=json_output)] = None,
     speeds: Annotated[str | None, typer.Option(
         help="Shaft speeds of --ross, rpm: START:STOP:COUNT or a comma list (default: 10 "
              "speeds from 10 % to 200 % of the model's speed).")] = None,
     output: Annotated[Path | None, typer.Option(
-        "-o", "--output", help="Figure of the coefficients over the cage angle.")] = None,
+        "-o", "--output", help="Figure of the coefficients over the cage angle.",
+        callback=figure_output)] = None,
 ):
     """Static equilibrium under the constant loads (velocities 0, cage held), and the
     stiffness K = -dF/dq and damping C = -dF/dq' matrices: at cage angle 0, over one ball
@@ -111,6 +115,8 @@ def stiffness(
     params = parameter_values(speed_rpm, sets)
     system = as_system(model, balls, **params)
     rpm = None
+    if speeds is not None and not ross:
+        raise InputError("--speeds: only with --ross")
     if ross:  # checked before any work
         check_planar(system.state_names[:system.n_state // 2])
         base = float(system.parameters.get("speed_rpm", 0.0))

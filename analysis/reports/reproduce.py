@@ -15,8 +15,10 @@ from pathlib import Path
 
 import xarray as xr
 
-from analysis.model import load_model
-from analysis.provenance import state_at
+from analysis.errors import InputError
+from analysis.integrate.simulate import check_run
+from analysis.model import as_system, load_model
+from analysis.provenance import run_attrs, state_at
 from analysis.reports.paper import (
     PAPER_NATURE,
     PAPER_TABLE2,
@@ -29,11 +31,11 @@ from analysis.reports.paper import (
     simulate_case,
 )
 from analysis.signal.spectrum import Peak
-from analysis.stability.classify import classify
+from analysis.stability.classify import classify, default_section, verdict_points
 from analysis.stability.lyapunov import lyapunov
 from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.executors import Executor
-from analysis.sweeps.grid import Axis, Setting
+from analysis.sweeps.grid import Axis, Setting, check_grid, section_period
 
 
 @dataclass
@@ -118,6 +120,36 @@ class Reproduction:
         return out
 
 
+def _sensitivity_axes(name: str, values: Sequence[float],
+                      n_balls: Sequence[int]) -> tuple[Axis, Axis]:
+    """The axes of one sensitivity chart: ``name`` over ``values``, and the balls."""
+    return (Axis(name, tuple(float(v) for v in values)),
+            Axis("n_balls", tuple(float(n) for n in n_balls)))
+
+
+def check_reproduction(model: str, n_balls: Sequence[int] = (5, 6, 7, 8, 9, 10), *,
+                       duration: float = 3.0, transient: float = 1.0, revolutions: int = 200,
+                       sensitivity: dict[str, Sequence[float]] | None = None) -> None:
+    """Raise ``InputError`` (or ``SpecError``) before anything is written when any part of
+    the reproduction would be refused: the model, every N_b's run (times in s, the step)
+    and every sensitivity chart's grid."""
+    load_model(model)
+    for nb in n_balls:
+        check_run(model, nb, duration=duration, transient=transient)
+        system = as_system(model, nb)
+        section = default_section(run_attrs(system.model, system.structure,
+                                            dict(system.parameters)))
+        period, least = section_period(system, section), verdict_points() + 1
+        if (duration - transient) / period < least:
+            raise InputError(f"duration: must be at least {transient + least * period:.4g} s "
+                             f"(the transient and {least} {section} periods of "
+                             f"{period * 1e3:.4g} ms: a verdict needs them at N_b = {nb}), "
+                             f"got {duration:g} s")
+    setting = Setting(model, None, {}, transient, revolutions)
+    for name, values in (SENSITIVITY if sensitivity is None else sensitivity).items():
+        check_grid(setting, *_sensitivity_axes(name, values, n_balls))
+
+
 def reproduce(
     out_dir: str | Path,
     model: str = "vakharia2015",
@@ -138,6 +170,9 @@ def reproduce(
     ``quick`` marks the result as a smoke test (the report says so at the top)."""
     start = time.perf_counter()
     out = Path(out_dir)
+    charts_of = SENSITIVITY if sensitivity is None else sensitivity
+    check_reproduction(model, n_balls, duration=duration, transient=transient,
+                       revolutions=revolutions, sensitivity=charts_of)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
     f_max = series_f_max(mdl, n_balls)  # one frequency range for every N_b's figure
@@ -157,10 +192,9 @@ def reproduce(
                 f"{rows[-1].ci95:.2g} 1/s)")
     charts = {}
     setting = Setting(model, None, {}, transient, revolutions)
-    for name, values in (SENSITIVITY if sensitivity is None else sensitivity).items():
+    for name, values in charts_of.items():
         progress = progress_factory(f"sensitivity {name}") if progress_factory else None
-        charts[name] = stability_chart(setting, Axis(name, tuple(float(v) for v in values)),
-                                       Axis("n_balls", tuple(float(n) for n in n_balls)),
+        charts[name] = stability_chart(setting, *_sensitivity_axes(name, values, n_balls),
                                        out / "runs" / f"sensitivity-{name}.nc",
                                        executor=executor, progress=progress)
     return Reproduction(model, rows, charts,

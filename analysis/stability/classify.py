@@ -253,6 +253,11 @@ def graph_ratio(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> float:
     return float(np.median(neighbours) / max(np.median(pairs[i != j]), 1e-300))
 
 
+def verdict_points(max_period: int = 16) -> int:
+    """Section points a verdict needs: periods up to ``max_period`` must repeat twice."""
+    return 2 * max_period + 2
+
+
 def classify(
     ds: xr.Dataset,
     section: str | None = None,
@@ -272,7 +277,7 @@ def classify(
     """
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
-    least = 2 * max_period + 2
+    least = verdict_points(max_period)
     found = pts.sizes.get("k", 0)  # section points along k (their times in coordinate t)
     if found < least:
         raise InputError(f"run: {found} point(s) on the {section} section; a verdict "

@@ -143,8 +143,9 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         ds = _assemble_chart(store, setting, x, y)
         save_dataset(ds, output)
         store.remove()
-    finally:
-        store.close()
+    except BaseException:  # a refusal or failure before the first point: no trace
+        store.discard()
+        raise
     return ds
 
 

@@ -222,8 +222,9 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
         ds = _assemble_diagram(store, setting, axis, directions, follow)
         save_dataset(ds, output)
         store.remove()
-    finally:
-        store.close()
+    except BaseException:  # a refusal or failure before the first point: no trace
+        store.discard()
+        raise
     return ds
 
 

@@ -46,6 +46,8 @@ class PointStore:
         self.output = Path(output)
         self.folder = self.output.with_name(self.output.name + ".parts")
         self._lock_fd: int | None = None
+        self.made = not self.folder.exists()
+        """Whether this store made the folder (``discard`` removes only such a folder)."""
         manifest = self.folder / MANIFEST
         text = json.dumps(definition, sort_keys=True, indent=1, default=float)
         if lock:
@@ -61,12 +63,12 @@ class PointStore:
                 raise InputError(f"output: {self.folder / MANIFEST} is damaged and points are "
                                  "stored beside it; delete the folder to start again") from None
             stored = None
-        if stored is not None and stored != json.loads(text):
+        if stored is not None and stored != json.loads(text) and self.done():
             self.close()
             raise InputError(
                 f"output: {self.folder} holds an unfinished sweep with a different "
                 "definition; finish it with the same command, or delete the folder")
-        if stored is None:
+        if stored != json.loads(text):  # none yet, or one of no stored point: replaced
             self.folder.mkdir(parents=True, exist_ok=True)
             _atomic_bytes(manifest, text.encode())
         if lock:
@@ -131,6 +133,13 @@ class PointStore:
         if self._lock_fd is not None:
             os.close(self._lock_fd)
             self._lock_fd = None
+
+    def discard(self) -> None:
+        """After a sweep that failed: remove the folder when this store made it and no point
+        was stored (a refusal leaves nothing behind), and release the lock."""
+        if self.made and not self.done():
+            self.remove()
+        self.close()
 
     def remove(self) -> None:
         """Delete the stored points (the sweep is assembled) and release the lock."""
