@@ -11,6 +11,7 @@ from analysis.cli.common import app, main
 from analysis.cli import models, runs, stability, continuation, sweeps, reports, curves  # noqa: F401
 from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
 from analysis.cli import explore, cite  # noqa: F401
+from analysis.cli import attractors  # noqa: F401  (global dynamics: basins, attractors)
 # isort: on
 
 __all__ = ["app", "main"]

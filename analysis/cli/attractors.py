@@ -1,0 +1,214 @@
+"""Global dynamics: `basins` (basins of attraction on a grid) and `attractors` (basin
+fractions in a box, and their global continuation in a parameter)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    JsonOption,
+    ModelArgument,
+    NBallsOption,
+    PeriodOption,
+    QuietOption,
+    SetOption,
+    SpeedOption,
+    app,
+    figure_output,
+    netcdf_output,
+    parameter_values,
+    parse_n_balls,
+    reports_errors,
+    write_figure,
+)
+
+DtOption = Annotated[float | None, typer.Option(
+    help="Largest RK4 step, s (default: the spec's); the map takes N = ceil(T/dt) steps "
+         "per forcing period T.")]
+ResolutionOption = Annotated[int, typer.Option(
+    help="Cells per orbit size along each coordinate (coarser merges close attractors, "
+         "finer costs periods).")]
+RevisitsOption = Annotated[int, typer.Option(
+    help="Consecutive revisits of a trajectory's own cells that mark an attractor.")]
+RecordOption = Annotated[int, typer.Option(help="Section points recorded per new attractor.")]
+HitsOption = Annotated[int, typer.Option(
+    help="Consecutive points in a known attractor's cells that label a trajectory.")]
+MaxPeriodsOption = Annotated[int, typer.Option(
+    help="Forcing periods after which a trajectory still searching is 'undecided'.")]
+PlotOption = Annotated[Path | None, typer.Option(
+    "--plot", help="Figure to write (PNG, PDF, SVG).", callback=figure_output)]
+OutputOption = Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                            callback=netcdf_output)]
+
+
+def _system(model: str, n_balls, speed_rpm, sets):
+    from analysis.model import System
+
+    return System.make(model, parse_n_balls(n_balls), **parameter_values(speed_rpm, sets))
+
+
+def _options(resolution: int, revisits: int, record: int, hits: int, max_periods: int):
+    from analysis.stability.attractors import MapperOptions
+
+    return MapperOptions(resolution=resolution, revisits=revisits, record=record, hits=hits,
+                         max_periods=max_periods)
+
+
+def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> None:
+    """Write the file (atomically), print the table or the JSON, draw the figure."""
+    from analysis.io import save_dataset
+    from analysis.stability.attractors import study_json
+
+    save_dataset(ds, output)
+    if as_json:
+        typer.echo(json.dumps(study_json(ds), indent=2))
+    else:
+        _echo_table(ds, output)
+    if plot:
+        from analysis.reports.attractor_plots import study_figure
+
+        write_figure(study_figure(ds, branches), plot, err=as_json)
+
+
+def _echo_table(ds, output: Path) -> None:
+    """One line per attractor: id, class, basin fraction, λ1, amplitudes."""
+    from analysis.stability.attractors import existence
+
+    kind = ds.attrs["kind"]
+    if kind == "attractor-continuation":
+        param = ds.attrs["param"]
+        typer.echo(f"wrote {output}: attractors at {ds.sizes['value']} values of {param}")
+        ranges = existence(ds)
+        for i, (low, high) in ranges.items():
+            natures = sorted({str(n) for n in ds.nature.sel(attractor=i).values if str(n)})
+            typer.echo(f"  attractor {i} ({', '.join(natures)}): {param} from {low:g} to "
+                       f"{high:g}")
+        return
+    typer.echo(f"wrote {output}: {ds.sizes['attractor']} attractor(s) on the "
+               f"{ds.attrs['section']} section")
+    names = [str(s) for s in ds.state.values][: max(1, ds.sizes["state"] // 2)]
+    for i in ds.attractor.values:
+        row = ds.sel(attractor=i)
+        head = f"  {int(i):>2}  {row.nature.values!s:<15} " \
+               f"{100 * float(row.fraction):5.1f} % ± {100 * float(row.fraction_stderr):.1f}"
+        if int(i) > 0:
+            amp = ", ".join(f"{k} {float(row.amplitude.sel(state=k)):.4g} {unit}"
+                            for k, unit in zip(names, ds.state_units.values, strict=False))
+            head += (f"  λ1 = {float(row.lambda1):.4g} ± {float(row.lambda1_ci95):.2g} 1/s"
+                     f"  amplitude {amp}")
+        typer.echo(head)
+
+
+@app.command()
+@reports_errors
+def basins(
+    model: ModelArgument,
+    x: Annotated[str, typer.Option(
+        "--x", help="COORD:LO:HI:N: a state (x, vy, x_housing …) from LO to HI in its unit, "
+                    "N grid values.")],
+    y: Annotated[str, typer.Option("--y", help="COORD:LO:HI:N, the other state.")],
+    output: OutputOption,
+    n_balls: NBallsOption = None,
+    speed_rpm: SpeedOption = None,
+    sets: SetOption = None,
+    period: PeriodOption = None,
+    dt: DtOption = None,
+    resolution: ResolutionOption = 40,
+    revisits: RevisitsOption = 30,
+    record: RecordOption = 100,
+    hits: HitsOption = 5,
+    max_periods: MaxPeriodsOption = 3000,
+    as_json: JsonOption = False,
+    plot: PlotOption = None,
+    quiet: QuietOption = False,
+):
+    """Basins of attraction: the attractor reached from every initial state of a grid over
+    two state coordinates (the others at the model's initial state), and every attractor's
+    class, period, λ1 and amplitudes."""
+    from analysis.reports.progress import ProgressReporter
+    from analysis.stability.attractors import Range
+    from analysis.stability.attractors import basins as run_basins
+
+    x_range = Range.parse(x, "--x", with_num=True)
+    y_range = Range.parse(y, "--y", with_num=True)
+    options = _options(resolution, revisits, record, hits, max_periods)
+    system = _system(model, n_balls, speed_rpm, sets)
+    ds = run_basins(system, x_range, y_range, period=period, dt=dt, options=options,
+                    progress=ProgressReporter("basins", quiet or as_json))
+    _finish(ds, output, as_json, plot)
+
+
+@app.command()
+@reports_errors
+def attractors(
+    model: ModelArgument,
+    samples: Annotated[int, typer.Option(help="Random initial states (per value with "
+                                              "--param).")],
+    box: Annotated[list[str], typer.Option(
+        "--box", help="COORD:LO:HI: a side of the box of initial states (repeatable); the "
+                      "other states at the model's initial state.")],
+    output: OutputOption,
+    param: Annotated[str | None, typer.Option(
+        "--param", help="NAME:LO:HI:N: continue the attractors over N values of a runtime "
+                        "parameter (its own unit, rpm for speed_rpm).")] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the random initial states.")] = 0,
+    branch: Annotated[list[Path] | None, typer.Option(
+        "--branch", help="Continuation branch file(s) (`bearingdyn continue`) drawn on the "
+                         "--param figure.")] = None,
+    n_balls: NBallsOption = None,
+    speed_rpm: SpeedOption = None,
+    sets: SetOption = None,
+    period: PeriodOption = None,
+    dt: DtOption = None,
+    resolution: ResolutionOption = 40,
+    revisits: RevisitsOption = 30,
+    record: RecordOption = 100,
+    hits: HitsOption = 5,
+    max_periods: MaxPeriodsOption = 3000,
+    as_json: JsonOption = False,
+    plot: PlotOption = None,
+    quiet: QuietOption = False,
+):
+    """Every attractor and its basin fraction (± standard error) among random initial
+    states in a box; with --param, their global continuation: found at each value from the
+    previous value's attractors and new random states, matched across values."""
+    from analysis.reports.progress import ProgressReporter
+    from analysis.stability.attractors import Box, Range, basin_fractions, global_continuation
+
+    sides = Box.parse(box, "--box")
+    options = _options(resolution, revisits, record, hits, max_periods)
+    along = Range.parse(param, "--param", with_num=True) if param is not None else None
+    branches = [_branch(path) for path in branch or []]
+    if branches and along is None:
+        raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
+    system = _system(model, n_balls, speed_rpm, sets)
+    if along is None:
+        ds = basin_fractions(system, sides, samples, seed=seed, period=period, dt=dt,
+                             options=options,
+                             progress=ProgressReporter("attractors", quiet or as_json))
+    else:
+        say = None if quiet else (lambda line: typer.echo(line, err=True))
+        ds = global_continuation(system, along.coordinate, along.points, sides, samples,
+                                 seed=seed, period=period, dt=dt, options=options,
+                                 progress=say)
+    _finish(ds, output, as_json, plot, branches)
+
+
+def _input_error(text: str):
+    from analysis.errors import InputError
+
+    return InputError(text)
+
+
+def _branch(path: Path):
+    """A continuation branch file, read and checked before any work."""
+    from analysis.io import open_result
+
+    ds = open_result(path)
+    if "special" not in ds or "param" not in ds.attrs:
+        raise _input_error(f"--branch: '{path}' is not a branch of `bearingdyn continue`")
+    return ds
