@@ -82,11 +82,12 @@ def _rows(attractors: Sequence[Attractor], ids: Sequence[int],
 
 
 def table(system: System, attractors: Sequence[Attractor], ids: Sequence[int],
-          fractions: Mapping[int, tuple[float, float]]) -> xr.Dataset:
-    """The attractors' table (see the module) over dimension ``attractor``."""
+          fractions: Mapping[int, tuple[float, float]], longest: int = 1) -> xr.Dataset:
+    """The attractors' table (see the module) over dimension ``attractor``; the section
+    points padded to at least ``longest`` rows."""
     n, names = system.n_state, list(system.state_names)
     cols = _rows(attractors, ids, fractions, n)
-    longest = max([len(p) for p in cols["points"]] + [1])
+    longest = max([len(p) for p in cols["points"]] + [longest])
     points = np.full((len(cols["id"]), longest, n), np.nan)
     for k, p in enumerate(cols["points"]):
         points[k, :len(p)] = p
@@ -150,8 +151,9 @@ def continuation_dataset(study: AttractorStudy, steps: Sequence[Step], parameter
                          box: Box, samples: int, seed: int) -> xr.Dataset:
     """The ``attractor-continuation`` Dataset: the table at each value, one id axis."""
     system = study.system
+    longest = max([len(a.points) for s in steps for a in s.result.attractors] + [1])
     tables = [table(system, [a for _, a in s.attractors()],
-                    [g for g, _ in s.attractors()], s.fractions()) for s in steps]
+                    [g for g, _ in s.attractors()], s.fractions(), longest) for s in steps]
     ids = sorted({int(i) for t in tables for i in t.attractor.values},
                  key=lambda i: (i < 0, abs(i)))
     merged = xr.concat([t.drop_vars("state_units").reindex(attractor=ids) for t in tables],
