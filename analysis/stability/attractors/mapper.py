@@ -174,6 +174,7 @@ class RecurrenceMapper:
         self._next = 0
         self._owner: dict[bytes, int] = {}  # attractor cell -> label
         self._basin: dict[bytes, int] = {}  # basin cell -> label (autonomous maps only)
+        self._merged: dict[int, int] = {}  # a label merged away -> the label it joined
         self.periods = 0
         """Periods integrated, summed over trajectories (the cost of the mapping)."""
 
@@ -185,7 +186,15 @@ class RecurrenceMapper:
         return [[row.tobytes() for row in member] for member in index]
 
     def attractor(self, label: int) -> Found:
-        return self.found[label]
+        return self.found[self.resolve(label)]
+
+    def resolve(self, label: int) -> int:
+        """The label an attractor now has: one recorded by a trajectory and found to be a
+        known attractor was merged into it, and states labelled with it before then are
+        that attractor's."""
+        while label in self._merged:
+            label = self._merged[label]
+        return label
 
     # -- the state machine ------------------------------------------------------------------
     def map(self, states: np.ndarray, steps: np.ndarray | None = None,
@@ -229,7 +238,7 @@ class RecurrenceMapper:
                 active = active[:0]
             if progress is not None:
                 progress(int(np.count_nonzero(labels)), count)
-        return labels
+        return np.array([self.resolve(int(k)) for k in labels], dtype=np.int64)
 
     def _walk(self, trace: _Trace, keys: list[bytes], points: np.ndarray, index: int,
               initial: np.ndarray, last: np.ndarray) -> int:
@@ -247,6 +256,7 @@ class RecurrenceMapper:
                     known.cells |= rec.cells
                     known.points += rec.points
                     del self.found[rec.label]
+                    self._merged[rec.label] = owner
                     return owner
                 if not owner:
                     self._owner[key] = rec.label
@@ -265,7 +275,7 @@ class RecurrenceMapper:
             else:
                 trace.hit_run, trace.hit_label = 0, 0
             if self.autonomous:
-                basin = self._basin.get(key, 0)
+                basin = self.resolve(self._basin.get(key, 0))
                 trace.basin_run = trace.basin_run + 1 if basin else 0
                 if basin and trace.basin_run >= opts.basin_hits:
                     return basin
