@@ -43,6 +43,7 @@ from modelgen.locations import (
     module_name,
     shipped_spec_dir,
     spec_digest,
+    user_spec_dirs,
     user_specs,
 )
 
@@ -536,13 +537,32 @@ def as_system(target: System | Model | str | Path, n_balls: BallCounts = None,
 
 # ---- finding and importing generated models -------------------------------------------
 
+def user_models() -> dict[str, Path]:
+    """The specs of the ``BEARINGDYN_MODELS`` folders by name (``user_specs``), the folders
+    judged first: ``InputError`` for a folder that does not exist, and a warning for each
+    spec whose name a shipped model has (the shipped one wins; the spec is never used)."""
+    import os
+    import warnings
+
+    for folder in user_spec_dirs():
+        if not folder.is_dir():
+            raise InputError(f"{MODELS_ENV}: '{folder}' is not an existing folder; give "
+                             f"folders of specs, separated by '{os.pathsep}'")
+    found = user_specs()
+    for name, path in found.items():
+        if _is_shipped_name(name):
+            warnings.warn(f"{MODELS_ENV}: {path} has the name of a shipped model and is never "
+                          "used; rename it (the file and model.name) to use it", stacklevel=2)
+    return found
+
+
 def available_models() -> list[str]:
     """Names of the shipped models and of the specs in ``BEARINGDYN_MODELS`` folders."""
     names = []
     for info in pkgutil.iter_modules(generated.__path__):
         if info.ispkg:
             names.append(importlib.import_module(f"generated.{info.name}").NAME)
-    names += [n for n in user_specs() if n not in names]
+    names += [n for n in user_models() if n not in names]
     return sorted(names)
 
 
@@ -566,12 +586,12 @@ def load_model(name: str | Path) -> Model:
     if not text.strip():
         raise InputError("model: the name is empty; give a model name (see 'bearingdyn "
                          "models') or the path of a .toml spec")
+    users = user_models()  # the folders judged whatever the name (a shadowed spec warned)
     path = Path(text).expanduser()
     if text.endswith(".toml") or path.is_dir() or path.exists():
         return _load_path(path)
     if _is_shipped_name(text) or _generated_exists(text):
         return _load_shipped(text)
-    users = user_specs()
     if text in users:
         return _load_spec_file(users[text])
     known = available_models()

@@ -181,13 +181,29 @@ def load_dataset(path: str | Path) -> xr.Dataset:
     saying why not: it must have ``t`` and every state variable its ``state_names`` attr
     names (``x``, ``y``, ``vx``, ``vy`` for files written before that attr), and pass
     ``check_run``."""
-    data = open_result(path)
+    return as_run(open_result(path), path)
+
+
+def as_run(data: xr.Dataset, path: str | Path = "the run") -> xr.Dataset:
+    """``data`` (a result read from ``path``) when it is a run that can be analysed
+    (``load_dataset``'s checks); else ``InputError``: a file of another program (no
+    ``model`` attribute), a result of another kind, or a damaged run (``check_run``)."""
+    check_ours(data, path)
     missing = [v for v in state_names(data) if v not in data]
     if "t" not in data.coords or missing:
         raise InputError(f"result file: '{path}' is not a bearingdyn run "
                          f"(missing {', '.join(missing) or 't'})")
     check_run(data, path)
     return data
+
+
+def check_ours(data: xr.Dataset, path: str | Path) -> None:
+    """``InputError`` unless ``data`` was written by bearingdyn (it names its model)."""
+    if not isinstance(data.attrs.get("model"), str):
+        names = ", ".join(map(str, data.data_vars)) or "none"
+        raise InputError(f"result file: '{path}' is not a bearingdyn result (it names no "
+                         f"model; variables: {names[:120]}); give a file that bearingdyn "
+                         "wrote")
 
 
 def check_run(ds: xr.Dataset, path: str | Path = "the run") -> None:

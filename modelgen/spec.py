@@ -262,7 +262,7 @@ class Spec(_Strict):
                         *_initial_problems(self)]
             if not attached:  # and these, every term on a known body or bearing
                 problems += [*_structure_problems(self), *_term_problems(self),
-                             *_contact_problems(self)]
+                             *_contact_problems(self), *_holding_problems(self)]
         if self.simulation.transient >= self.simulation.duration:
             problems.append("simulation.transient: must be shorter than simulation.duration "
                             f"({self.simulation.duration:g} s)")
@@ -496,6 +496,66 @@ def _structure_problems(spec: Spec) -> list[str]:
             problems.append(f"{where}: bearing '{bearing.name}' has no contact term; add "
                             "[[terms]] kind = 'hertz_contact' (or 'two_contact') for it, or "
                             "remove the bearing")
+    return problems
+
+
+HOLDING_TERMS = ("cubic_spring", "expression")
+"""Terms on a body that may hold it to ground by themselves (a spring of their own)."""
+
+
+def _holding_problems(spec: Spec) -> list[str]:
+    """Every body is acted on by something (else its states stay 0) and held to ground:
+    by its support's stiffness, a bearing to ground or a spring term of its own, or through
+    bearings by a body that is (else it drifts without bound under any constant load)."""
+    bodies = [b.name for b in spec.body_list()]
+    group = {name: name for name in bodies}
+
+    def root(name: str) -> str:
+        while group[name] != name:
+            name = group[name]
+        return name
+
+    held, joined, acted = set(), {n: [] for n in bodies}, set()
+    for body in spec.body_list():
+        if body.support is not None and body.support.stiffness is not None:
+            held.add(body.name)
+    for bearing in spec.bearing_list():
+        acted.add(bearing.inner)
+        if bearing.outer == GROUND:
+            held.add(bearing.inner)
+        else:
+            acted.add(bearing.outer)
+            group[root(bearing.inner)] = root(bearing.outer)
+            joined[bearing.inner].append(f"bearing '{bearing.name}' to '{bearing.outer}'")
+            joined[bearing.outer].append(f"bearing '{bearing.name}' to '{bearing.inner}'")
+    for term in spec.terms:
+        body = spec.attachment(term).get("body")
+        if body in group:
+            acted.add(body)
+            if term.kind in HOLDING_TERMS:
+                held.add(body)
+    grounded = {root(n) for n in held}
+    start = dict(zip(spec.state_names(), spec.initial_state(), strict=True))
+    several = len(bodies) > 1
+
+    def moved(body: str) -> bool:
+        return any(v != 0 and (not several or k.endswith(f"_{body}")) for k, v in start.items())
+
+    problems, named = [], set()
+    for i, name in enumerate(bodies):
+        where = f"bodies[{i}] ('{name}')" if spec.bodies is not None else f"body '{name}'"
+        if name not in acted and not moved(name):
+            problems.append(f"{where}: attached to nothing (no bearing or term acts on it and "
+                            "it starts at rest: its states would stay 0); join it with a "
+                            "bearing, put a term on it, or remove it")
+        elif root(name) not in grounded and root(name) not in named:
+            named.add(root(name))
+            others = [n for n in bodies if n != name and root(n) == root(name)]
+            through = f" (held only by {', '.join(joined[name])})" if joined[name] else ""
+            fix = "it or a body it is joined to" if others else "it"
+            problems.append(f"{where}: nothing holds it to ground{through}; give {fix} "
+                            "support = { stiffness = \"…\", damping = \"…\" }, a bearing with "
+                            f"outer = 'ground', or a spring term ({', '.join(HOLDING_TERMS)})")
     return problems
 
 

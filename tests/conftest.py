@@ -13,9 +13,11 @@ ROOT = Path(__file__).resolve().parent.parent
 SPECS = ROOT / "modelgen" / "specs"
 
 
-def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    """Run the real ``bearingdyn`` command (as a user does) and capture its output."""
-    env = dict(os.environ, PYTHONWARNINGS="ignore")
+def run_cli(*args: str, cwd: Path | None = None,
+            env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """Run the real ``bearingdyn`` command (as a user does) and capture its output
+    (``env``: variables set for it on top of this process's)."""
+    env = {**os.environ, "PYTHONWARNINGS": "ignore", **(env or {})}
     return subprocess.run([sys.executable, "-m", "analysis.cli", *args], capture_output=True,
                           text=True, cwd=cwd or ROOT, env=env, timeout=600)
 

@@ -298,6 +298,23 @@ SPEC_CASES = [
                                  {"value": 1e-5, "unit": "mm", "source": "x"}),),
              base="two-bearing-rotor",
              expect=("parameters.radial_clearance_left.unit: must be 'm', got 'mm'",)),
+    SpecCase("housing-without-support", "bodies and bearings", "a body that nothing holds "
+             "to ground (the housing's support removed; used to blow up as 'try a smaller "
+             "dt')", (("bodies.1.support", DROP),), base="rotor-housing",
+             expect=("bodies[0] ('rotor'): nothing holds it to ground (held only by bearing "
+                     "'bearing' to 'housing'); give it or a body it is joined to support",)),
+    SpecCase("body-attached-to-nothing", "bodies and bearings", "a body attached to nothing "
+             "(its states stayed 0)", (("bodies.+", {"name": "frame", "mass": "housing_mass"}),),
+             base="rotor-housing",
+             expect=("bodies[2] ('frame'): attached to nothing (no bearing or term acts on it "
+                     "and it starts at rest: its states would stay 0)",)),
+    SpecCase("support-without-stiffness", "bodies and bearings", "a support of damping only "
+             "(holds nothing)", (("bodies.1.support.stiffness", DROP),), base="rotor-housing",
+             expect=("nothing holds it to ground",)),
+    SpecCase("spring-removed", "bodies and bearings", "a Duffing oscillator without its "
+             "spring (a free mass under a harmonic force)", (("terms.0", DROP),),
+             base="duffing",
+             expect=("body 'rotor': nothing holds it to ground; give it support",)),
     SpecCase("defect-ball-beyond-balls", "bodies and bearings", "a pit on a ball the "
              "bearing does not have", (("terms.1.ball", 12),), base="6205-ball-defect",
              expect=("terms[1].ball: must be in [1, 9] (a ball of bearing 'bearing', 9 by "
@@ -434,9 +451,12 @@ class CliCase:
     one_line: bool = True
     """False for usage errors that click/typer print before the command runs."""
     marks: tuple = field(default=())
+    env: tuple[tuple[str, str], ...] = ()
+    """Environment variables the command runs with (``BEARINGDYN_MODELS=…``)."""
 
     def shown(self) -> str:
-        return "`bearingdyn " + " ".join(self.args) + "`"
+        prefix = "".join(f"{k}={v} " for k, v in self.env)
+        return f"`{prefix}bearingdyn " + " ".join(self.args) + "`"
 
 
 SIM = ("simulate", "vakharia2015", "-o", "r.nc")
@@ -1004,6 +1024,59 @@ CLI_CASES += _cases("checked before any write", (), [
      ["--out: folder 'gen' does not exist"], _bad_spec),
 ])
 
+CLI_CASES += _cases("accepted without a word (now judged)", ("simulate", "vakharia2015", "-o",
+                                                            "r.nc", "--no-compile"), [
+    ("save-every-beyond-run", "--save-every beyond the run's steps (one sample kept)",
+     ("--duration", "0.01", "--transient", "0", "--save-every", "2000"),
+     ["save_every: must be in [1, 1000] to keep at least 2 samples after the transient",
+      "got 2000: 1 sample(s) kept"]),
+    ("save-every-beyond-transient", "--save-every that keeps one sample after the transient",
+     ("--duration", "0.01", "--transient", "0.005", "--save-every", "800"),
+     ["save_every: must be in [1, 500]", "got 800"]),
+    ("save-every-huge", "--save-every 1e11", ("--duration", "0.01", "--transient", "0",
+                                              "--save-every", "100000000000"),
+     ["save_every: must be in [1, 1000]"]),
+])
+CLI_CASES += _cases("accepted without a word (now judged)", ("simulate", "two-bearing-rotor",
+                                                            "-o", "r.nc", *SHORT), [
+    ("balls-bearing-twice", "one bearing's balls given twice (the last one used to win)",
+     ("--n-balls", "left=7", "--n-balls", "left=8"),
+     ["'--n-balls': bearing 'left' given twice (7 and 8); give each bearing once"]),
+    ("balls-bearing-twice-comma", "one bearing twice in one --n-balls",
+     ("--n-balls", "left=7,right=8,left=9"), ["bearing 'left' given twice (7 and 9)"]),
+])
+CLI_CASES += _cases("accepted without a word (now judged)", ("plot",), [
+    ("plot-nan", "a run holding NaN (spectrum, poincare and classify refused it)",
+     (*RUN, "-o", "f.png"), ["result file: 'run.nc': variable x is not finite at t = 5e-05 s"],
+     _run_file("nan")),
+    ("plot-one-sample", "a run of one sample", (*RUN, "-o", "f.png"),
+     ["holds 1 sample(s); a run needs at least 2"], _run_file("one")),
+    ("plot-tampered", "a run whose dt attribute was edited to -1", (*RUN, "-o", "f.png"),
+     ["attribute dt must be a finite number > 0"], _run_file("tampered")),
+])
+CLI_CASES += _cases("accepted without a word (now judged)", SWEEP, [
+    ("sweep-serial-and-scheduler", "--executor serial with --scheduler (the executor was "
+     "silently overridden)", ("--executor", "serial", "--scheduler", "tcp://127.0.0.1:9"),
+     ["--scheduler: only with --executor dask (or without --executor), got --executor "
+      "serial"]),
+    ("sweep-processes-and-scheduler", "--executor processes with --scheduler",
+     ("--executor", "processes", "--scheduler", "tcp://127.0.0.1:9"),
+     ["--scheduler: only with --executor dask"]),
+    ("sweep-workers-and-scheduler", "--workers with --scheduler (ignored before)",
+     ("--workers", "2", "--scheduler", "tcp://127.0.0.1:9"),
+     ["--workers: not with --scheduler", "got --workers 2"]),
+])
+CLI_CASES += [
+    CliCase("models-folder-missing", "accepted without a word (now judged)", "a "
+            "BEARINGDYN_MODELS folder that does not exist (was ignored)", SIM_SHORT,
+            ("BEARINGDYN_MODELS: 'nowhere' is not an existing folder; give folders of specs",),
+            env=(("BEARINGDYN_MODELS", "nowhere"),)),
+    CliCase("models-folder-is-file", "accepted without a word (now judged)", "a "
+            "BEARINGDYN_MODELS entry that is a file", ("models",),
+            ("BEARINGDYN_MODELS: 'f.txt' is not an existing folder",),
+            setup=_spec_file("f.txt", "a file"), env=(("BEARINGDYN_MODELS", "f.txt"),)),
+]
+
 
 @dataclass
 class Outcome:
@@ -1026,7 +1099,7 @@ def _run_case(case: CliCase, folder: Path) -> Outcome:
     if case.setup:
         case.setup(folder)
     before = _listing(folder)
-    res = run_cli(*case.args, cwd=folder)
+    res = run_cli(*case.args, cwd=folder, env=dict(case.env))
     return Outcome(res.returncode, res.stdout, res.stderr, folder, before, _listing(folder))
 
 
@@ -1142,7 +1215,8 @@ def test_crash_mid_write_leaves_nothing(tmp_path):
 GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "user parameters",
           "custom expressions", "bodies and bearings", "command line", "simulate", "files",
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
-          "jobs", "checked before any write", "numerical failures"]
+          "jobs", "checked before any write", "accepted without a word (now judged)",
+          "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:

@@ -144,6 +144,10 @@ def parse_n_balls(items: list[str] | None) -> int | dict[str, int] | None:
             if not name.strip():
                 raise typer.BadParameter(f"a bearing name is missing in {part!r}",
                                          param_hint="'--n-balls'")
+            if name.strip() in named:
+                raise typer.BadParameter(
+                    f"bearing {name.strip()!r} given twice ({named[name.strip()]} and "
+                    f"{number}); give each bearing once", param_hint="'--n-balls'")
             named[name.strip()] = number
         else:
             plain.append(number)
@@ -287,8 +291,21 @@ QuietOption = Annotated[bool, typer.Option("--quiet", help="No progress output."
 
 
 def executor_of(kind: str, workers: int | None, scheduler: str | None):
+    """The executor of ``--executor``, ``--workers`` and ``--scheduler``. A scheduler runs
+    the tasks on its own workers: given with ``--workers`` or with ``--executor`` serial or
+    processes typed out, it is refused (one of them would be ignored)."""
     from analysis.sweeps.executors import make_executor
 
+    if scheduler is not None:
+        context = click.globals.get_current_context(silent=True)
+        typed = context is not None and context.get_parameter_source("executor") \
+            == click.core.ParameterSource.COMMANDLINE
+        if typed and kind != "dask":
+            raise InputError(f"--scheduler: only with --executor dask (or without "
+                             f"--executor), got --executor {kind}")
+        if workers is not None:
+            raise InputError(f"--workers: not with --scheduler (the scheduler's cluster has "
+                             f"its own workers), got --workers {workers}")
     return make_executor(kind, workers, scheduler)
 
 

@@ -271,4 +271,4 @@ def plot(
     from analysis.io import open_result
     from analysis.reports.plots import any_figure
 
-    write_figure(any_figure(open_result(result), var), output)
+    write_figure(any_figure(open_result(result), var, result), output)

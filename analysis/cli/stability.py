@@ -74,8 +74,26 @@ def lyapunov(
         typer.echo(json.dumps({**data, "provenance": provenance(res)}, indent=2))
     else:
         _echo_lyapunov(res, data)
+    warning = unresolved_warning(data["exponents"][0], data["ci95"][0], data["duration"])
+    if warning:
+        typer.echo(warning, err=True)
     if output:
         write_figure(_lyapunov_figure(res), output, err=as_json)
+
+
+def unresolved_warning(value: float, ci95: float, duration: float) -> str | None:
+    """A warning line when λ1's 95 % interval (1/s) is wider than λ1 itself (its sign is
+    not resolved), with the averaging time (s) that would narrow the interval to half the
+    value (the interval shrinks as 1/sqrt(duration)); None when it is resolved."""
+    if not ci95 > abs(value):
+        return None
+    if value == 0 or not np.isfinite(ci95):
+        need = "a much longer run"
+    else:
+        need = f"about {duration * (2 * ci95 / abs(value)) ** 2:.3g} s of averaging"
+    return (f"warning: λ1 = {value:.4g} ± {ci95:.2g} 1/s: the interval is wider than the "
+            f"value, so its sign is not resolved by {duration:g} s of averaging; {need} "
+            "(--duration) would narrow it to half the value")
 
 
 def _running_json(running, dim: str) -> dict:

@@ -11,7 +11,7 @@ Checks, in this order (the first that fails is the one reported):
 
 1. the times: duration and dt finite and > 0 s, transient in [0, duration), dt <= duration;
 2. the method (``rk4`` or ``cvodes``) and CVODES' tolerances;
-3. ``save_every`` a whole number >= 1;
+3. ``save_every`` a whole number >= 1 that keeps at least two samples after the transient;
 4. the resolution: at most ``MAX_STEPS`` steps, and at least ``RESOLUTION_REFUSE`` steps per
    period of the fastest forcing (a warning below ``RESOLUTION_WARN``:
    ``analysis.integrate.checks.check_resolution``);
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -120,6 +120,7 @@ class RunPlan:
         check_resolution(model, system.structure, values, dt, duration, warn=warn)
         plan = cls(system, dt, duration, transient, method, save_every,
                    None if t0 is None else float(t0), rtol, atol)
+        plan.check_kept()
         if in_memory:
             check_memory(model.n_state, plan.n_saved, save_every)
         check_rk4_step(model, system.structure, values, dt, method)
@@ -153,6 +154,25 @@ class RunPlan:
         """Index of the first saved sample after the transient."""
         threshold = self.transient - 1e-12 * self._duration
         return max(0, first_kept(threshold, self.save_every * self.dt))
+
+    @property
+    def n_kept(self) -> int:
+        """Samples the run keeps after the transient (``first`` … ``n_saved``)."""
+        return self.n_saved - self.first + 1
+
+    def check_kept(self) -> None:
+        """``InputError`` when the run would keep fewer than two samples after the transient
+        (``save_every`` beyond the run's steps): nothing to analyse, not even a spectrum."""
+        if self.n_kept >= 2:
+            return
+        after = self.n_steps - math.ceil(self.transient / self.dt - 1e-9)  # steps kept from
+        top = max(1, min(self.save_every - 1, after))
+        most = next((n for n in range(top, max(1, top - 10_000), -1)
+                     if replace(self, save_every=n).n_kept >= 2), max(1, after // 2))
+        raise InputError(f"save_every: must be in [1, {most}] to keep at least 2 samples "
+                         f"after the transient ({self.n_steps} steps of {self.dt:g} s, "
+                         f"transient {self.transient:g} s), got {self.save_every}: "
+                         f"{max(self.n_kept, 0)} sample(s) kept")
 
     def times(self, start: int = 0, stop: int | None = None) -> np.ndarray:
         """Times (s, from ``t0``) of the saved samples ``start … stop − 1`` (all: 0 …

@@ -7,6 +7,8 @@ notebook's inline backend, a script's choice) and needs no display."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -15,7 +17,14 @@ from matplotlib.figure import Figure
 from analysis.errors import InputError
 from analysis.forcing import run_period_parameter
 from analysis.model import balls_text
-from analysis.provenance import displacement_names, is_velocity, state_names, vc_frequencies
+from analysis.provenance import (
+    as_run,
+    check_ours,
+    displacement_names,
+    is_velocity,
+    state_names,
+    vc_frequencies,
+)
 from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
 from analysis.signal.poincare import poincare_section, section_period
 from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
@@ -439,22 +448,35 @@ def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
     return fig
 
 
-def any_figure(ds: xr.Dataset, variables: list[str] | None = None) -> Figure:
+def any_figure(ds: xr.Dataset, variables: list[str] | None = None,
+               path: str | Path | None = None) -> Figure:
     """The natural figure of any bearingdyn result file (``variables``: the state variables
     of a diagram or of a run's spectra and maps; default: the first body's
-    displacements)."""
+    displacements). ``InputError`` for a file of another program, a ``kind`` attribute
+    that names no figure, or a run that cannot be analysed (``path``: the file, named in
+    the message)."""
+    path = path or ds.encoding.get("source", "the result")
+    check_ours(ds, path)
     kind = ds.attrs.get("kind")
-    if kind == "diagram":
-        return diagram_figure(ds, variables)
-    if kind == "chart":
-        return chart_figure(ds)
+    if kind is not None and kind not in FIGURE_KINDS:
+        raise InputError(f"result file: '{path}': attribute kind must be one of "
+                         f"{', '.join(FIGURE_KINDS)} to be drawn, got {str(kind)[:60]!r} (a "
+                         "damaged or edited file, or a result drawn by its own command)")
+    if kind is not None:
+        return FIGURE_KINDS[kind](ds, variables)
     if "special" in ds and "param" in ds.attrs:
         return branch_figure([ds])
+    ds = as_run(ds, path)
     if variables:
         fig = spectrum_figure(ds, variables)
         return fig
     return paper_figure(ds, default_figure_section(ds))
 
+
+FIGURE_KINDS: dict[str, Callable[[xr.Dataset, list[str] | None], Figure]] = {
+    "diagram": diagram_figure, "chart": lambda ds, variables: chart_figure(ds)}
+"""The figure of each result kind (the ``kind`` attribute) that ``any_figure`` draws; a
+result without one is a run or a branch."""
 
 SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}
 
