@@ -27,7 +27,7 @@ this state machine on its section points, one per forcing period:
   of the section, which a finite set of cells covers).
 - a trajectory that leaves the blow-up bound, or whose state is not finite, is
   ``DIVERGED``; one still searching after ``max_periods`` periods is ``UNDECIDED``. Neither
-  is ever dropped.
+  is ever dropped (nor are the states of a block whose integration failed: ``FAILED``).
 
 Trajectories are advanced ``chunk`` periods per ensemble call and processed in a fixed
 order, so a result depends only on the states, the settings and the chunk.
@@ -46,7 +46,10 @@ DIVERGED = -1
 """Label of a trajectory that blew up (non-finite, or beyond the model's blow-up bound)."""
 UNDECIDED = -2
 """Label of a trajectory still searching after ``max_periods`` periods."""
-SPECIAL_LABELS = {DIVERGED: "diverged", UNDECIDED: "undecided"}
+FAILED = -3
+"""Label of the states of a block whose mapping raised a ``SimulationError`` (recorded,
+never dropped; see ``study.AttractorStudy.map_block``)."""
+SPECIAL_LABELS = {DIVERGED: "diverged", UNDECIDED: "undecided", FAILED: "failed"}
 """The class names of the labels that are not attractors."""
 
 
@@ -140,6 +143,11 @@ class Found:
         return self.last_state[:-1]
 
 
+def cells_set(cells: np.ndarray) -> set:
+    """An (m, n) int64 array of cell indices as the mapper's cell keys (``bytes`` rows)."""
+    return {row.tobytes() for row in np.ascontiguousarray(cells, dtype=np.int64)}
+
+
 class _Trace:
     """The search state of one trajectory."""
 
@@ -177,6 +185,9 @@ class RecurrenceMapper:
         self._merged: dict[int, int] = {}  # a label merged away -> the label it joined
         self.periods = 0
         """Periods integrated, summed over trajectories (the cost of the mapping)."""
+        self.spent = np.zeros(0, dtype=np.int64)
+        """Periods integrated per initial state in the last ``map`` call (the time each
+        trajectory needed to be labelled)."""
 
     # -- cells ------------------------------------------------------------------------------
     def cell_keys(self, points: np.ndarray) -> list[list[bytes]]:
@@ -184,6 +195,12 @@ class RecurrenceMapper:
         index = np.floor(points / self.scale.size * self.options.resolution)
         index = np.nan_to_num(index, nan=0.0, posinf=0.0, neginf=0.0).astype(np.int64)
         return [[row.tobytes() for row in member] for member in index]
+
+    def cells_array(self, cells: set) -> np.ndarray:
+        """Cell keys (``cell_keys``) as an (m, n) int64 array of cell indices, sorted (the
+        exact inverse of ``cells_set``)."""
+        n = len(self.scale.size)
+        return np.frombuffer(b"".join(sorted(cells)), dtype=np.int64).reshape(-1, n).copy()
 
     def attractor(self, label: int) -> Found:
         return self.found[self.resolve(label)]
@@ -208,6 +225,7 @@ class RecurrenceMapper:
         s = np.ascontiguousarray(np.column_stack([states, start]))
         initial = s.copy()
         labels = np.zeros(count, dtype=np.int64)
+        self.spent = np.zeros(count, dtype=np.int64)
         traces = [_Trace() for _ in range(count)]
         active = np.arange(count)
         opts, done_periods = self.options, 0
@@ -217,6 +235,7 @@ class RecurrenceMapper:
             points = self.advance(block, chunk)
             s[active] = block
             self.periods += chunk * active.size
+            self.spent[active] += chunk
             done_periods += chunk
             bad = self.is_diverged(points)
             keys = self.cell_keys(points)
