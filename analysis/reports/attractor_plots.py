@@ -129,8 +129,9 @@ def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> 
     ids = [int(i) for i in ds.attractor.values]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 7), sharex=True,
                                       layout="constrained", height_ratios=(3, 2))
+    named: set[str] = set()
     for br in branches:
-        _overlay_branch(top, br, factor)
+        _overlay_branch(top, br, factor, named)
     for i in ids:
         if i < 0:
             continue
@@ -156,17 +157,20 @@ def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> 
     return fig
 
 
-def _overlay_branch(ax, br: xr.Dataset, factor: float) -> None:
+def _overlay_branch(ax, br: xr.Dataset, factor: float, named: set[str]) -> None:
     """A continuation branch: amplitude of its first state against its parameter, stable
-    solid, unstable dashed, special points marked."""
+    solid, unstable dashed, special points marked; its name enters the legend once
+    (``named``: the names already there)."""
     param = br.attrs["param"]
     lam, amp, stable = br[param].values, br.amplitude.values * factor, br.stable.values
     cuts = np.nonzero(np.diff(stable))[0] + 1
     for run in np.split(np.arange(len(lam)), cuts):
         run = np.append(run, run[-1] + 1) if run[-1] + 1 < len(lam) else run
         ax.plot(lam[run], amp[run], color="k", ls="-" if stable[run[0]] else "--", lw=1.0)
-    ax.plot([], [], color="k", lw=1.0, label=f"{br.attrs.get('branch', 'branch')} "
-                                             "(continue; dashed: unstable)")
+    name = f"{br.attrs.get('branch', 'branch')} (continue; dashed: unstable)"
+    if name not in named:
+        named.add(name)
+        ax.plot([], [], color="k", lw=1.0, label=name)
     for j, kind in enumerate(br.special.values):
         if kind:
             ax.plot(lam[j], amp[j], SPECIAL_MARKERS.get(str(kind), "o"), color="k", ms=6)
