@@ -143,6 +143,12 @@ class Found:
         return self.last_state[:-1]
 
 
+def cells_array(cells: set, n: int) -> np.ndarray:
+    """The mapper's cell keys (``RecurrenceMapper.cell_keys``) of an n-state map as an
+    (m, n) int64 array of cell indices, sorted (the exact inverse of ``cells_set``)."""
+    return np.frombuffer(b"".join(sorted(cells)), dtype=np.int64).reshape(-1, n).copy()
+
+
 def cells_set(cells: np.ndarray) -> set:
     """An (m, n) int64 array of cell indices as the mapper's cell keys (``bytes`` rows)."""
     return {row.tobytes() for row in np.ascontiguousarray(cells, dtype=np.int64)}
@@ -195,12 +201,6 @@ class RecurrenceMapper:
         index = np.floor(points / self.scale.size * self.options.resolution)
         index = np.nan_to_num(index, nan=0.0, posinf=0.0, neginf=0.0).astype(np.int64)
         return [[row.tobytes() for row in member] for member in index]
-
-    def cells_array(self, cells: set) -> np.ndarray:
-        """Cell keys (``cell_keys``) as an (m, n) int64 array of cell indices, sorted (the
-        exact inverse of ``cells_set``)."""
-        n = len(self.scale.size)
-        return np.frombuffer(b"".join(sorted(cells)), dtype=np.int64).reshape(-1, n).copy()
 
     def attractor(self, label: int) -> Found:
         return self.found[self.resolve(label)]

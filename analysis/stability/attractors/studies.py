@@ -1,6 +1,14 @@
 """The three attractor studies a user runs: basins on a grid, basin fractions in a box,
 and global continuation in a parameter. Each returns a Dataset with provenance
-(``analysis.stability.attractors.dataset``)."""
+(``analysis.stability.attractors.dataset``).
+
+Each cuts its initial states into blocks of ``block`` states (``study.Blocks``; at each
+parameter value for a continuation, the values one after the other since each is seeded
+from the previous one) and maps them with ``runner`` (default: in this process); the
+result does not depend on the runner (``analysis.sweeps.attractor_blocks`` runs the blocks
+on an executor and stores them). The Dataset also has ``label_periods`` (basins and
+fractions: the forcing periods each initial state took to be labelled), the attrs ``block``
+and, when a block failed, ``failed_blocks``."""
 
 from __future__ import annotations
 
@@ -21,7 +29,15 @@ from analysis.stability.attractors.dataset import (
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions
 from analysis.stability.attractors.sampling import Box, Range, grid_states
-from analysis.stability.attractors.study import AttractorStudy, check_memory
+from analysis.stability.attractors.study import (
+    BLOCK,
+    AttractorStudy,
+    Blocks,
+    Result,
+    Runner,
+    check_memory,
+    use_blocks,
+)
 
 Progress = Callable[[int, int], None]
 
@@ -33,35 +49,60 @@ def check_count(field: str, value: int) -> int:
     return int(value)
 
 
+LABEL_PERIODS = {"units": "forcing periods",
+                 "long_name": "periods integrated before the initial state was labelled"}
+
+
+def blocks_attrs(ds: xr.Dataset, block: int, results: Sequence[Result]) -> xr.Dataset:
+    """``ds`` with the attrs ``block`` and (when any) ``failed_blocks``."""
+    ds.attrs["block"] = block
+    failed = [f"{k}: {message}" for r in results for k, message in r.failed.items()]
+    if failed:
+        ds.attrs["failed_blocks"] = "; ".join(failed)
+    return ds
+
+
 def basins(system: System, x: Range, y: Range, *, period: str | Period | None = None,
            dt: float | None = None, options: MapperOptions | None = None,
            label_options: LabelOptions | None = None,
-           progress: Progress | None = None) -> xr.Dataset:
+           progress: Progress | None = None, block: int = BLOCK,
+           runner: Runner | None = None) -> xr.Dataset:
     """Basins of attraction on a grid of ``x.num`` × ``y.num`` initial states over two
     state coordinates (SI units; the others at ``system.state``): the attractor id of every
     grid cell and the attractors' table (``dataset.basins_dataset``). ``period``: the
-    map's forcing period (None: the model's default); ``dt``: largest RK4 step, s."""
+    map's forcing period (None: the model's default); ``dt``: largest RK4 step, s;
+    ``block``, ``runner``: see the module."""
+    how = Blocks(block, runner)
     check_count("x", x.num)
     check_count("y", y.num)
     states = grid_states(system, x, y)
     check_memory(len(states), system.n_state, options or MapperOptions())
     study = AttractorStudy(system, period, dt, options, label_options)
-    return basins_dataset(study, study.find(states, progress), x, y)
+    result = study.find(states, progress, how)
+    ds = basins_dataset(study, result, x, y)
+    ds["label_periods"] = (ds.basin.dims, result.spent.reshape(y.num, x.num).astype(np.int32),
+                           LABEL_PERIODS)
+    return blocks_attrs(ds, block, [result])
 
 
 def basin_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     period: str | Period | None = None, dt: float | None = None,
                     options: MapperOptions | None = None,
                     label_options: LabelOptions | None = None,
-                    progress: Progress | None = None) -> xr.Dataset:
+                    progress: Progress | None = None, block: int = BLOCK,
+                    runner: Runner | None = None) -> xr.Dataset:
     """Each attractor's basin fraction, with its standard error, among ``samples`` initial
     states drawn uniformly in ``box`` (``seed``: NumPy's ``default_rng`` seed)."""
+    how = Blocks(block, runner)
     check_count("samples", samples)
     box.check(system)
     check_memory(samples, system.n_state, options or MapperOptions())
     study = AttractorStudy(system, period, dt, options, label_options)
     states = box.sample(system, samples, np.random.default_rng(seed))
-    return fractions_dataset(study, study.find(states, progress), states, box, seed)
+    result = study.find(states, progress, how)
+    ds = fractions_dataset(study, result, states, box, seed)
+    ds["label_periods"] = ("sample", result.spent.astype(np.int32), LABEL_PERIODS)
+    return blocks_attrs(ds, block, [result])
 
 
 def global_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
@@ -69,15 +110,19 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                         dt: float | None = None, options: MapperOptions | None = None,
                         label_options: LabelOptions | None = None,
                         match_distance: float = MATCH_DISTANCE,
-                        progress: Callable[[str], None] | None = None) -> xr.Dataset:
+                        progress: Callable[[str], None] | None = None, block: int = BLOCK,
+                        runner: Runner | None = None) -> xr.Dataset:
     """The attractors at each of ``values`` of ``parameter``, seeded from the previous
     value's and ``samples`` random states in ``box``, matched across values
     (``continuation.continue_attractors``)."""
+    how = Blocks(block, runner)
     check_count("samples", samples)
     box.check(system)
     check_memory(samples + 16, system.n_state, options or MapperOptions())
-    steps = continue_attractors(system, parameter, values, box, samples, seed=seed,
-                                period=period, dt=dt, options=options,
-                                label_options=label_options, match_distance=match_distance,
-                                progress=progress)
-    return continuation_dataset(steps[0].study, steps, parameter, box, samples, seed)
+    with use_blocks(how):
+        steps = continue_attractors(system, parameter, values, box, samples, seed=seed,
+                                    period=period, dt=dt, options=options,
+                                    label_options=label_options,
+                                    match_distance=match_distance, progress=progress)
+    ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed)
+    return blocks_attrs(ds, block, [s.result for s in steps])

@@ -7,18 +7,33 @@
 the motion whatever the model's units.
 
 Labels: attractor ids from 1 in the order they were first met, ``DIVERGED`` (−1) for states
-whose motion blew up and ``UNDECIDED`` (−2) for states still searching after
-``max_periods`` periods.
+whose motion blew up, ``UNDECIDED`` (−2) for states still searching after ``max_periods``
+periods and ``FAILED`` (−3) for the states of a block whose integration raised a
+``SimulationError``.
+
+**Blocks.** ``find`` cuts the initial states into blocks of ``Blocks.size`` states (default
+``BLOCK``, in order). Each block is mapped by a fresh ``RecurrenceMapper`` with the study's
+scale and options (``map_block``, a ``Block``: what a worker computes and a store keeps);
+then ``merge`` joins the attractors of all blocks whose cell sets overlap (union–find; the
+attractor of the lowest-numbered block, then the lowest label, is kept as the
+representative), numbers them in the order of their representatives and describes each
+once. A result depends on the states, the settings and the block size only: not on where,
+in which order or by how many workers the blocks were mapped. ``Blocks.runner`` maps them
+(default: in this process, one after the other); ``analysis.sweeps.attractor_blocks`` gives
+one that runs them on an executor and stores each. ``use_blocks`` sets both for the studies
+called inside it (``continuation.continue_attractors`` too).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, SimulationError
 from analysis.integrate.ensemble import StroboscopicMap
 from analysis.integrate.flow import Period
 from analysis.integrate.simulate import simulate
@@ -26,11 +41,15 @@ from analysis.model import System
 from analysis.stability.attractors.label import Attractor, LabelOptions, describe
 from analysis.stability.attractors.mapper import (
     DIVERGED,
+    FAILED,
     SPECIAL_LABELS,
     UNDECIDED,
+    Found,
     MapperOptions,
     RecurrenceMapper,
     Scale,
+    cells_array,
+    cells_set,
 )
 from analysis.stability.classify import forcing_case
 from analysis.stability.periodic import as_period
@@ -39,6 +58,9 @@ MEMORY_BUDGET = 4 * 2**30
 """Most bytes a study may hold (labels, the states in flight and their cells)."""
 SCALE_PERIODS = 200
 """Periods of the settled run whose ranges set the cell size."""
+BLOCK = 256
+"""Initial states per block (``Blocks``): each block is mapped by its own mapper, on any
+worker."""
 
 
 def one_forcing(system: System, period: Period) -> bool:
@@ -88,8 +110,14 @@ class Result:
     periods: int
     """Periods integrated in all (the cost)."""
     mapper_labels: np.ndarray | None = None
-    """The mapper's own labels (ids of ``RecurrenceMapper.found``; ``labels`` numbers the
-    attractors met 1, 2, … in the order of those ids)."""
+    """The labels each block's own mapper gave (ids of its ``RecurrenceMapper.found``;
+    ``labels`` numbers the merged attractors 1, 2, … in the order of their
+    representatives)."""
+    spent: np.ndarray | None = None
+    """(K,) periods integrated per initial state (the time it needed to be labelled)."""
+    failed: dict[int, str] = field(default_factory=dict)
+    """Block index -> message, for blocks whose integration failed (their states
+    ``FAILED``)."""
 
     def fractions(self, mask: np.ndarray | None = None) -> dict[int, tuple[float, float]]:
         """id -> (fraction of the labels, its standard error √(f(1−f)/K)) for every
@@ -105,6 +133,129 @@ class Result:
         return out
 
 
+@dataclass
+class Block:
+    """One block of initial states mapped by a fresh ``RecurrenceMapper``: its labels, the
+    periods each state took, and the attractors that label its states (``Found``, in the
+    order of their labels). ``arrays``/``from_arrays``: the same as plain arrays (a worker's
+    reply, a stored part), exactly."""
+
+    labels: np.ndarray
+    spent: np.ndarray
+    found: list[Found]
+    n_state: int
+    failed: str = ""
+    """The ``SimulationError`` that stopped the block (its labels all ``FAILED``)."""
+
+    @classmethod
+    def failure(cls, count: int, n_state: int, message: str) -> Block:
+        return cls(np.full(count, FAILED, dtype=np.int64), np.zeros(count, dtype=np.int64),
+                   [], n_state, message or "failed")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        n, found = self.n_state, self.found
+
+        def rows(values, width):
+            return np.array(values, dtype=float).reshape(-1, width)
+
+        cells = [cells_array(f.cells, n) for f in found]
+        points = [rows(f.points, n) for f in found]
+        missing = np.full(n + 1, np.nan)
+        return {
+            "labels": np.asarray(self.labels, dtype=np.int64),
+            "spent": np.asarray(self.spent, dtype=np.int64),
+            "n_state": np.array(n), "failed": np.array(self.failed),
+            "found_label": np.array([f.label for f in found], dtype=np.int64),
+            "found_step": np.array([f.found_step for f in found], dtype=np.int64),
+            "finder": np.array([f.finder for f in found], dtype=np.int64),
+            "finder_state": rows([f.finder_state for f in found], n + 1),
+            "last_state": rows([missing if f.last_state is None else f.last_state
+                                for f in found], n + 1),
+            "cell_count": np.array([len(c) for c in cells], dtype=np.int64),
+            "cells": np.concatenate(cells) if cells else np.zeros((0, n), dtype=np.int64),
+            "point_count": np.array([len(p) for p in points], dtype=np.int64),
+            "points": np.concatenate(points) if points else np.zeros((0, n)),
+        }
+
+    @classmethod
+    def from_arrays(cls, data) -> Block:
+        """The block of ``arrays`` (``KeyError``/``ValueError`` when they are not one)."""
+        n = int(data["n_state"])
+        cell_ends = np.cumsum(data["cell_count"])
+        point_ends = np.cumsum(data["point_count"])
+        found = []
+        for j, label in enumerate(data["found_label"]):
+            last = np.asarray(data["last_state"][j], dtype=float)
+            found.append(Found(
+                label=int(label),
+                cells=cells_set(data["cells"][cell_ends[j] - data["cell_count"][j]:
+                                              cell_ends[j]]),
+                points=list(np.array(data["points"][point_ends[j] - data["point_count"][j]:
+                                                    point_ends[j]], dtype=float)),
+                finder=int(data["finder"][j]),
+                finder_state=np.array(data["finder_state"][j], dtype=float),
+                found_step=int(data["found_step"][j]),
+                last_state=None if np.isnan(last).all() else last))
+        labels = np.asarray(data["labels"], dtype=np.int64)
+        spent = np.asarray(data["spent"], dtype=np.int64)
+        if labels.shape != spent.shape:
+            raise ValueError("labels and spent differ in length")
+        return cls(labels, spent, found, n, str(data["failed"]))
+
+
+Runner = Callable[["AttractorStudy", list[np.ndarray], Callable[[int, int], None] | None],
+                  list[Block]]
+"""``runner(study, blocks, progress)``: ``study.map_block`` of every block of initial
+states, in block order (``progress(done, total)`` in states labelled)."""
+
+
+def map_blocks(study: AttractorStudy, blocks: list[np.ndarray],
+               progress: Callable[[int, int], None] | None = None) -> list[Block]:
+    """The default runner: every block in this process, one after the other."""
+    total, done, out = sum(len(b) for b in blocks), 0, []
+    for states in blocks:
+        def report(k: int, _: int, before: int = done) -> None:
+            progress(before + k, total)
+
+        out.append(study.map_block(states, report if progress is not None else None))
+        done += len(states)
+    return out
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """How ``AttractorStudy.find`` cuts and maps its initial states."""
+
+    size: int = BLOCK
+    """States per block."""
+    runner: Runner | None = None
+    """Who maps the blocks (None: ``map_blocks``, in this process)."""
+
+    def __post_init__(self) -> None:
+        size = self.size
+        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
+            raise InputError(f"block: must be a whole number >= 1, got {size!r}")
+
+
+_BLOCKS: ContextVar[Blocks | None] = ContextVar("attractor_blocks", default=None)
+
+
+@contextmanager
+def use_blocks(blocks: Blocks) -> Iterator[Blocks]:
+    """Within the ``with``, ``AttractorStudy.find`` cuts and maps its states by
+    ``blocks`` (unless given its own)."""
+    token = _BLOCKS.set(blocks)
+    try:
+        yield blocks
+    finally:
+        _BLOCKS.reset(token)
+
+
+def current_blocks() -> Blocks:
+    """The ``Blocks`` in force (``use_blocks``; default ``Blocks()``)."""
+    return _BLOCKS.get() or Blocks()
+
+
 class AttractorStudy:
     """The attractors of ``system``'s map over ``period`` (None: the model's default,
     ``stability.periodic.default_period``), with RK4 steps of at most ``dt`` s (None: the
@@ -115,16 +266,23 @@ class AttractorStudy:
                  label_options: LabelOptions | None = None, scale: Scale | None = None,
                  compiled: bool = True):
         self.system = system
+        self.dt = dt
+        """The largest RK4 step asked for, s (None: the spec's); the map's own is
+        ``map.dt``."""
         self.period = as_period(system.model, period)
         self.section = section_name(self.period)
         self.options = options or MapperOptions()
         self.label_options = label_options or LabelOptions()
         self.map = StroboscopicMap.make(system, self.period, dt, compiled)
         self.autonomous = one_forcing(system, self.period)
-        self.scale = scale or self.settled_scale()
-        self.mapper = RecurrenceMapper(self.map.advance, self.map.diverged, self.scale,
-                                       self.options, self.autonomous)
-        self._described: dict[int, Attractor] = {}
+        self._scale = scale
+
+    @property
+    def scale(self) -> Scale:
+        """The cell scale (given, or ``settled_scale`` computed on first use)."""
+        if self._scale is None:
+            self._scale = self.settled_scale()
+        return self._scale
 
     def settled_scale(self) -> Scale:
         """The cell scale from ``SCALE_PERIODS`` periods of the System's own motion after
@@ -139,27 +297,72 @@ class AttractorStudy:
         units = tuple(model.state_units[name] for name in model.state_names)
         return Scale.of_ranges(ranges, model.state_names, units, 2 * np.pi / smap.period_s)
 
+    def mapper(self) -> RecurrenceMapper:
+        """A fresh recurrence mapper of this study's map, scale and options."""
+        return RecurrenceMapper(self.map.advance, self.map.diverged, self.scale,
+                                self.options, self.autonomous)
+
+    def map_block(self, states: np.ndarray,
+                  progress: Callable[[int, int], None] | None = None) -> Block:
+        """One block of initial states (K × n, SI, t = 0) mapped by a fresh mapper; a
+        ``SimulationError`` makes it a failed block (its states ``FAILED``, recorded)."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        mapper = self.mapper()
+        try:
+            labels = mapper.map(states, progress=progress)
+        except SimulationError as exc:
+            return Block.failure(len(states), self.system.n_state, str(exc))
+        used = sorted({int(k) for k in labels if k > 0})
+        return Block(labels, mapper.spent.copy(), [mapper.attractor(k) for k in used],
+                     self.system.n_state)
+
     def find(self, states: np.ndarray,
-             progress: Callable[[int, int], None] | None = None) -> Result:
+             progress: Callable[[int, int], None] | None = None,
+             blocks: Blocks | None = None) -> Result:
         """Label the initial states ``states`` (K × n, SI units, at t = 0) and describe
-        every attractor met (in this call or before)."""
+        every attractor met: the states cut into blocks and mapped by ``blocks`` (default:
+        ``current_blocks()``), the blocks' attractors merged (see the module)."""
         states = np.atleast_2d(np.asarray(states, dtype=float))
         check_memory(len(states), self.system.n_state, self.options)
-        before = self.mapper.periods
-        raw = self.mapper.map(states, progress=progress)
-        found = sorted(int(k) for k in np.unique(raw) if k > 0)
-        dense = {label: i for i, label in enumerate(found, 1)}
-        labels = np.array([dense.get(int(k), int(k)) for k in raw], dtype=np.int64)
-        attractors = [replace(self.described(label), id=dense[label]) for label in found]
-        return Result(labels, attractors, self.mapper.periods - before, raw)
+        how = blocks or current_blocks()
+        parts = [states[i:i + how.size] for i in range(0, len(states), how.size)]
+        mapped = (how.runner or map_blocks)(self, parts, progress)
+        return self.merge(mapped)
 
-    def described(self, label: int) -> Attractor:
-        """The mapper's attractor ``label`` described (once: memoised)."""
-        if label not in self._described:
-            self._described[label] = describe(
-                self.system, self.mapper.attractor(label), label, self.section,
-                self.map.period_s, self.map.dt, self.label_options)
-        return self._described[label]
+    def merge(self, blocks: Sequence[Block]) -> Result:
+        """One ``Result`` of the blocks (in block order): attractors whose cells overlap
+        are one (union–find; the lowest (block, label) is the representative), numbered
+        1, 2, … in the order of their representatives, each described once."""
+        nodes = [(b, f) for b, block in enumerate(blocks) for f in block.found]
+        parent = list(range(len(nodes)))
+
+        def root(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        owner: dict[bytes, int] = {}
+        for i, (_, found) in enumerate(nodes):
+            for cell in found.cells:
+                j = owner.setdefault(cell, i)
+                a, b = root(i), root(j)
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+        ids: dict[int, int] = {}
+        for i in range(len(nodes)):  # a group's root is its lowest node: met first
+            ids.setdefault(root(i), len(ids) + 1)
+        index = {(b, f.label): ids[root(i)] for i, (b, f) in enumerate(nodes)}
+        labels = np.concatenate(
+            [np.array([index[b, int(k)] if k > 0 else int(k) for k in block.labels],
+                      dtype=np.int64) for b, block in enumerate(blocks)]
+            or [np.zeros(0, dtype=np.int64)])
+        attractors = [describe(self.system, nodes[r][1], i, self.section, self.map.period_s,
+                               self.map.dt, self.label_options) for r, i in ids.items()]
+        spent = np.concatenate([b.spent for b in blocks] or [np.zeros(0, dtype=np.int64)])
+        raw = np.concatenate([b.labels for b in blocks] or [np.zeros(0, dtype=np.int64)])
+        return Result(labels, attractors, int(spent.sum()), raw, spent,
+                      {b: block.failed for b, block in enumerate(blocks) if block.failed})
 
 
 def special_name(label: int) -> str:
@@ -167,4 +370,5 @@ def special_name(label: int) -> str:
     return SPECIAL_LABELS[label]
 
 
-__all__ = ["DIVERGED", "UNDECIDED", "AttractorStudy", "Result", "one_forcing"]
+__all__ = ["BLOCK", "DIVERGED", "FAILED", "UNDECIDED", "AttractorStudy", "Block", "Blocks",
+           "Result", "map_blocks", "one_forcing", "use_blocks"]

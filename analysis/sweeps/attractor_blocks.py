@@ -1,0 +1,314 @@
+"""Attractor studies at scale: their blocks of initial states on an executor, each block
+stored as it finishes, so an interrupted study resumes.
+
+``basins_to_file``, ``fractions_to_file`` and ``continuation_to_file`` run the studies of
+``analysis.stability.attractors.studies`` with a ``StoredRunner``: the parent computes the
+study's cell scale once (``AttractorStudy.settled_scale``) and hands it, with the System and
+the mapper's settings (``StudyRef``), to every worker, so every block cuts the section into
+the same cells; a worker maps its block with a fresh mapper (``AttractorStudy.map_block``)
+and returns it as arrays; the parent stores it (``analysis.sweeps.store.PointStore``, in
+``OUTPUT.parts``, key ``CALL-BLOCK``: CALL is the parameter value's index in a
+continuation, 0 otherwise), then merges the blocks' attractors and describes each once
+(``AttractorStudy.merge``). So the file does not depend on the executor or the number of
+workers, and a run interrupted at any point, then re-run with the same arguments, gives the
+file an uninterrupted run gives.
+
+As sweeps: one process per output (a lock); a stored block that cannot be read is reported
+(``on_damaged``) and mapped again; a re-run with another definition is refused while blocks
+of the first are stored; a block whose integration fails is stored as failed (its states
+``FAILED``, the message in the file's ``failed_blocks``); the folder is removed once the file
+is written, and a study refused before its first block leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import functools
+import zipfile
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from analysis.errors import InputError
+from analysis.io import save_dataset
+from analysis.model import System, load_model
+from analysis.stability.attractors.continuation import MATCH_DISTANCE
+from analysis.stability.attractors.label import LabelOptions
+from analysis.stability.attractors.mapper import MapperOptions, Scale
+from analysis.stability.attractors.sampling import Box, Range, grid_states
+from analysis.stability.attractors.studies import (
+    basin_fractions,
+    basins,
+    check_count,
+    global_continuation,
+)
+from analysis.stability.attractors.study import (
+    BLOCK,
+    AttractorStudy,
+    Block,
+    Blocks,
+    check_memory,
+)
+from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.store import PointStore
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class StudyRef:
+    """What a worker needs to rebuild a study's map and mapper (picklable, hashable): the
+    System by its model's name or spec path, balls, parameters and state; the period, the
+    largest step, the mapper's settings and the parent's cell scale."""
+
+    model: str
+    structure: tuple[int, ...]
+    parameters: tuple[tuple[str, float], ...]
+    state: tuple[float, ...]
+    period: str
+    dt: float | None
+    options: MapperOptions
+    scale: tuple[float, ...]
+    compiled: bool
+
+    @classmethod
+    def of(cls, study: AttractorStudy) -> StudyRef:
+        system, model = study.system, study.system.model
+        spec = model.spec_path
+        source = spec if spec and Path(spec).is_absolute() and Path(spec).exists() \
+            else model.name
+        return cls(source, tuple(system.structure),
+                   tuple((k, float(v)) for k, v in system.parameters.items()),
+                   tuple(float(v) for v in system.state), str(study.period), study.dt,
+                   study.options, tuple(float(v) for v in study.scale.size),
+                   study.map.compiled)
+
+    def study(self) -> AttractorStudy:
+        model = load_model(self.model)
+        system = System(model, self.structure, model.parameters(dict(self.parameters)),
+                        np.array(self.state))
+        return AttractorStudy(system, self.period, self.dt, self.options,
+                              scale=Scale(np.array(self.scale)), compiled=self.compiled)
+
+
+@functools.lru_cache(maxsize=4)
+def study_of(ref: StudyRef) -> AttractorStudy:
+    """The study of ``ref``, built once per worker process."""
+    return ref.study()
+
+
+def map_block_task(task: tuple[StudyRef, str, np.ndarray]) -> tuple[str, dict]:
+    """A worker's task: (ref, key, states) -> (key, the mapped block as arrays)."""
+    ref, key, states = task
+    return key, study_of(ref).map_block(states).arrays()
+
+
+class StoredRunner:
+    """A ``study.Runner`` that maps the pending blocks on ``executor`` and stores each in
+    ``store``; stored blocks of the same states are read back instead (one that cannot be
+    read is reported to ``on_damaged`` and mapped again). Its n-th call (a continuation's
+    n-th value) keys its blocks ``n-BLOCK``. One pending block, or a serial executor: the
+    blocks are mapped in this process (no worker to start)."""
+
+    def __init__(self, store: PointStore, executor: Executor | None = None,
+                 on_damaged: Callable[[str], None] | None = None):
+        self.store, self.executor = store, executor or SerialExecutor()
+        self.on_damaged = on_damaged
+        self.calls = 0
+
+    def stored(self, key: str, states: np.ndarray, done: set[str]) -> Block | None:
+        """The stored block ``key`` of ``states``, or None (absent, damaged or of other
+        states: mapped again)."""
+        if key not in done:
+            return None
+        try:
+            data = self.store.load(key)
+            block = Block.from_arrays(data)
+            same = np.array_equal(data["states"], states)
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            (self.store.folder / f"{key}.npz").unlink(missing_ok=True)
+            if self.on_damaged:
+                self.on_damaged(key)
+            return None
+        return block if same else None
+
+    def save(self, key: str, states: np.ndarray, arrays: dict) -> None:
+        self.store.save(key, {**arrays, "states": states})
+
+    def __call__(self, study: AttractorStudy, blocks: list[np.ndarray],
+                 progress: Progress | None = None) -> list[Block]:
+        call, self.calls = self.calls, self.calls + 1
+        keys = [f"{call:04d}-{j:05d}" for j in range(len(blocks))]
+        there = self.store.done()
+        found = {k: self.stored(k, states, there)
+                 for k, states in zip(keys, blocks, strict=True)}
+        pending = [j for j, k in enumerate(keys) if found[k] is None]
+        total = sum(len(b) for b in blocks)
+        done = [total - sum(len(blocks[j]) for j in pending)]
+        if len(pending) == 1 or isinstance(self.executor, SerialExecutor):
+            for j in pending:
+                def report(k: int, _: int, before: int = done[0]) -> None:
+                    progress(before + k, total)
+
+                block = study.map_block(blocks[j], report if progress else None)
+                self.save(keys[j], blocks[j], block.arrays())
+                found[keys[j]] = block
+                done[0] += len(blocks[j])
+        elif pending:
+            ref = StudyRef.of(study)  # the scale: computed here, once, for every worker
+
+            def stored(task, result) -> None:
+                _, key, states = task
+                self.save(key, states, result[1])
+                found[key] = Block.from_arrays(result[1])
+                done[0] += len(states)
+
+            run_with_progress(self.executor, map_block_task,
+                              [(ref, keys[j], blocks[j]) for j in pending],
+                              lambda: done[0], total, progress, stored)
+        return [found[k] for k in keys]
+
+
+def system_definition(system: System) -> dict:
+    """The System as a store's definition records it."""
+    model = system.model
+    return {"model": model.name, "spec_file": model.spec_file,
+            "spec_sha256": model.spec_sha256, "structure": list(system.structure),
+            "parameters": {k: float(v) for k, v in system.parameters.items()},
+            "state": [float(v) for v in system.state]}
+
+
+def check_study(system: System, period: str | None, dt: float | None,
+                options: MapperOptions | None, label_options: LabelOptions | None,
+                block: int) -> AttractorStudy:
+    """Every setting of a study checked (``InputError``), before any work: the block size,
+    the period and its section, the step. Returns the study (its scale not computed)."""
+    Blocks(block)
+    return AttractorStudy(system, period, dt, options, label_options)
+
+
+def study_definition(study: AttractorStudy, kind: str, block: int, **extra) -> dict:
+    return {"kind": kind, "system": system_definition(study.system),
+            "period": str(study.period), "dt": study.dt, "compiled": study.map.compiled,
+            "options": asdict(study.options), "label_options": asdict(study.label_options),
+            "block": block, **extra}
+
+
+def check_basins(system: System, x: Range, y: Range, *, period: str | None = None,
+                 dt: float | None = None, options: MapperOptions | None = None,
+                 label_options: LabelOptions | None = None, block: int = BLOCK) -> dict:
+    """Every input of ``basins_to_file`` checked before any work; its store's
+    definition."""
+    study = check_study(system, period, dt, options, label_options, block)
+    check_count("x", x.num)
+    check_count("y", y.num)
+    states = grid_states(system, x, y)
+    check_memory(len(states), system.n_state, study.options)
+    return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
+
+
+def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
+                    period: str | None = None, dt: float | None = None,
+                    options: MapperOptions | None = None,
+                    label_options: LabelOptions | None = None, block: int = BLOCK) -> dict:
+    """Every input of ``fractions_to_file`` checked before any work; its definition."""
+    study = check_study(system, period, dt, options, label_options, block)
+    check_count("samples", samples)
+    box.check(system)
+    check_memory(samples, system.n_state, study.options)
+    return study_definition(study, "attractors", block, box=box.text, samples=samples,
+                            seed=seed)
+
+
+def check_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
+                       samples: int, *, seed: int = 0, period: str | None = None,
+                       dt: float | None = None, options: MapperOptions | None = None,
+                       label_options: LabelOptions | None = None,
+                       match_distance: float = MATCH_DISTANCE, block: int = BLOCK) -> dict:
+    """Every input of ``continuation_to_file`` checked before any work (the study at each
+    value); its definition."""
+    if parameter not in system.model.parameter_names:
+        raise InputError(f"param: '{parameter}' is not a parameter of model "
+                         f"'{system.model.name}'; parameters: "
+                         f"{', '.join(system.model.parameter_names)}")
+    study = check_study(system, period, dt, options, label_options, block)
+    for value in values:
+        check_study(system.replace(**{parameter: float(value)}), period, dt, options,
+                    label_options, block)
+    check_count("samples", samples)
+    box.check(system)
+    check_memory(samples + 16, system.n_state, study.options)
+    return study_definition(study, "attractor-continuation", block, param=parameter,
+                            values=[float(v) for v in values], box=box.text,
+                            samples=samples, seed=seed, match_distance=match_distance)
+
+
+def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner], xr.Dataset],
+               executor: Executor | None,
+               on_damaged: Callable[[str], None] | None) -> xr.Dataset:
+    """``run(runner)`` with a store at ``output``; the file written, the store removed."""
+    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
+    try:
+        ds = run(StoredRunner(store, executor, on_damaged))
+        save_dataset(ds, output)
+        store.remove()
+    except BaseException:  # a refusal or failure before the first block: no trace
+        store.discard()
+        raise
+    return ds
+
+
+def basins_to_file(system: System, x: Range, y: Range, output: str | Path, *,
+                   period: str | None = None, dt: float | None = None,
+                   options: MapperOptions | None = None,
+                   label_options: LabelOptions | None = None, block: int = BLOCK,
+                   executor: Executor | None = None, progress: Progress | None = None,
+                   on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """``studies.basins`` with its blocks on ``executor`` (default: serial) and stored
+    under ``output``; writes the netCDF file ``output`` and returns its Dataset."""
+    definition = check_basins(system, x, y, period=period, dt=dt, options=options,
+                              label_options=label_options, block=block)
+    return stored_run(output, definition, lambda runner: basins(
+        system, x, y, period=period, dt=dt, options=options, label_options=label_options,
+        progress=progress, block=block, runner=runner), executor, on_damaged)
+
+
+def fractions_to_file(system: System, box: Box, samples: int, output: str | Path, *,
+                      seed: int = 0, period: str | None = None, dt: float | None = None,
+                      options: MapperOptions | None = None,
+                      label_options: LabelOptions | None = None, block: int = BLOCK,
+                      executor: Executor | None = None, progress: Progress | None = None,
+                      on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """``studies.basin_fractions`` with its blocks on ``executor``, stored under
+    ``output``; writes ``output``."""
+    definition = check_fractions(system, box, samples, seed=seed, period=period, dt=dt,
+                                 options=options, label_options=label_options, block=block)
+    return stored_run(output, definition, lambda runner: basin_fractions(
+        system, box, samples, seed=seed, period=period, dt=dt, options=options,
+        label_options=label_options, progress=progress, block=block, runner=runner),
+        executor, on_damaged)
+
+
+def continuation_to_file(system: System, parameter: str, values: Sequence[float], box: Box,
+                         samples: int, output: str | Path, *, seed: int = 0,
+                         period: str | None = None, dt: float | None = None,
+                         options: MapperOptions | None = None,
+                         label_options: LabelOptions | None = None,
+                         match_distance: float = MATCH_DISTANCE, block: int = BLOCK,
+                         executor: Executor | None = None,
+                         progress: Callable[[str], None] | None = None,
+                         on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """``studies.global_continuation`` with the blocks of each value on ``executor`` (the
+    values one after the other: each is seeded from the previous one), stored under
+    ``output``; writes ``output``. On a re-run the stored values' attractors are described
+    again (in this process) to seed the next value."""
+    definition = check_continuation(system, parameter, values, box, samples, seed=seed,
+                                    period=period, dt=dt, options=options,
+                                    label_options=label_options,
+                                    match_distance=match_distance, block=block)
+    return stored_run(output, definition, lambda runner: global_continuation(
+        system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
+        options=options, label_options=label_options, match_distance=match_distance,
+        progress=progress, block=block, runner=runner), executor, on_damaged)
