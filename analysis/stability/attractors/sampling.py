@@ -35,6 +35,8 @@ class Range:
     low: float
     high: float
     num: int = 0
+    field: str = ""
+    """The option or keyword it was given as (``--x``, ``--box`` …), named by errors."""
 
     @classmethod
     def parse(cls, text: str, field: str, with_num: bool) -> Range:
@@ -52,19 +54,22 @@ class Range:
             except ValueError:
                 raise InputError(f"{field}: N must be a whole number >= 1, got "
                                  f"{parts[3]!r}") from None
-        made = cls(parts[0], low, high, num)
+        made = cls(parts[0], low, high, num, field)
         made.check(field, with_num)
         return made
 
     def check(self, field: str, with_num: bool = False) -> None:
+        """``InputError`` unless LO < HI (and, ``with_num``, N >= 1)."""
         if not self.low < self.high:
             raise InputError(f"{field}: LO must be < HI, got {self.coordinate}:{self.low:g}:"
                              f"{self.high:g}")
         if with_num and self.num < 1:
             raise InputError(f"{field}: N must be a whole number >= 1, got {self.num}")
 
-    def check_state(self, system: System, field: str) -> int:
-        """The coordinate's index in the System's state, or ``InputError``."""
+    def check_state(self, system: System, field: str = "") -> int:
+        """The coordinate's index in the System's state, or ``InputError`` naming ``field``
+        (default: the field it was given as)."""
+        field = self.field or field
         names = system.state_names
         if self.coordinate not in names:
             raise InputError(f"{field}: '{self.coordinate}' is not a state of model "
@@ -101,9 +106,10 @@ class Box:
         """The sides as the command line gives them, space-separated."""
         return " ".join(f"{s.coordinate}:{s.low!r}:{s.high!r}" for s in self.sides)
 
-    def check(self, system: System, field: str = "box") -> None:
+    def check(self, system: System) -> None:
+        """``InputError`` unless every side names a state of ``system``."""
         for side in self.sides:
-            side.check_state(system, field)
+            side.check_state(system, "box")
 
     def sample(self, system: System, count: int, rng: np.random.Generator) -> np.ndarray:
         """``count`` states (count × n, SI units), each named coordinate uniform in its
@@ -121,7 +127,8 @@ def grid_states(system: System, x: Range, y: Range) -> np.ndarray:
     units); the others at the System's state."""
     ix, iy = x.check_state(system, "x"), y.check_state(system, "y")
     if ix == iy:
-        raise InputError(f"y: must be another coordinate than x, got {y.coordinate!r} twice")
+        raise InputError(f"{y.field or 'y'}: must be another coordinate than "
+                         f"{x.field or 'x'}'s, got {y.coordinate!r} twice")
     gx, gy = np.meshgrid(x.points, y.points)
     states = np.repeat(system.state[None, :], gx.size, axis=0)
     states[:, ix], states[:, iy] = gx.ravel(), gy.ravel()

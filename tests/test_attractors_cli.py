@@ -1,0 +1,104 @@
+"""`bearingdyn basins` and `bearingdyn attractors` as a user runs them: files written and
+read back, JSON with provenance, figures rendered to PNG, and bad input refused in one line
+(exit 2) before any work, leaving the folder as it was."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from analysis.io import open_result
+from analysis.provenance import provenance
+
+DUFFING = ["--set", "linear_stiffness=1", "--set", "cubic_stiffness=0.5", "--set",
+           "damping=0.1", "--set", "forcing_amplitude=0.3", "--speed-rpm", "13.369"]
+
+
+def test_basins_writes_the_grid_the_table_and_a_named_figure(cli, tmp_path):
+    res = cli("basins", "duffing", *DUFFING, "--x", "x:-3:3:12", "--y", "vx:-3:3:10",
+              "-o", "b.nc", "--plot", "b.png", "--json", "--quiet", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    ds = open_result(tmp_path / "b.nc")
+    assert ds.attrs["kind"] == "basins" and ds.basin.shape == (10, 12)
+    assert out["provenance"] == provenance(tmp_path / "b.nc")
+    assert out["provenance"]["spec_sha256"] == ds.attrs["spec_sha256"]
+    rows = {a["id"]: a for a in out["attractors"]}
+    assert set(rows) == set(ds.attractor.values.tolist()) == {1, 2}
+    for i, row in rows.items():  # the JSON is the file's table
+        assert row["class"] == "periodic-1" and row["period"] == 1
+        assert row["fraction"] == pytest.approx(float((ds.basin == i).mean()))
+        assert set(row["amplitude"]) == {"x", "y", "vx", "vy"}
+    assert (tmp_path / "b.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_attractors_json_layout_for_fractions_and_for_a_continuation(cli, tmp_path):
+    res = cli("attractors", "duffing", *DUFFING, "--samples", "40", "--box", "x:-3:3",
+              "--box", "vx:-3:3", "--seed", "4", "--json", "-o", "a.nc", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    rows = json.loads(res.stdout)["attractors"]
+    assert {tuple(sorted(r)) for r in rows} == {tuple(sorted(
+        ["id", "class", "period", "fraction", "fraction_stderr", "lambda1", "lambda1_ci95",
+         "amplitude"]))}
+    assert sum(r["fraction"] for r in rows) == pytest.approx(1.0)
+    again = cli("attractors", "duffing", *DUFFING, "--samples", "40", "--box", "x:-3:3",
+                "--box", "vx:-3:3", "--seed", "4", "--json", "-o", "b.nc", cwd=tmp_path)
+    assert json.loads(again.stdout)["attractors"] == rows  # the seed makes it reproducible
+
+    res = cli("attractors", "duffing", *DUFFING[:-2], "--samples", "20", "--box", "x:-3:3",
+              "--box", "vx:-3:3", "--param", "speed_rpm:12.5:15.5:3", "--json",
+              "-o", "c.nc", "--plot", "c.png", "--quiet", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert [list(v) for v in out["values"]] == [["speed_rpm", "attractors"]] * 3
+    ids = [[a["id"] for a in v["attractors"]] for v in out["values"]]
+    assert ids[0] == [1, 2] and ids[1] == [1, 2]  # kept from value to value
+    assert (tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
+
+
+BAD = [
+    (["basins", "duffing", "--x", "q:-3:3:10", "--y", "vx:-3:3:10"],
+     "--x: 'q' is not a state of model 'duffing'; states: x, y, vx, vy"),
+    (["basins", "duffing", "--x", "x:3:-3:10", "--y", "vx:-3:3:10"],
+     "--x: LO must be < HI, got x:3:-3"),
+    (["basins", "duffing", "--x", "x:-3:3:0", "--y", "vx:-3:3:10"],
+     "--x: N must be a whole number >= 1, got 0"),
+    (["basins", "duffing", "--x", "x:-3:3", "--y", "vx:-3:3:10"],
+     "--x: must be COORD:LO:HI:N, got 'x:-3:3'"),
+    (["basins", "duffing", "--x", "x:-3:3:100000", "--y", "vx:-3:3:100000"],
+     "initial states would need about"),
+    (["basins", "duffing", "--x", "x:-3:3:4", "--y", "x:-3:3:4"],
+     "--y: must be another coordinate than --x's, got 'x' twice"),
+    (["basins", "two-bearing-rotor", "--x", "x:-1e-5:1e-5:4", "--y", "y:-1e-5:1e-5:4"],
+     "period: model 'two-bearing-rotor' has bearings"),
+    (["attractors", "duffing", "--samples", "0", "--box", "x:-3:3"],
+     "samples: must be a whole number >= 1, got 0"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--seed", "1.5"],
+     "--seed"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3:4"],
+     "--box: must be COORD:LO:HI, got 'x:-3:3:4'"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--box", "x:0:1"],
+     "--box: coordinate x given twice"),
+    (["attractors", "duffing", "--samples", "10", "--box", "vq:-3:3"],
+     "--box: 'vq' is not a state of model 'duffing'"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--param",
+      "speed_rpm:12:15:0"], "--param: N must be a whole number >= 1, got 0"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--param",
+      "omega:1:2:3"], "param: 'omega' is not a parameter of model 'duffing'"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--revisits", "0"],
+     "revisits: must be a whole number >= 1, got 0"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--branch",
+      "missing.nc"], "missing.nc"),
+]
+
+
+@pytest.mark.parametrize(("args", "message"), BAD, ids=[" ".join(a[:4]) for a, _ in BAD])
+def test_bad_input_is_one_line_exit_2_and_leaves_nothing(cli, tmp_path, args, message):
+    before = sorted(p.name for p in tmp_path.iterdir())
+    res = cli(*args, "-o", "out.nc", "--plot", "out.png", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], res.stderr
+    assert "Traceback" not in res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
