@@ -10,14 +10,18 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import (
+    ExecutorOption,
     JsonOption,
     ModelArgument,
     NBallsOption,
     PeriodOption,
     QuietOption,
+    SchedulerOption,
     SetOption,
     SpeedOption,
+    WorkersOption,
     app,
+    executor_of,
     figure_output,
     netcdf_output,
     parameter_values,
@@ -43,6 +47,10 @@ PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Figure to write (PNG, PDF, SVG).", callback=figure_output)]
 OutputOption = Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
                                             callback=netcdf_output)]
+BlockOption = Annotated[int, typer.Option(
+    "--block", help="Initial states per block: each block is mapped by its own mapper on one "
+                    "worker and stored in OUTPUT.parts as it finishes (an interrupted run "
+                    "resumes); the result depends on it, not on the executor.")]
 
 
 def _system(model: str, n_balls, speed_rpm, sets):
@@ -59,11 +67,9 @@ def _options(resolution: int, revisits: int, record: int, hits: int, max_periods
 
 
 def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> None:
-    """Write the file (atomically), print the table or the JSON, draw the figure."""
-    from analysis.io import save_dataset
+    """Print the table or the JSON (the file is written), draw the figure."""
     from analysis.stability.attractors import study_json
 
-    save_dataset(ds, output)
     if as_json:
         typer.echo(json.dumps(study_json(ds), indent=2))
     else:
@@ -72,6 +78,19 @@ def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> 
         from analysis.reports.attractor_plots import study_figure
 
         write_figure(study_figure(ds, branches), plot, err=as_json)
+
+
+def _recomputing(key: str) -> None:
+    typer.echo(f"warning: stored block {key} could not be read; mapping it again", err=True)
+
+
+def _run(make, run):
+    """``run(executor)`` on the executor ``make()`` gives, closed afterwards."""
+    ex = make()
+    try:
+        return run(ex)
+    finally:
+        ex.close()
 
 
 def _echo_table(ds, output: Path) -> None:
@@ -122,23 +141,30 @@ def basins(
     record: RecordOption = 100,
     hits: HitsOption = 5,
     max_periods: MaxPeriodsOption = 3000,
+    block: BlockOption = 256,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
     as_json: JsonOption = False,
     plot: PlotOption = None,
     quiet: QuietOption = False,
 ):
     """Basins of attraction: the attractor reached from every initial state of a grid over
     two state coordinates (the others at the model's initial state), and every attractor's
-    class, period, λ1 and amplitudes."""
+    class, period, λ1 and amplitudes. Resumable: re-run the same command to continue."""
     from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Range
-    from analysis.stability.attractors import basins as run_basins
+    from analysis.sweeps.attractor_blocks import basins_to_file, check_basins
 
     x_range = Range.parse(x, "--x", with_num=True)
     y_range = Range.parse(y, "--y", with_num=True)
     options = _options(resolution, revisits, record, hits, max_periods)
     system = _system(model, n_balls, speed_rpm, sets)
-    ds = run_basins(system, x_range, y_range, period=period, dt=dt, options=options,
-                    progress=ProgressReporter("basins", quiet or as_json))
+    settings = dict(period=period, dt=dt, options=options, block=block)
+    check_basins(system, x_range, y_range, **settings)  # before any work or file
+    ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
+        system, x_range, y_range, output, **settings, executor=ex,
+        progress=ProgressReporter("basins", quiet or as_json), on_damaged=_recomputing))
     _finish(ds, output, as_json, plot)
 
 
@@ -169,15 +195,26 @@ def attractors(
     record: RecordOption = 100,
     hits: HitsOption = 5,
     max_periods: MaxPeriodsOption = 3000,
+    block: BlockOption = 256,
+    executor: ExecutorOption = "processes",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
     as_json: JsonOption = False,
     plot: PlotOption = None,
     quiet: QuietOption = False,
 ):
     """Every attractor and its basin fraction (± standard error) among random initial
     states in a box; with --param, their global continuation: found at each value from the
-    previous value's attractors and new random states, matched across values."""
+    previous value's attractors and new random states (the blocks of each value on the
+    executor), matched across values. Resumable: re-run the same command to continue."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.stability.attractors import Box, Range, basin_fractions, global_continuation
+    from analysis.stability.attractors import Box, Range
+    from analysis.sweeps.attractor_blocks import (
+        check_continuation,
+        check_fractions,
+        continuation_to_file,
+        fractions_to_file,
+    )
 
     sides = Box.parse(box, "--box")
     options = _options(resolution, revisits, record, hits, max_periods)
@@ -186,15 +223,24 @@ def attractors(
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
     system = _system(model, n_balls, speed_rpm, sets)
+    settings = dict(seed=seed, period=period, dt=dt, options=options, block=block)
+
+    def executor_made():
+        return executor_of(executor, workers, scheduler)
+
     if along is None:
-        ds = basin_fractions(system, sides, samples, seed=seed, period=period, dt=dt,
-                             options=options,
-                             progress=ProgressReporter("attractors", quiet or as_json))
+        check_fractions(system, sides, samples, **settings)  # before any work or file
+        ds = _run(executor_made, lambda ex: fractions_to_file(
+            system, sides, samples, output, **settings, executor=ex,
+            progress=ProgressReporter("attractors", quiet or as_json),
+            on_damaged=_recomputing))
     else:
         say = None if quiet else (lambda line: typer.echo(line, err=True))
-        ds = global_continuation(system, along.coordinate, along.points, sides, samples,
-                                 seed=seed, period=period, dt=dt, options=options,
-                                 progress=say)
+        check_continuation(system, along.coordinate, along.points, sides, samples,
+                           **settings)
+        ds = _run(executor_made, lambda ex: continuation_to_file(
+            system, along.coordinate, along.points, sides, samples, output, **settings,
+            executor=ex, progress=say, on_damaged=_recomputing))
     _finish(ds, output, as_json, plot, branches)
 
 
