@@ -107,11 +107,21 @@ def chart(
     scheduler: SchedulerOption = None,
     quiet: QuietOption = False,
     table: Annotated[bool, typer.Option("--table", help="Print the chart as a table.")] = False,
+    ics: Annotated[int | None, typer.Option(
+        "--ics", help="Also map K initial states per point as one ensemble (the model's own "
+                      "and K - 1 drawn in --ics-box): the number of distinct attractors and "
+                      "the class of each; multistable points are marked.")] = None,
+    ics_box: Annotated[list[str] | None, typer.Option(
+        "--ics-box", help="COORD:LO:HI, a side of the box the --ics states are drawn in "
+                          "(repeatable; default: every position within ± the radial "
+                          "clearance).")] = None,
+    ics_seed: Annotated[int, typer.Option(help="Seed of the --ics states.")] = 0,
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
     from analysis.sweeps.chart import chart_table, stability_chart
     from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid
+    from analysis.sweeps.multistability import parse_ics
 
     if not 1 <= revolutions <= MAX_SAMPLES:
         raise InputError(f"--revolutions: must be a whole number in [1, {MAX_SAMPLES}], "
@@ -120,15 +130,18 @@ def chart(
                       section, dt, lyapunov)
     axes = Axis.parse(x), Axis.parse(y)
     check_grid(setting, *axes)  # every input, before a worker starts or a file is made
+    several = parse_ics(ics, ics_box, ics_seed)
     ex = executor_of(executor, workers, scheduler)
     try:
         ds = stability_chart(setting, *axes, output, executor=ex,
                              progress=ProgressReporter("chart", quiet),
-                             on_damaged=_recomputing)
+                             on_damaged=_recomputing, ics=several)
     finally:
         ex.close()
     typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
-               f"points ({ex.name})")
+               f"points ({ex.name})" + (f"; {int(ds.multistable.sum())} multistable among "
+                                        f"{several.count} initial states each"
+                                        if several is not None else ""))
     if table:
         typer.echo(chart_table(ds))
 

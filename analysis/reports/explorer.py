@@ -197,6 +197,7 @@ main{display:flex;flex-wrap:wrap;gap:1.5em}
 .hint,#subtitle{color:#555;font-size:.9em;margin:.2em 0}
 svg text{font-size:11px;fill:#333}.cell{stroke:#fff;stroke-width:1;cursor:pointer}
 .cell:hover{stroke:#000}.cell.selected{stroke:#000;stroke-width:3}
+.multistable{stroke:#000;stroke-width:1.6;pointer-events:none}
 #legend span{display:inline-block;margin-right:1em;font-size:.85em}
 #legend i{display:inline-block;width:.9em;height:.9em;margin-right:.3em;vertical-align:middle}
 table{border-collapse:collapse;font-size:.88em;margin:.3em 0}
@@ -251,8 +252,15 @@ function drawMap() {
                           height: ch, fill: colour(p), class: "cell",
                           "data-ix": p.ix, "data-iy": p.iy}, svg);
     const t = el("title", {}, r);
-    t.textContent = `${D.x} = ${fmt(p.x)}, ${D.y} = ${fmt(p.y)}: ${p.nature}`;
+    t.textContent = `${D.x} = ${fmt(p.x)}, ${D.y} = ${fmt(p.y)}: ${p.nature}` +
+      (p.n_attractors !== undefined ?
+        `; ${p.n_attractors} attractor(s) among the --ics states` : "");
     r.addEventListener("click", () => select(p, r));
+    if (p.multistable === 1) {  // chart --ics: two or more attractors coexist here
+      const x0 = left + p.ix * cw, y0 = top + (ny - 1 - p.iy) * ch;
+      el("path", {d: `M${x0 + 2} ${y0 + ch - 2} L${x0 + cw - 2} ${y0 + 2}`,
+                  class: "multistable"}, svg);
+    }
   }
   const every = (n) => Math.max(1, Math.ceil(n / 8));
   D.xs.forEach((v, i) => { if (i % every(nx) === 0) {
@@ -270,7 +278,9 @@ function drawMap() {
   const seen = [...new Set(D.points.map(p => p.nature))];
   document.getElementById("legend").innerHTML = seen.map(n =>
     `<span><i style="background:${colour(D.points.find(p => p.nature === n))}"></i>${n}</span>`
-  ).join("");
+  ).join("") + (D.points.some(p => p.multistable === 1) ?
+    "<span id='multistable-key'>╱ multistable (two or more attractors among the --ics " +
+    "initial states)</span>" : "");
 }
 
 function plot(container, title, xs, ys, xlabel, ylabel, kind) {

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -392,8 +393,10 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     axes[0].pcolormesh(*edges, ds.nature_code.transpose(yname, xname), cmap=cmap, norm=norm,
                        shading="flat")
     present = sorted(set(np.unique(ds.nature_code.values).tolist()))
-    axes[0].legend(handles=[Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k])
-                            for k in present], fontsize=8, loc="upper right")
+    handles = [Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k]) for k in present]
+    if "multistable" in ds:
+        handles.append(_mark_multistable(axes[0], ds, xname, yname, edges))
+    axes[0].legend(handles=handles, fontsize=8, loc="upper right")
     axes[0].set_title("nature of the response", fontsize=9)
     lam = ds.lyapunov.transpose(yname, xname).values
     top = float(np.nanmax(np.abs(lam))) if np.isfinite(lam).any() else 1.0
@@ -413,6 +416,21 @@ def chart_figure(ds: xr.Dataset) -> Figure:
                 axis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
     return fig
+
+
+def _mark_multistable(ax, ds: xr.Dataset, xname: str, yname: str, edges) -> Any:
+    """Hatch the cells of a chart with ``--ics`` where two or more attractors coexist; the
+    legend's handle."""
+    from matplotlib.patches import Patch, Rectangle
+
+    many = ds.multistable.transpose(yname, xname).values
+    for iy, ix in zip(*np.nonzero(many), strict=True):
+        ax.add_patch(Rectangle((edges[0][ix], edges[1][iy]), edges[0][ix + 1] - edges[0][ix],
+                               edges[1][iy + 1] - edges[1][iy], fill=False, hatch="///",
+                               edgecolor="k", lw=0.0))
+    return Patch(facecolor="white", edgecolor="k", hatch="///",
+                 label=f"multistable (≥ 2 attractors among {int(ds.attrs['ics'])} "
+                       "initial states)")
 
 
 def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:

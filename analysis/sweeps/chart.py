@@ -46,6 +46,7 @@ from analysis.sweeps.grid import (
     check_grid,
     record,
 )
+from analysis.sweeps.multistability import Ics, point_attractors
 from analysis.sweeps.points import chart_points
 from analysis.sweeps.store import PointStore
 
@@ -89,17 +90,35 @@ def _failed_point(setting: Setting, exc: SimulationError) -> dict:
 
 
 def _task_system(task: tuple) -> System:
-    setting, xname, xval, yname, yval, _ = task
+    setting, xname, xval, yname, yval, *_ = task
     return setting.system_at(**{xname: xval, yname: yval})
 
 
 def _chart_group_task(group: list[tuple]) -> list[tuple[str, dict]]:
     """Chart points of one model and balls together (``points.chart_points``: their
-    tangents in lockstep, each result ``points.chart_point``'s bit for bit)."""
+    tangents in lockstep, each result ``points.chart_point``'s bit for bit); with ``Ics``
+    (a task's last item) also each point's attractors among K initial states."""
     setting = group[0][0]
     systems = [_task_system(task) for task in group]
-    return [(task[-1], out if isinstance(out, dict) else _failed_point(setting, out))
-            for task, out in zip(group, chart_points(setting, systems), strict=True)]
+    out = [(task[-2], point if isinstance(point, dict) else _failed_point(setting, point))
+           for task, point in zip(group, chart_points(setting, systems), strict=True)]
+    ics = group[0][-1]
+    if ics is not None:
+        for (key, point), system in zip(out, systems, strict=True):
+            point.update(_ics_point(setting, ics, system, key))
+    return out
+
+
+def _ics_point(setting: Setting, ics: Ics, system: System, key: str) -> dict:
+    """The point's attractors among ``ics``' initial states (``multistability``); a point
+    whose mapping fails records no attractor and the chart goes on."""
+    iy, ix = (int(k) for k in key.split("-"))
+    try:
+        return point_attractors(ics, system, classified_section(setting, system),
+                                iy * 10_000 + ix, setting.dt)
+    except SimulationError:
+        return {"n_attractors": 0, "attractor_codes": np.full(ics.count, -1),
+                "diverged_share": np.nan, "multistable": 0}
 
 
 def _chart_groups(setting: Setting, tasks: list[tuple]) -> list[list[tuple]]:
@@ -122,25 +141,34 @@ def _chart_groups(setting: Setting, tasks: list[tuple]) -> list[list[tuple]]:
 def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                     executor: Executor | None = None,
                     progress: Callable[[int, int], None] | None = None,
-                    on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+                    on_damaged: Callable[[str], None] | None = None,
+                    ics: Ics | None = None) -> xr.Dataset:
     """Classify every point of the grid y × x; writes and returns the netCDF Dataset.
 
     Resumable as ``analysis.sweeps.diagram.bifurcation_diagram``; a point whose run fails is
-    classed ``failed: …`` (``nature_code`` 0) and the chart goes on."""
+    classed ``failed: …`` (``nature_code`` 0) and the chart goes on. ``ics``: also map K
+    initial states per point (``multistability``: ``n_attractors``, ``multistable``,
+    ``attractor_codes``, ``diverged_share``)."""
     check_grid(setting, x, y)
+    if ics is not None:  # its box fits the model, before any point runs
+        ics.box_of(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
     definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
                   "structure": list(setting.loaded().structure(setting.n_balls))}
+    if ics is not None:
+        definition["ics"] = {"count": ics.count, "seed": ics.seed,
+                             "box": ics.box.text if ics.box else None,
+                             "options": asdict(ics.options)}
     store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
     try:
         done = store.done()
-        tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}")
+        tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
         run_with_progress(executor or SerialExecutor(), _chart_group_task,
                           _chart_groups(setting, tasks), lambda: len(store.done()),
                           len(x.values) * len(y.values), progress,
                           lambda group, results: [store.save(*r) for r in results])
-        ds = _assemble_chart(store, setting, x, y)
+        ds = _assemble_chart(store, setting, x, y, ics)
         save_dataset(ds, output)
         store.remove()
     except BaseException:  # a refusal or failure before the first point: no trace
@@ -149,19 +177,24 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
     return ds
 
 
-def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis) -> xr.Dataset:
+def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,
+                    ics: Ics | None = None) -> xr.Dataset:
     shape = (len(y.values), len(x.values))
     first = store.load(f"{0:04d}-{0:04d}")
+    extra = ("n_attractors", "multistable", "diverged_share") if ics is not None else ()
     fields = ("nature_code", "period", "lyapunov", "ci95",
-              *(f for f in first if f.startswith("amplitude_")), "graph_ratio")
+              *(f for f in first if f.startswith("amplitude_")), "graph_ratio", *extra)
     arrays = {f: np.full(shape, np.nan) for f in fields}
     nature = np.empty(shape, dtype=object)
+    codes = np.full((*shape, ics.count if ics is not None else 0), -1, dtype=np.int64)
     for iy in range(shape[0]):
         for ix in range(shape[1]):
             point = store.load(f"{iy:04d}-{ix:04d}")
             for f in fields:
                 arrays[f][iy, ix] = point[f]
             nature[iy, ix] = str(point["nature"])
+            if ics is not None:
+                codes[iy, ix] = point["attractor_codes"]
     dims = (y.name, x.name)
     state_units = setting.loaded().state_units
     units = {"lyapunov": "1/s", "ci95": "1/s",
@@ -172,10 +205,20 @@ def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis) -> xr
                            {"legend": ", ".join(f"{v}: {k}" for k, v in NATURE_CODES.items())})
     data["period"] = (dims, arrays["period"].astype(int))
     data["nature"] = (dims, nature)
+    if ics is not None:
+        data["n_attractors"] = (dims, arrays["n_attractors"].astype(int),
+                                {"long_name": f"attractors met by {ics.count} initial states"})
+        data["multistable"] = (dims, arrays["multistable"].astype(int),
+                               {"long_name": "two or more attractors (1) or not (0)"})
+        data["attractor_codes"] = ((*dims, "attractor_slot"), codes,
+                                   {"long_name": "nature_code of each attractor (-1: none)"})
     section = classified_section(setting, setting.system_at(**{x.name: x.values[0],
                                                                 y.name: y.values[0]}))
     attrs = setting.attrs("chart", section, (x, y))
     attrs.update(x=x.name, y=y.name)
+    if ics is not None:
+        attrs.update(ics=ics.count, ics_seed=ics.seed,
+                     ics_box=ics.box.text if ics.box else "positions within ± the clearance")
     return xr.Dataset(data, coords={y.name: y.coord(), x.name: x.coord()}, attrs=attrs)
 
 
