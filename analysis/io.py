@@ -12,6 +12,7 @@ from typing import Any
 import xarray as xr
 
 from analysis.errors import InputError, Interrupt, WriteError
+from modelgen.locations import broken_link
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff",
                    ".webp")
@@ -131,10 +132,7 @@ def open_result(path: str | Path) -> xr.Dataset:
     path = Path(path)
     if path.is_dir():
         raise InputError(f"result file: '{path}' is a folder, not a result file")
-    if not path.exists():
-        raise InputError(f"result file: '{path}' does not exist")
-    if not path.is_file():
-        raise InputError(f"result file: '{path}' is not a plain file (a pipe or device)")
+    check_readable(path)
     try:
         with xr.open_dataset(path, engine=_engine(path)) as ds:
             return ds.load()
@@ -149,9 +147,17 @@ def _engine(path: Path) -> str:
         return "scipy" if handle.read(3) == b"CDF" else "h5netcdf"
 
 
+def check_readable(path: Path) -> None:
+    """``InputError`` unless a result file can be opened at ``path``: it does not exist, is
+    a broken symbolic link (a loop, a missing target), or is not a plain file."""
+    if not path.exists():
+        raise InputError(f"result file: '{path}' {broken_link(path) or 'does not exist'}")
+    if not path.is_file():
+        raise InputError(f"result file: '{path}' is not a plain file (a pipe or device)")
+
+
 def read_attrs(path: str | Path) -> dict[str, Any]:
     """The attrs of the result file at ``path``, read without its data."""
-    if not Path(path).is_file():
-        raise InputError(f"result file: '{path}' does not exist")
+    check_readable(Path(path))
     with xr.open_dataset(path, engine=_engine(Path(path))) as ds:
         return dict(ds.attrs)

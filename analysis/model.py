@@ -38,6 +38,7 @@ import generated
 from analysis.errors import InputError, StaleModelError
 from modelgen.locations import (
     MODELS_ENV,
+    broken_link,
     cached_model_root,
     is_shipped,
     module_name,
@@ -588,6 +589,8 @@ def load_model(name: str | Path) -> Model:
                          "models') or the path of a .toml spec")
     users = user_models()  # the folders judged whatever the name (a shadowed spec warned)
     path = Path(text).expanduser()
+    if (broken := broken_link(path)) is not None:
+        raise InputError(f"model: '{text}' {broken}")
     if text.endswith(".toml") or path.is_dir() or path.exists():
         return _load_path(path)
     if _is_shipped_name(text) or _generated_exists(text):
@@ -620,7 +623,7 @@ def _load_path(path: Path) -> Model:
     if path.is_dir():
         return _load_folder(path)
     if not path.exists():
-        raise InputError(f"model: spec file {path} not found")
+        raise InputError(f"model: spec file {path} {broken_link(path) or 'not found'}")
     if is_shipped(path):
         return _load_shipped(path.stem)
     return _load_spec_file(path)

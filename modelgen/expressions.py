@@ -178,8 +178,13 @@ def _check_call(node: ast.Call, text: str) -> None:
         called = _fragment(text, node.func)
         raise ExpressionError(f"calls to '{_shorten(called, 30)}' are not allowed; functions: "
                               f"{', '.join(FUNCTIONS)}", _fragment(text, node))
+    if any(keyword.arg is None for keyword in node.keywords):
+        raise ExpressionError("'**' unpacking is not allowed", _fragment(text, node))
     if node.keywords:
         raise ExpressionError("keyword arguments are not allowed", _fragment(text, node))
+    for arg in node.args:  # the star, before a count of arguments it would make wrong
+        if isinstance(arg, ast.Starred):
+            raise ExpressionError(_FORBIDDEN_NODES[ast.Starred], _fragment(text, arg))
     _, arity = FUNCTIONS[node.func.id]
     n = len(node.args)
     if (arity is not None and n != arity) or (arity is None and not 2 <= n <= MAX_ARGS):

@@ -85,3 +85,20 @@ def cached_model_root(path: Path) -> Path:
     key = f"{GENERATED_LAYOUT}\0{resolved}".encode()
     where = hashlib.sha256(key).hexdigest()[:8]
     return cache_root() / "models" / f"{resolved.stem}-{spec_digest(resolved)[:16]}-{where}"
+
+
+def broken_link(path: Path) -> str | None:
+    """How a path that cannot be opened is a broken symbolic link: 'is a symbolic link loop'
+    or "is a symbolic link to 'TARGET', which does not exist"; None when it is not a link
+    (then it simply does not exist, or it opens)."""
+    import errno
+
+    if not os.path.islink(path):
+        return None
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop (it leads back to itself)"
+        return f"is a symbolic link to '{os.readlink(path)}', which does not exist"
+    return None

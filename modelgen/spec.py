@@ -32,6 +32,7 @@ from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
 from modelgen.locations import (
     MODELS_ENV,
+    broken_link,
     module_name,
     shipped_spec_dir,
     spec_digest,
@@ -835,6 +836,8 @@ def _allowed(loc: tuple) -> str:
         return f" in {QUANTITIES[loc[1]].range_text()}"
     section = {"simulation": SimulationDefaults, "structure": Structure,
                "bearings": Bearing, "bodies": Body}.get(str(loc[0]))
+    if len(loc) >= 4 and _is_union_tag(loc, 2):  # terms.<i>.<kind>.<field>: the term's own
+        section = TERMS[loc[2]]
     info = section.model_fields.get(str(loc[-1])) if section else None
     low, high, left, right = "-inf", "inf", "(", ")"
     for rule in info.metadata if info else ():
@@ -903,7 +906,7 @@ def load_spec(name_or_path: str | Path) -> tuple[Spec, Path]:
     """Read and validate a spec by shipped name or path; returns the spec and its file."""
     path = spec_path(name_or_path)
     if not path.exists():
-        raise SpecError(str(path), ["file not found"])
+        raise SpecError(str(path), [broken_link(path) or "file not found"])
     if path.is_dir() or not path.is_file():
         raise SpecError(str(path), ["not a plain file (a folder, a pipe or a device)"])
     size = path.stat().st_size

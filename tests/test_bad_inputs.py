@@ -393,6 +393,15 @@ SPEC_CASES = [
     SpecCase("expr-ball-symbol", "custom expressions", "a per-ball symbol in a rotor force",
              (expression(fx="1e9*delta"),),
              ("terms.5.fx: 'delta' is a per-ball symbol; it may be used in 'ball' only",)),
+    SpecCase("expr-star", "custom expressions", "'*' unpacking in a call (reported as an "
+             "argument count before)", (expression(fx="Max(*x)"),),
+             ("terms.5.fx: '*' unpacking is not allowed: '*x'",)),
+    SpecCase("expr-double-star", "custom expressions", "'**' unpacking in a call",
+             (expression(fx="sin(**x)"),),
+             ("terms.5.fx: '**' unpacking is not allowed: 'sin(**x)'",)),
+    SpecCase("defect-ball-zero", "bodies and bearings", "a pit on ball 0 (the range was "
+             "missing from the message)", (("terms.1.ball", 0),), base="6205-ball-defect",
+             expect=("terms.1.ball: must be in [1, 64], got 0",)),
     SpecCase("expr-empty", "custom expressions", "an expression term without expressions",
              (expression(description="nothing"),),
              ("terms.5: an expression term needs at least one of fx, fy, ball",)),
@@ -555,7 +564,8 @@ CLI_CASES = [
             ("result file: 'r.nc' is not a readable netCDF file",), setup=_corrupt_result),
     CliCase("result-foreign", "files", "a netCDF file that is not a bearingdyn run",
             ("poincare", "r.nc"),
-            ("result file: 'r.nc' is not a bearingdyn run (missing x, y, vx, vy)",),
+            ("result file: 'r.nc' is not a bearingdyn result (it names no model; variables: "
+             "z)",),
             setup=_foreign_result),
     CliCase("section-unknown", "command line", "an unknown Poincaré section",
             ("poincare", "r.nc", "--section", "moon"),
@@ -577,8 +587,9 @@ _RUN_CACHE: dict[str, bytes] = {}
 
 def _sample_run_bytes(kind: str) -> bytes:
     """A short run of the paper's model as bytes (made once per test session): ``good``,
-    ``tampered`` (dt < 0 in its attributes), ``nan`` (one state NaN), ``one`` (one sample),
-    ``short`` (too few section points to classify), ``netcdf3`` (classic format)."""
+    ``tampered`` (dt < 0 in its attributes), ``kind`` (a damaged kind attribute), ``nan``
+    (one state NaN), ``one`` (one sample), ``short`` (too few section points to classify),
+    ``netcdf3`` (classic format)."""
     with _RUN_LOCK:
         if kind not in _RUN_CACHE:
             import tempfile
@@ -587,6 +598,7 @@ def _sample_run_bytes(kind: str) -> bytes:
 
             ds = simulate("vakharia2015", 8, duration=0.05, transient=0.0)
             variants = {"good": ds, "tampered": ds.assign_attrs(dt=-1.0),
+                        "kind": ds.assign_attrs(kind="chrt"),
                         "nan": ds.assign(x=ds.x.where(ds.t != ds.t[5])),
                         "one": ds.isel(t=slice(0, 1)), "short": ds.isel(t=slice(0, 2000))}
             with tempfile.TemporaryDirectory() as tmp:
@@ -1078,6 +1090,69 @@ CLI_CASES += [
 ]
 
 
+def _link_loop(name: str) -> Callable[[Path], None]:
+    def setup(folder: Path) -> None:
+        (folder / f"{name}.a").symlink_to(name)
+        (folder / name).symlink_to(f"{name}.a")
+    return setup
+
+
+def _dangling(name: str) -> Callable[[Path], None]:
+    def setup(folder: Path) -> None:
+        (folder / name).symlink_to("gone.nc")
+    return setup
+
+
+BLAME = "messages that name the right thing"
+CLI_CASES += _cases(BLAME, ("spectrum", *RUN, "--envelope"), [
+    ("envelope-band-above-nyquist", "a pass band above the Nyquist frequency (was clipped, "
+     "then printed as given)", ("--band", "20000:60000"),
+     ["--band: must lie in [0, 50000] Hz, below the Nyquist frequency of this run (dt = "
+      "1e-05 s), got 20000:60000"], _run_file()),
+    ("envelope-band-zero-width", "a band of zero width", ("--band", "100:100"),
+     ["--band: must be LO:HI in Hz with 0 <= LO < HI, got '100:100'"], _run_file()),
+    ("envelope-band-narrow", "a band narrower than the run's frequency resolution (gave "
+     "empty tables)", ("--band", "1000:1010"),
+     ["--band: must be at least 40 Hz wide (two bins of this run's resolution 1/T = 20 Hz), "
+      "got 1000:1010 (10 Hz)"], _run_file()),
+])
+CLI_CASES += _cases(BLAME, (), [
+    ("sweep-speed-zero", "a speed axis from 0 to 0 (was blamed on shaft_hz)",
+     (*SWEEP, "--from", "0", "--to", "0"),
+     ["axis speed_rpm: the 'shaft' section has no period at speed_rpm = 0 (shaft_hz = 0 Hz); "
+      "give values at which it turns (> 0 at both ends), or another --section"]),
+    ("chart-speed-zero", "a chart whose speed axis starts at 0",
+     (*CHART[:3], "speed_rpm:0:4000:2", *CHART[4:]),
+     ["axis speed_rpm: the 'shaft' section has no period at speed_rpm = 0"]),
+    ("run-model-no-balls", "the paper's case of a model without balls (said 'leave n_balls "
+     "out, got 6' though none was given)", ("run", "--model", "duffing", "-o", "out"),
+     ["--model: the paper's case (N_b = 6…10) varies N_b, the balls of a model with one "
+      "bearing; model 'duffing' has no bearing"]),
+    ("run-model-two-bearings", "the paper's case of a model with two bearings",
+     ("run", "--model", "two-bearing-rotor", "-o", "out"),
+     ["model 'two-bearing-rotor' has bearings left, right"]),
+    ("reproduce-model-no-balls", "the reproduction of a model without balls",
+     ("reproduce", "duffing", "--quick", "-o", "rep"),
+     ["model: the reproduction varies N_b", "model 'duffing' has no bearing"]),
+    ("model-link-loop", "a spec that is a symbolic-link loop (was 'not found')",
+     ("simulate", "loop.toml", "-o", "r.nc"),
+     ["model: 'loop.toml' is a symbolic link loop"], _link_loop("loop.toml")),
+    ("result-link-loop", "a result file that is a symbolic-link loop",
+     ("spectrum", "loop.nc"), ["result file: 'loop.nc' is a symbolic link loop"],
+     _link_loop("loop.nc")),
+    ("result-link-dangling", "a result file that links to nothing",
+     ("spectrum", "link.nc"),
+     ["result file: 'link.nc' is a symbolic link to 'gone.nc', which does not exist"],
+     _dangling("link.nc")),
+    ("generate-link-loop", "a spec to generate that is a symbolic-link loop",
+     ("generate", "loop.toml", "--out", "gen"),
+     ["loop.toml: is a symbolic link loop"], _link_loop("loop.toml")),
+    ("plot-foreign", "a netCDF file of another program (was \"no variable 'x'\")",
+     ("plot", "r.nc", "-o", "f.png"),
+     ["result file: 'r.nc' is not a bearingdyn result (it names no model"], _foreign_result),
+])
+
+
 @dataclass
 class Outcome:
     returncode: int
@@ -1216,7 +1291,7 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "custom expressions", "bodies and bearings", "command line", "simulate", "files",
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
           "jobs", "checked before any write", "accepted without a word (now judged)",
-          "numerical failures"]
+          "messages that name the right thing", "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:

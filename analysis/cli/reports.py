@@ -77,11 +77,13 @@ def run(
 ):
     """The default job: the paper's case for N_b = 6…10 (netCDF + figure per N_b, peak table)."""
     from analysis.integrate.simulate import check_run
-    from analysis.reports.paper import PAPER_N_BALLS
+    from analysis.reports.paper import PAPER_N_BALLS, check_one_bearing
     from analysis.reports.report import peak_table_markdown, run_paper_case
 
     params = parse_sets(sets)
     check_out_dir(out_dir)
+    if not n_balls:
+        check_one_bearing(model, "--model", "the paper's case (N_b = 6…10)")
     for nb in n_balls or PAPER_N_BALLS:  # every run checked before the first file is written
         check_run(model, nb, duration=duration, transient=transient, **params)
     results = run_paper_case(out_dir, model, n_balls or PAPER_N_BALLS, duration, transient,

@@ -12,12 +12,27 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from analysis.errors import InputError
 from analysis.integrate.simulate import simulate
 from analysis.io import save_dataset
 from analysis.signal.spectrum import Peak, find_peaks
 
 PAPER_N_BALLS = (6, 7, 8, 9, 10)
 """Table 2 of the paper."""
+
+
+def check_one_bearing(model: str, option: str, job: str) -> None:
+    """``InputError`` naming ``option`` unless ``model`` has one bearing: ``job`` (the
+    paper's case, its reproduction) varies the number of balls N_b of that bearing."""
+    from analysis.model import load_model
+
+    loaded = load_model(model)
+    if len(loaded.bearings) != 1:
+        has = f"bearings {', '.join(loaded.bearing_names)}" if loaded.bearings else \
+            "no bearing"
+        raise InputError(f"{option}: {job} varies N_b, the balls of a model with one "
+                         f"bearing; model '{loaded.name}' has {has}, got {model!r} (give such "
+                         "a model, e.g. vakharia2015, or use `bearingdyn simulate`)")
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from analysis.reports.paper import (
     PAPER_TABLE2,
     SENSITIVITY,
     PaperRow,
+    check_one_bearing,
     major_name,
     nature_matches,
     other_peak_names,
@@ -133,7 +134,7 @@ def check_reproduction(model: str, n_balls: Sequence[int] = (5, 6, 7, 8, 9, 10),
     """Raise ``InputError`` (or ``SpecError``) before anything is written when any part of
     the reproduction would be refused: the model, every N_b's run (times in s, the step)
     and every sensitivity chart's grid."""
-    load_model(model)
+    check_one_bearing(model, "model", "the reproduction")
     for nb in n_balls:
         check_run(model, nb, duration=duration, transient=transient)
         system = as_system(model, nb)

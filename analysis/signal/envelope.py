@@ -28,6 +28,7 @@ filter bank).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,8 +74,30 @@ def parse_band(text: str) -> tuple[float, float]:
     return band
 
 
+def check_band(band: tuple[float, float], fs: float, n_samples: int) -> tuple[float, float]:
+    """A given pass band (Hz) as it is used, or ``InputError``: it must lie between 0 and
+    the Nyquist frequency ``fs``/2 of the run (never clipped), and be at least two bins of
+    the run's frequency resolution ``fs``/``n_samples`` wide (a narrower band passes
+    nothing: an empty table)."""
+    low, high = float(band[0]), float(band[1])
+    nyquist, resolution = fs / 2, fs / n_samples
+    text = f"{band[0]:g}:{band[1]:g}"
+    if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
+        raise InputError(f"--band: must be LO:HI in Hz with 0 <= LO < HI, got {text}")
+    if high > nyquist * (1 + 1e-9):
+        raise InputError(f"--band: must lie in [0, {nyquist:g}] Hz, below the Nyquist "
+                         f"frequency of this run (dt = {1 / fs:g} s), got {text}")
+    if high - low < 2 * resolution:
+        raise InputError(f"--band: must be at least {2 * resolution:.3g} Hz wide (two bins "
+                         f"of this run's resolution 1/T = {resolution:.3g} Hz), got {text} "
+                         f"({high - low:g} Hz)")
+    return low, min(high, nyquist)  # the Nyquist frequency within rounding: as given
+
+
 def _bandpass(values: np.ndarray, fs: float, low: float, high: float) -> np.ndarray:
     nyquist = fs / 2
+    if low <= 0 and high >= nyquist:
+        return values  # the whole band: nothing to filter
     if low <= 0:
         sos = scipy.signal.butter(ORDER, high, btype="lowpass", fs=fs, output="sos")
     elif high >= nyquist:
@@ -140,14 +163,9 @@ def envelope(ds: xr.Dataset, var: str | None = None, band: tuple[float, float] |
     if band is None:
         chosen = choose_band(ds, var, min_width_hz)
     else:
-        low, high = float(band[0]), float(band[1])
-        if not 0 <= low < high:
-            raise InputError(f"band: must have 0 <= low < high (Hz), got {band!r}")
-        if low >= fs / 2:
-            raise InputError(f"band: the low edge must be below the Nyquist frequency "
-                             f"{fs / 2:g} Hz, got {low:g} Hz")
-        analytic = scipy.signal.hilbert(_bandpass(values, fs, low, min(high, fs / 2)))
-        chosen = Band(low, min(high, fs / 2), spectral_kurtosis(analytic), "user")
+        low, high = check_band(band, fs, len(values))
+        analytic = scipy.signal.hilbert(_bandpass(values, fs, low, high))
+        chosen = Band(low, high, spectral_kurtosis(analytic), "user")
     analytic = scipy.signal.hilbert(_bandpass(values, fs, chosen.low_hz, chosen.high_hz))
     name = f"{var}_envelope"
     units = ds[var].attrs.get("units", "")

@@ -271,10 +271,25 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
             raise InputError(f"axis {axis.name}: model '{model.name}' has no bearing "
                              f"'{bearing}'; bearings: {', '.join(model.bearing_names) or 'none'}")
         for value in (axis.values[0], axis.values[-1]):
-            section_period(setting.system_at(**{axis.name: value}), setting.record_section)
+            _check_section_at(setting, axis.name, value)
     for corner in itertools.product(*((axis.values[0], axis.values[-1]) for axis in axes)):
         system = setting.system_at(**{a.name: v for a, v in zip(axes, corner, strict=True)})
         setting.plan(system, warn=warn)  # times, resolution, RK4 step at the grid's corners
+
+
+def _check_section_at(setting: Setting, name: str, value: float) -> None:
+    """``InputError`` naming the axis and its value when the recorded section has no period
+    at ``name`` = ``value`` (a shaft at rest: 0 rpm), instead of the frequency it lacks."""
+    section = setting.record_section
+    try:
+        section_period(setting.system_at(**{name: value}), section)
+    except InputError as exc:
+        frequency, _, _ = str(exc).partition(":")
+        if not frequency.endswith("_hz") and "_hz_" not in frequency:
+            raise
+        raise InputError(f"axis {name}: the '{section}' section has no period at {name} = "
+                         f"{value:g} ({frequency} = 0 Hz); give values at which it turns "
+                         "(> 0 at both ends), or another --section") from None
 
 
 def _check_setting_times(setting: Setting) -> None:
