@@ -1152,6 +1152,41 @@ CLI_CASES += _cases(BLAME, (), [
      ["result file: 'r.nc' is not a bearingdyn result (it names no model"], _foreign_result),
 ])
 
+JUDGED = "judged, not failed inside"
+CLI_CASES += _cases(JUDGED, SWEEP, [
+    ("scheduler-scheme", "a scheduler address with a misspelt scheme",
+     ("--scheduler", "htp://127.0.0.1:8786"),
+     ["--scheduler: must be tcp://HOST:PORT (tcp or tls, port 1-65535), got "
+      "'htp://127.0.0.1:8786' (unknown scheme 'htp')"]),
+    ("scheduler-no-port", "a scheduler address without its port",
+     ("--scheduler", "tcp://127.0.0.1"), ["got 'tcp://127.0.0.1' (no port)"]),
+    ("scheduler-no-host", "a scheduler address without its host",
+     ("--scheduler", "tcp://:8786"), ["got 'tcp://:8786' (no host)"]),
+    ("scheduler-port-range", "a port beyond 65535", ("--scheduler", "tcp://127.0.0.1:99999"),
+     ["(port 99999)"]),
+    ("scheduler-empty", "an empty scheduler address (started a local cluster before)",
+     ("--scheduler", ""), ["got '' (no port)"]),
+    ("scheduler-refused", "a scheduler address where nothing listens (answered after 20 s)",
+     ("--scheduler", "tcp://127.0.0.1:9"),
+     ["--scheduler: tcp://127.0.0.1:9: nothing listens at 127.0.0.1:9 (connection refused)"]),
+    ("scheduler-unknown-host", "a scheduler on a host that does not exist",
+     ("--scheduler", "tcp://no-such-host.invalid:8786"),
+     ["unknown host 'no-such-host.invalid'"]),
+])
+CLI_CASES += _cases(JUDGED, ("plot",), [
+    ("plot-kind-damaged", "a result whose kind attribute was damaged (an internal error "
+     "before)", (*RUN, "-o", "f.png"),
+     ["result file: 'run.nc': attribute kind must be one of diagram, chart to be drawn, got "
+      "'chrt'"], _run_file("kind")),
+])
+CLI_CASES += _cases(JUDGED, ("spectrum", *RUN, "--envelope"), [
+    ("envelope-band-beyond", "a low-pass band beyond the Nyquist frequency (a filter error "
+     "surfaced as an internal error)", ("--band", "0:60000"),
+     ["--band: must lie in [0, 50000] Hz", "got 0:60000"], _run_file()),
+    ("envelope-band-nan", "NaN as a band edge", ("--band", "nan:5000"),
+     ["--band: must be LO:HI in Hz with 0 <= LO < HI, got 'nan:5000'"], _run_file()),
+])
+
 
 @dataclass
 class Outcome:
@@ -1291,7 +1326,8 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "custom expressions", "bodies and bearings", "command line", "simulate", "files",
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
           "jobs", "checked before any write", "accepted without a word (now judged)",
-          "messages that name the right thing", "numerical failures"]
+          "messages that name the right thing", "judged, not failed inside",
+          "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:

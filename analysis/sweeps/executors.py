@@ -114,9 +114,10 @@ class DaskExecutor:
 
         self.retries = retries
         self.cluster = None
-        if scheduler:
+        if scheduler is not None:
+            probe_scheduler(scheduler)
             try:
-                self.client = Client(scheduler, timeout="20s")
+                self.client = Client(scheduler, timeout=f"{3 * PROBE_SECONDS:g}s")
             except OSError as exc:
                 raise InputError(f"--scheduler: cannot reach {scheduler} ({exc})") from None
             self.name = f"dask {scheduler}"
@@ -142,6 +143,83 @@ class DaskExecutor:
             self.cluster.close()
 
 
+PROBE_SECONDS = 3.0
+"""How long the probe of a scheduler address waits to connect and for the first answer."""
+SCHEDULER_SCHEMES = ("tcp", "tls")
+HANDSHAKE_MOST = 1 << 20
+"""Largest first message (bytes) a Dask scheduler sends: its handshake is a few hundred."""
+
+
+def parse_scheduler(address: str) -> tuple[str, str, int]:
+    """``tcp://host:port`` (the scheme may be left out, or be ``tls``) as (scheme, host,
+    port); ``InputError`` naming what is wrong (the scheme, a missing host or port)."""
+    scheme, sep, rest = address.strip().rpartition("://")
+    scheme = scheme if sep else "tcp"
+    allowed = f"must be tcp://HOST:PORT ({' or '.join(SCHEDULER_SCHEMES)}, port 1-65535)"
+    if scheme not in SCHEDULER_SCHEMES:
+        raise InputError(f"--scheduler: {allowed}, got {address!r} (unknown scheme "
+                         f"{scheme!r})")
+    host, colon, port = rest.rstrip("/").rpartition(":")
+    if not colon or not port.isdigit():
+        raise InputError(f"--scheduler: {allowed}, got {address!r} (no port)")
+    host = host.removeprefix("[").removesuffix("]")
+    if not host or any(c.isspace() or c in "/@" for c in host):
+        raise InputError(f"--scheduler: {allowed}, got {address!r} (no host)")
+    if not 1 <= int(port) <= 65535:
+        raise InputError(f"--scheduler: {allowed}, got {address!r} (port {int(port)})")
+    return scheme, host, int(port)
+
+
+def probe_scheduler(address: str, seconds: float = PROBE_SECONDS) -> None:
+    """``InputError`` unless a Dask scheduler answers at ``address`` within ``seconds``:
+    nothing listens there, the host is unknown or does not answer, or what answers is not
+    a Dask scheduler (its first message is not a Dask handshake; Dask itself would read
+    any first bytes as a length and try to allocate it)."""
+    import socket
+    import struct
+
+    scheme, host, port = parse_scheduler(address)
+    where = f"--scheduler: {address}"
+    try:
+        sock = socket.create_connection((host, port), timeout=seconds)
+    except socket.gaierror:
+        raise InputError(f"{where}: unknown host {host!r}") from None
+    except TimeoutError:
+        raise InputError(f"{where}: no answer within {seconds:g} s (a Dask scheduler "
+                         "answers at once); is the host reachable and the address "
+                         "right?") from None
+    except ConnectionRefusedError:
+        raise InputError(f"{where}: nothing listens at {host}:{port} (connection refused); "
+                         "start the scheduler (`dask scheduler`) or give its address") from None
+    except OSError as exc:
+        raise InputError(f"{where}: cannot reach {host}:{port} "
+                         f"({exc.strerror or exc})") from None
+    with sock:
+        if scheme == "tls":
+            return  # the TLS handshake comes first: Dask's own connect judges it
+        try:
+            head = _receive(sock, 8)
+            (size,) = struct.unpack("<Q", head) if len(head) == 8 else (0,)
+            body = _receive(sock, size) if 0 < size <= HANDSHAKE_MOST else b""
+        except OSError:  # silent within the time, or reset: no Dask handshake either way
+            body = b""
+    if b"pickle-protocol" not in body:
+        raise InputError(f"{where}: not a Dask scheduler (what answers at {host}:{port} sent "
+                         f"no Dask handshake within {seconds:g} s); give the address `dask "
+                         "scheduler` prints")
+
+
+def _receive(sock, size: int) -> bytes:
+    """Up to ``size`` bytes from ``sock`` (fewer when the peer closes)."""
+    data = b""
+    while len(data) < size:
+        chunk = sock.recv(size - len(data))
+        if not chunk:
+            break
+        data += chunk
+    return data
+
+
 def make_executor(kind: str = "processes", workers: int | None = None,
                   scheduler: str | None = None) -> Executor:
     """``serial``, ``processes`` (default: all cores) or ``dask`` (``scheduler`` address,
@@ -149,7 +227,7 @@ def make_executor(kind: str = "processes", workers: int | None = None,
     if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
         raise InputError(f"--workers: must be a whole number in [1, {MAX_WORKERS}], "
                          f"got {workers}")
-    if scheduler:
+    if scheduler is not None:
         return DaskExecutor(scheduler=scheduler)
     if kind == "serial":
         return SerialExecutor()
