@@ -221,3 +221,13 @@ def test_a_killed_command_resumes_and_bad_options_write_nothing(system, tmp_path
     x, y = Range("x", -3.0, 3.0, 30), Range("vx", -3.0, 3.0, 30)
     xr.testing.assert_identical(read(tmp_path / "b.nc"), basins(system, x, y, block=20))
     assert not parts.exists()
+
+
+def test_a_dask_local_cluster_gives_the_same_file(system, reference, tmp_path):
+    pytest.importorskip("distributed")
+    ex = make_executor("dask", 2)
+    try:
+        basins_to_file(system, X, Y, tmp_path / "d.nc", block=BLOCK, executor=ex)
+    finally:
+        ex.close()
+    xr.testing.assert_identical(read(tmp_path / "d.nc"), reference)
