@@ -37,10 +37,13 @@ import numpy as np
 import generated
 from analysis.errors import InputError, StaleModelError
 from modelgen.locations import (
+    MANIFEST,
     MODELS_ENV,
     broken_link,
     cached_model_root,
     is_shipped,
+    manifest_problem,
+    manifest_text,
     module_name,
     shipped_spec_dir,
     spec_digest,
@@ -632,6 +635,12 @@ def _load_path(path: Path) -> Model:
 def _load_spec_file(path: Path) -> Model:
     """A user spec: its cached generated code, generated first when missing."""
     root = cached_model_root(path)
+    if root.is_dir() and (problem := manifest_problem(root)) is not None:
+        import warnings
+
+        warnings.warn(f"the cached code of {path.name} is damaged ({problem}); generating it "
+                      f"again in {root}", stacklevel=2)
+        _discard(root)
     module_dir = _only_model(root) if root.is_dir() else None
     if module_dir is None:
         _generate_into_cache(path, root)
@@ -641,27 +650,33 @@ def _load_spec_file(path: Path) -> Model:
 
 def _generate_into_cache(path: Path, root: Path) -> None:
     """Generate a user spec's code into its cache folder (validated first; written to a
-    temporary folder and renamed, so concurrent processes never see half a model)."""
-    import os
+    temporary folder with its manifest and renamed, so concurrent processes never see half
+    a model, and a full disk leaves nothing)."""
     import shutil
-    import tempfile
 
     from modelgen.codegen import package_files, render
+    from modelgen.tree import stage
 
     files = {**package_files(), **render(path).files}  # validates the spec first
-    root.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=root.parent, prefix=f".{root.name}."))
+    tmp = stage(root, {**files, MANIFEST: manifest_text(files)})
     try:
-        for rel, text in files.items():
-            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
-            (tmp / rel).write_text(text)
-        try:
-            os.rename(tmp, root)
-        except OSError:  # another process was first: use theirs
-            shutil.rmtree(tmp, ignore_errors=True)
-    except BaseException:
+        tmp.rename(root)
+    except OSError:  # another process was first: use theirs
         shutil.rmtree(tmp, ignore_errors=True)
-        raise
+
+
+def _discard(root: Path) -> None:
+    """Remove a damaged cache entry: renamed aside first (one rename: another process sees
+    the entry or none), then deleted."""
+    import os
+    import shutil
+
+    aside = root.with_name(f".{root.name}.damaged-{os.getpid()}")
+    try:
+        os.rename(root, aside)
+    except OSError:  # another process moved it already
+        return
+    shutil.rmtree(aside, ignore_errors=True)
 
 
 def _only_model(root: Path) -> Path | None:
@@ -684,6 +699,9 @@ def _load_folder(folder: Path) -> Model:
     else:
         raise InputError(f"model: {given} is not a generated model folder (written by "
                          "`bearingdyn generate SPEC --out DIR`)")
+    if (root / MANIFEST).exists() and (problem := manifest_problem(root)) is not None:
+        raise InputError(f"model: {given} is damaged ({problem}); write it again with "
+                         f"`bearingdyn generate SPEC --out {root}`")
     loaded = _import_folder(root, module)
     check_fresh(loaded, loaded.NAME)
     return Model(module=loaded)

@@ -20,7 +20,6 @@ from __future__ import annotations
 import contextlib
 import importlib
 import importlib.util
-import os
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -34,10 +33,11 @@ from sympy.printing.str import StrPrinter
 
 import modelgen
 from modelgen.assemble import Equations, assemble, latex_equations
-from modelgen.locations import cached_model_root, is_shipped
+from modelgen.locations import cached_model_root, is_shipped, manifest_problem
 from modelgen.spec import Spec, load_spec, n_balls_range, spec_hash
 from modelgen.symbols import Context
 from modelgen.terms.base import ROLE_NAMES
+from modelgen.tree import write_atomic, write_root
 from modelgen.unrolled import helper_sources
 
 RUNTIME_TEMPLATE = "runtime.py.tmpl"
@@ -424,25 +424,16 @@ def atomic_write_text(target: Path, text: str) -> None:
     """Write ``text`` to ``target`` through a temporary file in the same folder and a
     rename: a reader sees the old file or the new one, never half of one."""
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(target, text)
 
 
-def _write_tree(root: Path, files: dict[str, str], check: bool) -> list[str]:
-    changed = []
-    for rel, text in files.items():
-        target = root / rel
-        current = target.read_text() if target.exists() else None
-        if current != text:
-            changed.append(rel)
-            if not check:
-                atomic_write_text(target, text)
+def _write_tree(root: Path, files: dict[str, str], check: bool, manifest: bool) -> list[str]:
+    """The files of ``files`` that differ from ``root`` on disk; written unless ``check``
+    (``modelgen.tree.write_root``: each model folder whole, the manifest last)."""
+    changed = [rel for rel, text in files.items()
+               if not (root / rel).is_file() or (root / rel).read_text() != text]
+    if not check and (changed or (manifest and manifest_problem(root) is not None)):
+        write_root(root, files, changed, manifest=manifest)
     return changed
 
 
@@ -466,7 +457,7 @@ def generate(names: list[str | Path], root: Path | None = None,
             render(name, root if root is not None and not is_shipped(path) else None).files)
     changed = []
     for target, files in rendered.items():
-        rels = _write_tree(target, files, check)
+        rels = _write_tree(target, files, check, manifest=target != default_root())
         named = target in (default_root(), root)
         changed += rels if named else [str(target / r) for r in rels]
     return changed

@@ -21,9 +21,12 @@ from pathlib import Path
 SPEC_DIR = "specs"
 MODELS_ENV = "BEARINGDYN_MODELS"
 CACHE_ENV = "BEARINGDYN_CACHE"
-GENERATED_LAYOUT = "2"
+GENERATED_LAYOUT = "3"
 """Version of the generated code's layout; part of the cache key, so code cached by a
-bearingdyn with another layout is never loaded."""
+bearingdyn with another layout is never loaded (3: with a manifest of hashes)."""
+MANIFEST = "MANIFEST.json"
+"""The file of a generated root (user cache, ``generate --out``) that holds the SHA-256 of
+every other file, checked when the root is loaded."""
 
 
 def module_name(model: str) -> str:
@@ -101,4 +104,37 @@ def broken_link(path: Path) -> str | None:
         if exc.errno == errno.ELOOP:
             return "is a symbolic link loop (it leads back to itself)"
         return f"is a symbolic link to '{os.readlink(path)}', which does not exist"
+    return None
+
+
+def manifest_text(files: dict[str, str]) -> str:
+    """The manifest of a generated root whose files (relative path -> text) are ``files``."""
+    import json
+
+    digests = {rel: hashlib.sha256(text.encode("utf-8")).hexdigest()
+               for rel, text in sorted(files.items()) if rel != MANIFEST}
+    return json.dumps({"layout": GENERATED_LAYOUT, "sha256": digests}, indent=1) + "\n"
+
+
+def manifest_problem(root: Path) -> str | None:
+    """What is wrong with the generated root ``root`` against its manifest (a file missing,
+    changed or the manifest itself unreadable), in a few words; None when every file is as
+    written."""
+    import json
+
+    try:
+        digests = json.loads((root / MANIFEST).read_text())["sha256"]
+    except FileNotFoundError:
+        return f"no {MANIFEST}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"{MANIFEST} is damaged"
+    if not isinstance(digests, dict):
+        return f"{MANIFEST} is damaged"
+    for rel, digest in digests.items():
+        try:
+            data = (root / rel).read_bytes()
+        except OSError:
+            return f"{rel} is missing"
+        if hashlib.sha256(data).hexdigest() != digest:
+            return f"{rel} was changed (truncated or edited)"
     return None

@@ -19,6 +19,7 @@ definition is refused. When every point is done the sweep assembles the final ne
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
@@ -114,12 +115,13 @@ class PointStore:
             np.savez(handle, **{k: np.asarray(v) for k, v in values.items()})
 
         fd, tmp = tempfile.mkstemp(prefix=f".{key}.", suffix=".tmp", dir=self.folder)
+        target = self.folder / f"{key}.npz"
         try:
-            with os.fdopen(fd, "wb") as handle:
+            with _naming(target), os.fdopen(fd, "wb") as handle:
                 write(handle)
                 handle.flush()
                 os.fsync(handle.fileno())
-            os.replace(tmp, self.folder / f"{key}.npz")
+            os.replace(tmp, target)
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)
@@ -149,6 +151,22 @@ class PointStore:
 
 def _atomic_bytes(path: Path, data: bytes) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "wb") as handle:
-        handle.write(data)
-    os.replace(tmp, path)
+    try:
+        with _naming(path), os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def _naming(path: Path):
+    """Re-raise an ``OSError`` without a file name (a full disk while writing) naming
+    ``path``, so the one line the user sees says which file could not be written."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is not None:
+            raise
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
