@@ -700,8 +700,9 @@ def _load_folder(folder: Path) -> Model:
         raise InputError(f"model: {given} is not a generated model folder (written by "
                          "`bearingdyn generate SPEC --out DIR`)")
     if (root / MANIFEST).exists() and (problem := manifest_problem(root)) is not None:
+        shown = given if root == folder else given.parent  # as the user wrote it
         raise InputError(f"model: {given} is damaged ({problem}); write it again with "
-                         f"`bearingdyn generate SPEC --out {root}`")
+                         f"`bearingdyn generate SPEC --out {shown}`")
     loaded = _import_folder(root, module)
     check_fresh(loaded, loaded.NAME)
     return Model(module=loaded)

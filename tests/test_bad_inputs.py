@@ -1187,6 +1187,51 @@ CLI_CASES += _cases(JUDGED, ("spectrum", *RUN, "--envelope"), [
      ["--band: must be LO:HI in Hz with 0 <= LO < HI, got 'nan:5000'"], _run_file()),
 ])
 
+_GENERATED: dict[str, bytes] = {}
+
+
+def _damaged_out(damage: Callable[[Path], None]) -> Callable[[Path], None]:
+    """Setup: ``gen/``, a folder written by ``bearingdyn generate duffing.toml --out gen``
+    (made once, copied), then ``damage(gen)``."""
+    def setup(folder: Path) -> None:
+        with _RUN_LOCK:
+            if not _GENERATED:
+                import tempfile
+
+                from modelgen.codegen import generate
+
+                with tempfile.TemporaryDirectory() as tmp:
+                    spec = Path(tmp) / "duffing.toml"
+                    spec.write_text((SPECS / "duffing.toml").read_text())
+                    generate([str(spec)], root=Path(tmp) / "gen")
+                    _GENERATED.update({str(f.relative_to(Path(tmp) / "gen")): f.read_bytes()
+                                       for f in (Path(tmp) / "gen").rglob("*")
+                                       if f.is_file() and "__pycache__" not in f.parts})
+        for rel, data in _GENERATED.items():
+            (folder / "gen" / rel).parent.mkdir(parents=True, exist_ok=True)
+            (folder / "gen" / rel).write_bytes(data)
+        damage(folder / "gen")
+    return setup
+
+
+CLI_CASES += _cases("half-written and damaged generated code", ("simulate", "gen", "-o",
+                                                               "r.nc", *SHORT), [
+    ("out-folder-truncated", "a model folder whose module was truncated by hand (was an "
+     "internal error)", (),
+     ["model: gen is damaged (duffing/__init__.py was changed (truncated or edited)); write "
+      "it again with `bearingdyn generate SPEC --out"],
+     _damaged_out(lambda gen: (gen / "duffing" / "__init__.py").write_text("NAME = 'duf"))),
+    ("out-folder-file-missing", "a model folder with its C file removed", (),
+     ["model: gen is damaged (duffing/duffing.c is missing)"],
+     _damaged_out(lambda gen: (gen / "duffing" / "duffing.c").unlink())),
+    ("out-folder-manifest-damaged", "a model folder whose manifest is not JSON", (),
+     ["model: gen is damaged (MANIFEST.json is damaged)"],
+     _damaged_out(lambda gen: (gen / "MANIFEST.json").write_text("{"))),
+    ("out-folder-runtime-missing", "a model folder without its runtime", (),
+     ["model: gen is not a generated model folder"],
+     _damaged_out(lambda gen: (gen / "_runtime.py").unlink())),
+])
+
 
 @dataclass
 class Outcome:
@@ -1327,7 +1372,7 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
           "jobs", "checked before any write", "accepted without a word (now judged)",
           "messages that name the right thing", "judged, not failed inside",
-          "numerical failures"]
+          "half-written and damaged generated code", "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:
@@ -1386,6 +1431,12 @@ Notes:
   --debug for the traceback)`, exit code 1); a full disk or a missing permission while
   writing is one line with exit code 1 (the old file, if any, is kept); Ctrl-C or SIGTERM
   ends with `interrupted`, exit code 130.
+- Generated code is written whole or not at all (a temporary folder, renamed into
+  place): a disk that fills during `bearingdyn generate` ends in one line naming the file
+  (`error: cannot use '…/__init__.py': No space left on device`, exit code 1) and leaves
+  the old model folder, or none. A damaged user-cache entry (checked against its
+  `MANIFEST.json` of SHA-256 hashes) is generated again with one warning line;
+  `tests/test_generate_faults.py` fills the disk part way and damages entries by hand.
 - Numerical failures: a blow-up (non-finite state, or a displacement beyond 1000 clearances
   or a quarter of the ball diameter) stops the run with its time and a suggestion; CVODES
   failures carry the solver's own return code; a shooting solve that does not converge is
