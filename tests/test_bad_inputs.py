@@ -1023,6 +1023,14 @@ CLI_CASES += _cases("checked before any write", ("reproduce",), [
 CLI_CASES += _cases("checked before any write", (), [
     ("explore-output-suffix", "an explorer page that is not HTML",
      ("explore", "c.nc", "-o", "page.txt"), ["--output: 'page.txt' must end in one of .html"]),
+    ("explore-bins", "too few spectrum bins (judged before the workers start)",
+     ("explore", "c.nc", "-o", "page.html", "--spectrum-bins", "3"),
+     ["spectrum_bins: must be an integer >= 16, got 3"]),
+    ("explore-run-as-chart", "a run given as the chart (judged before the workers start)",
+     ("explore", "run.nc", "-o", "page.html"), ["chart file: kind must be 'chart', got None"],
+     _run_file()),
+    ("explore-chart-missing", "a chart file that does not exist",
+     ("explore", "gone.nc", "-o", "page.html"), ["result file: 'gone.nc' does not exist"]),
     ("cite-output-folder-missing", "a citation into a folder that does not exist",
      ("cite", "vakharia2015", "-o", "nowhere/x.bib"), ["--output: folder 'nowhere' does not "
                                                        "exist"]),

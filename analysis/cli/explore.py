@@ -36,12 +36,14 @@ def explore(
     """Chart explorer: one HTML page (no network needed) where clicking a point of the
     stability chart shows its spectra, Poincaré maps and numbers. Each point's run is
     recomputed for it (one simulation per point, without the Lyapunov exponent)."""
-    from analysis.reports.explorer import write_explorer
+    from analysis.reports.explorer import check_spectrum_bins, load_chart, write_explorer
     from analysis.reports.progress import ProgressReporter
 
+    check_spectrum_bins(spectrum_bins)
+    chart = load_chart(chart_file)  # judged before a worker starts
     ex = executor_of(executor, workers, scheduler)
     try:
-        path = write_explorer(chart_file, output, spectrum_bins=spectrum_bins, executor=ex,
+        path = write_explorer(chart, output, spectrum_bins=spectrum_bins, executor=ex,
                               progress=ProgressReporter("explore", quiet))
     finally:
         ex.close()

@@ -114,8 +114,7 @@ def explorer_data(chart: xr.Dataset, *, spectrum_bins: int = SPECTRUM_BINS, exec
     from analysis.model import load_model
     from analysis.sweeps.executors import SerialExecutor
 
-    if not (isinstance(spectrum_bins, int) and spectrum_bins >= 16):
-        raise InputError(f"spectrum_bins: must be an integer >= 16, got {spectrum_bins!r}")
+    check_spectrum_bins(spectrum_bins)
     setting = _setting_of_chart(chart)
     xname, yname = str(chart.attrs["x"]), str(chart.attrs["y"])
     xs, ys = chart[xname].values.tolist(), chart[yname].values.tolist()
@@ -159,11 +158,27 @@ def _escape(text: str) -> str:
     return escape(text)
 
 
-def write_explorer(chart_file: str | Path, output: str | Path, *,
+def check_spectrum_bins(spectrum_bins: int) -> None:
+    """``InputError`` unless ``spectrum_bins`` (bins kept per spectrum) is a whole number
+    >= 16."""
+    if not (isinstance(spectrum_bins, int) and spectrum_bins >= 16):
+        raise InputError(f"spectrum_bins: must be an integer >= 16, got {spectrum_bins!r}")
+
+
+def load_chart(chart_file: str | Path) -> xr.Dataset:
+    """The chart file ``chart_file``, read and judged (a stability chart of `bearingdyn
+    chart` whose setting can be rebuilt), or ``InputError``: checked before any work."""
+    chart = open_result(chart_file)
+    _setting_of_chart(chart)
+    return chart
+
+
+def write_explorer(chart_file: str | Path | xr.Dataset, output: str | Path, *,
                    spectrum_bins: int = SPECTRUM_BINS, executor=None,
                    progress: Callable[[int, int], None] | None = None) -> Path:
-    """Read a chart file, compute each point's detail and write the page atomically."""
-    chart = open_result(chart_file)
+    """Read a chart file (or take a chart read by ``load_chart``), compute each point's
+    detail and write the page atomically."""
+    chart = chart_file if isinstance(chart_file, xr.Dataset) else load_chart(chart_file)
     page = explorer_html(explorer_data(chart, spectrum_bins=spectrum_bins, executor=executor,
                                        progress=progress))
     return atomic_write(output, lambda tmp: tmp.write_text(page, encoding="utf-8"))
