@@ -4,7 +4,9 @@
 - the scalar tangent block of a chart point (``points.chart_blocks``: states and one tangent
   vector, CasADi's compiled C);
 - the lane kernel (``analysis.integrate.lanes``): states and tangent of ``LANES`` points per
-  call, per point.
+  call, per point, with the step of ``simulate`` and with the chart's step
+  (``tangent.Carry.angle_addition``: the shaft angle of the later RK4 stages by angle
+  addition, two sin/cos pairs fewer).
 
     python benchmarks/bench_lanes.py [--model vakharia2015] [--n-balls 8] [--repeat 20]
 
@@ -23,7 +25,13 @@ import numpy as np
 from analysis.integrate.compiled import Runner, library
 from analysis.integrate.lanes import LANES, kernel
 from analysis.model import load_model
-from analysis.sweeps.points import LANE_RENORMS, RENORM_EVERY, _Caller, chart_blocks
+from analysis.sweeps.points import (
+    ANGLE_ADDITION,
+    LANE_RENORMS,
+    RENORM_EVERY,
+    _Caller,
+    chart_blocks,
+)
 
 STEPS = 30_000
 """RK4 steps per timed run of each path."""
@@ -47,12 +55,15 @@ def main() -> None:
     start = np.concatenate([z, [0.0], np.eye(n)[:, 0]])
     runner = Runner(library(model, structure), params[0], dt)
     scalar = _Caller(chart_blocks(model, structure)[100], start.copy(), params[0], dt)
-    lanes = kernel(model, structure, RENORM_EVERY)
-    if lanes is None:
+    kernels = [kernel(model, structure, RENORM_EVERY, False),
+               kernel(model, structure, RENORM_EVERY, True)]
+    if None in kernels:
         raise SystemExit("no lane kernel for this model (see analysis/integrate/lanes.py)")
     p = np.stack(params, axis=1)
-    times: dict[str, list[float]] = {"states only": [], "tangent, scalar block": [],
-                                     f"tangent, lanes ({LANES} points per call)": []}
+    times: dict[str, list[float]] = {
+        "states only": [], f"tangent, scalar block{' (angle addition)' * ANGLE_ADDITION}": [],
+        f"tangent, lanes ({LANES} points per call)": [],
+        f"tangent, lanes, angle addition ({LANES} points per call)": []}
     renorms = STEPS // RENORM_EVERY
     for _ in range(args.repeat + 1):  # the first round warms up, not kept
         t = time.perf_counter()
@@ -63,12 +74,15 @@ def main() -> None:
         for _ in range(STEPS // 10_000):
             scalar()
         b = time.perf_counter() - t
-        s = np.ascontiguousarray(np.repeat(start[:, None], LANES, axis=1))
-        t = time.perf_counter()
-        for _ in range(renorms // LANE_RENORMS):
-            lanes.run(s, p, np.full(LANES, dt), np.zeros(LANES), LANE_RENORMS, RENORM_EVERY)
-        c = (time.perf_counter() - t) / LANES
-        for key, value in zip(times, (a, b, c), strict=True):
+        lane_times = []
+        for lanes in kernels:
+            s = np.ascontiguousarray(np.repeat(start[:, None], LANES, axis=1))
+            t = time.perf_counter()
+            for _ in range(renorms // LANE_RENORMS):
+                lanes.run(s, p, np.full(LANES, dt), np.zeros(LANES), LANE_RENORMS,
+                          RENORM_EVERY)
+            lane_times.append((time.perf_counter() - t) / LANES)
+        for key, value in zip(times, (a, b, *lane_times), strict=True):
             times[key].append(value / STEPS * 1e6)
     for key in times:
         times[key] = times[key][1:]

@@ -28,6 +28,8 @@ ensembles of ``analysis.integrate.ensemble``): each lane is ``simulate``'s run b
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -254,32 +256,57 @@ class StateKernel(LaneLibrary):
 
 
 @cache
-def kernel(model: Any, structure: tuple[int, ...], renorm_every: int) -> Kernel | None:
-    """The lane kernel of ``model`` with these balls, compiled and self-tested against
-    ``tangent.tangent_block`` (bit for bit over one renormalisation), or None (see the
-    module). Memoised per process."""
-    step, constants = lyapunov_step(model, structure, 1)
+def kernel(model: Any, structure: tuple[int, ...], renorm_every: int,
+           angle_addition: bool = False) -> Kernel | None:
+    """The lane kernel of ``model`` with these balls (with ``angle_addition``: the step of
+    ``tangent.Carry.angle_addition``, the chart's), compiled and self-tested against
+    ``tangent.tangent_block`` of the same step (bit for bit over one renormalisation), or
+    None (see the module). Memoised per process."""
+    step, constants = lyapunov_step(model, structure, 1, angle_addition)
     n = model.n_state
     try:
         source = kernel_source(step, constants, qr_logs(n, 1))
     except Unsupported:
         return None
-    loaded = _load(source, library_stem("bd_lanes", model, structure), "bd_lanes_run")
+    stem = "bd_lanes_aa" if angle_addition else "bd_lanes"
+    loaded = _load(source, library_stem(stem, model, structure), "bd_lanes_run")
     if loaded is None:
         return None
     built = Kernel(n, len(model.parameter_names), *loaded)
-    return built if _agrees(built, tangent_block(model, structure, 1, renorm_every, 1),
-                            model, renorm_every) else None
+    block = tangent_block(model, structure, 1, renorm_every, 1, angle_addition=angle_addition)
+    return built if _agrees(built, block, model, renorm_every) else None
+
+
+@contextmanager
+def _compiling(path: Path) -> Iterator[None]:
+    """Holds an exclusive lock on ``<path>.lock`` (POSIX ``flock``; nothing elsewhere):
+    workers of one chart that first meet a model and balls at the same moment compile its
+    kernel once, the others wait and load it."""
+    try:
+        import fcntl
+    except ImportError:  # no flock: each process may compile (renamed atomically anyway)
+        yield
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path.with_suffix(".lock"), "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def _load(source: str, stem: str, symbol: str) -> tuple[Path, Any] | None:
     """The library of ``source`` from the cache of ``analysis.integrate.compiled`` (built
-    there once) and its function ``symbol``, or None when it cannot be built or loaded."""
+    there once, by one process at a time) and its function ``symbol``, or None when it
+    cannot be built or loaded."""
     command = compiler_command()
     path = cached_path(stem, source, command)
     try:
         if not path.exists():
-            compile_library(source, path, command)
+            with _compiling(path):  # a second process waits, then loads the first's build
+                if not path.exists():
+                    compile_library(source, path, command)
         fn = getattr(ctypes.CDLL(str(path)), symbol)
     except (CompileError, OSError, AttributeError):
         return None

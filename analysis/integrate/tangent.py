@@ -60,6 +60,10 @@ class Carry:
     """Also ``vec(D)``, D = dz/dp (n × n_par), after Q; the step takes ``g = dh/dp``."""
     constants: bool = False
     """The parameter-only subexpressions as a last input ``c`` (see ``Step.constants``)."""
+    angle_addition: bool = False
+    """The forcing angles of the step's later stages by angle addition (``angle_addition``):
+    two sin/cos pairs fewer per step for a rotor's shaft angle, the states changed by
+    rounding. The chart's tangent (``analysis.sweeps.points``) takes it."""
 
     def __post_init__(self) -> None:
         if self.product not in PRODUCTS:
@@ -74,6 +78,53 @@ class Step(NamedTuple):
     constants: ca.Function | None
 
 
+def _shifted(angle: ca.SX, t: ca.SX, h: ca.SX) -> bool:
+    """Whether ``angle`` is ω·(t + c·h): it depends on t and h, its slope in t on neither,
+    and it is 0 at t = h = 0 (a forcing angle at a later stage of an RK4 step)."""
+    if not (ca.depends_on(angle, t) and ca.depends_on(angle, h)):
+        return False
+    slope = ca.jacobian(angle, t)
+    if ca.depends_on(slope, t) or ca.depends_on(slope, h):
+        return False
+    return ca.substitute(ca.substitute(angle, t, ca.SX(0)), h, ca.SX(0)).is_zero()
+
+
+@cache
+def angle_addition(rk4_step: ca.Function) -> ca.Function:
+    """``rk4_step(t, z, p, h)`` with the forcing angles of its later stages by angle
+    addition: every sin or cos of an angle a = ω·(t + c·h) (``_shifted``: the shaft angle
+    at t + h/2 and t + h) becomes that of a(t, 0), the angle at the step's start, rotated
+    by a(0, h), as the generated runtime already reaches the cage angle. The rotations
+    depend on p and h only, so ``Carry.constants`` computes them once per call and a step
+    takes one sin/cos pair per forcing frequency instead of three. Every other operation is
+    ``rk4_step``'s, in its order (the Function is read instruction by instruction); the
+    result differs from ``rk4_step``'s by rounding (a few 1e-16 of a step's increment)."""
+    fn = rk4_step
+    inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
+    t, h = inputs[0], inputs[3]
+    work: list[Any] = [None] * fn.sz_w()
+    outputs = [ca.SX.zeros(fn.sparsity_out(i)) for i in range(fn.n_out())]
+    for i in range(fn.n_instructions()):
+        op, out, arg = fn.instruction_id(i), fn.instruction_output(i), fn.instruction_input(i)
+        if op == ca.OP_INPUT:
+            work[out[0]] = inputs[arg[0]].nz[arg[1]]
+        elif op == ca.OP_OUTPUT:
+            outputs[out[0]].nz[out[1]] = work[arg[0]]
+        elif op == ca.OP_CONST:
+            work[out[0]] = ca.SX(fn.instruction_constant(i))
+        elif op in (ca.OP_SIN, ca.OP_COS) and _shifted(work[arg[0]], t, h):
+            angle = work[arg[0]]
+            start, turn = ca.substitute(angle, h, ca.SX(0)), ca.substitute(angle, t, ca.SX(0))
+            c0, s0, ct, st = ca.cos(start), ca.sin(start), ca.cos(turn), ca.sin(turn)
+            work[out[0]] = c0 * ct - s0 * st if op == ca.OP_COS else s0 * ct + c0 * st
+        elif len(arg) == 1:
+            work[out[0]] = ca.SX.unary(op, work[arg[0]])
+        else:
+            work[out[0]] = ca.SX.binary(op, work[arg[0]], work[arg[1]])
+    return ca.Function(f"{fn.name()}_aa", inputs, [ca.cse(o) for o in outputs],
+                       fn.name_in(), fn.name_out())
+
+
 @cache
 def tangent_step(rk4_step: ca.Function, carry: Carry, name: str,
                  constants_name: str | None = None,
@@ -83,7 +134,10 @@ def tangent_step(rk4_step: ca.Function, carry: Carry, name: str,
     ``s = [z; k; vec(Q); vec(D)]`` (the parts ``carry`` asks for): z after step k at time
     ``t0 + k·h`` (s), Q the tangent vectors, D = dz/dp; h the step (s). The Function is
     called ``name`` (its constants ``constants_name``), with input and output ``names``
-    when given (they name the exported functions of a library)."""
+    when given (they name the exported functions of a library). With
+    ``carry.angle_addition`` the step is that of ``angle_addition(rk4_step)``."""
+    if carry.angle_addition:
+        rk4_step = angle_addition(rk4_step)
     n, n_par = rk4_step.size1_in(1), rk4_step.size1_in(2)
     z, k = ca.SX.sym("z", n), ca.SX.sym("k")
     p, h, t0 = ca.SX.sym("p", n_par), ca.SX.sym("h"), ca.SX.sym("t0")
@@ -178,22 +232,26 @@ def qr_logs(n: int, n_vectors: int) -> ca.Function:
                                         ca.log(ca.fabs(ca.diag(r)))])
 
 
-def lyapunov_step(model: Any, structure: tuple[int, ...], n_vectors: int) -> Step:
+def lyapunov_step(model: Any, structure: tuple[int, ...], n_vectors: int,
+                  angle_addition: bool = False) -> Step:
     """``tangent_step`` of ``model`` with ``n_vectors`` tangent vectors moved by ``jtimes``
     and its parameter-only subexpressions as the input c:
     ``tangent_step(s, p, h, t0, c) -> s'`` with ``s = [z; k; vec(Q)]`` and
-    ``tangent_constants(p, h, t0) -> c``."""
+    ``tangent_constants(p, h, t0) -> c``; with ``angle_addition``, the step of
+    ``Carry.angle_addition``."""
     return tangent_step(model.functions(structure).rk4_step,
-                        Carry(directions=n_vectors, constants=True), "tangent_step",
+                        Carry(directions=n_vectors, constants=True,
+                              angle_addition=angle_addition), "tangent_step",
                         "tangent_constants")
 
 
 def _renormalisation(model: Any, structure: tuple[int, ...], n_vectors: int,
-                     renorm_every: int, with_states: bool) -> ca.Function:
+                     renorm_every: int, with_states: bool,
+                     angle_addition: bool = False) -> ca.Function:
     """``(s, p, h, t0, c) -> (s', log|diag R| (k), [Z])``: ``renorm_every`` steps of
     ``lyapunov_step``, then Q re-orthonormalised by QR; Z ((n + 1) × renorm_every) holds
     ``[z; k]`` after every step when ``with_states``."""
-    step = lyapunov_step(model, structure, n_vectors).step
+    step = lyapunov_step(model, structure, n_vectors, angle_addition).step
     n = model.n_state
     s, p, h, t0, c = (ca.MX.sym(name, step.sparsity_in(i))
                       for i, name in enumerate(("s", "p", "h", "t0", "c")))
@@ -210,17 +268,21 @@ def _renormalisation(model: Any, structure: tuple[int, ...], n_vectors: int,
 
 @cache
 def tangent_block(model: Any, structure: tuple[int, ...], n_vectors: int, renorm_every: int,
-                  n_renorm: int, with_states: bool = False) -> ca.Function:
+                  n_renorm: int, with_states: bool = False,
+                  angle_addition: bool = False) -> ca.Function:
     """``(s, p, h, t0) -> (s', logs (k × n_renorm), [Z])``: ``n_renorm`` renormalisations
     of ``renorm_every`` steps each (see ``lyapunov_step`` for s, k = ``n_vectors``); Z
     ((n + 1) × renorm_every·n_renorm) holds ``[z; k]`` after every step when
-    ``with_states``. The constants are computed once per call."""
-    renorm = _renormalisation(model, structure, n_vectors, renorm_every, with_states)
-    constants = lyapunov_step(model, structure, n_vectors).constants
+    ``with_states``. The constants are computed once per call. ``angle_addition``: the
+    step of ``Carry.angle_addition`` (the chart's)."""
+    renorm = _renormalisation(model, structure, n_vectors, renorm_every, with_states,
+                              angle_addition)
+    constants = lyapunov_step(model, structure, n_vectors, angle_addition).constants
     s, p, h, t0 = (ca.MX.sym(name, renorm.sparsity_in(i))
                    for i, name in enumerate(("s", "p", "h", "t0")))
     args = [ca.repmat(a, 1, n_renorm) for a in (p, h, t0, constants(p, h, t0))]
     out = renorm.mapaccum(n_renorm)(s, *args)
     name = f"lyapunov_{model_tag(model, structure)}_k{n_vectors}_r{renorm_every}_n{n_renorm}"
+    name += "_aa" if angle_addition else ""
     return ca.Function(name + ("_states" if with_states else ""), [s, p, h, t0],
                        [out[0][:, -1], *out[1:]])
