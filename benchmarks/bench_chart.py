@@ -14,6 +14,7 @@ units of a plain compiled RK4 run.
 
     python benchmarks/bench_chart.py [--speeds 200] [--workers N] [--executor processes|dask]
                                      [--reference-points 10] [--repeat 3] [--no-chart]
+                                     [--save chart.nc]
 
 Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
 ``--quick`` is ``--speeds 10`` (80 points) for an estimate.
@@ -118,6 +119,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-chart", action="store_true",
                         help="the serial reference only")
+    parser.add_argument("--save", type=Path, help="also write the chart to this netCDF file")
     args = parser.parse_args()
     speeds = 10 if args.quick else args.speeds
     x = Axis.parse(f"speed_rpm:1000:10000:{speeds}")
@@ -159,6 +161,8 @@ def main() -> None:
           f"{points / wall / args.workers:.3f} points/s/core; target <= {WALL_TARGET:g} s for "
           f"1600 points on 2 cores: {verdict}")
     print("classes:", counts)
+    if args.save is not None:
+        chart.to_netcdf(args.save)
 
 
 if __name__ == "__main__":

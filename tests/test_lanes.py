@@ -110,3 +110,44 @@ def test_without_a_kernel_the_points_run_one_by_one(monkeypatch):
             assert _same(got, chart_point(CHART, system))
     finally:
         kernel.cache_clear()
+
+
+def test_a_lane_that_blows_up_before_its_tangent_leaves_its_neighbour_alone():
+    """A 1 nm clearance and a 100 kN unbalance leave the bounds in the first step, in the
+    states-alone part (the state lane kernel): that lane is chart_point's SimulationError,
+    word for word, and its neighbour is chart_point's result exactly."""
+    from analysis.errors import SimulationError
+
+    points = [CHART.system_at(n_balls=8, speed_rpm=3000.0),
+              CHART.system_at(n_balls=8, speed_rpm=3100.0, radial_clearance=1e-9,
+                              unbalance_force=1e5)]
+    good, bad = chart_points(CHART, points)
+    assert _same(good, chart_point(CHART, points[0]))
+    with pytest.raises(SimulationError) as alone:
+        chart_point(CHART, points[1])
+    assert isinstance(bad, SimulationError) and str(bad) == str(alone.value)
+
+
+def test_the_angle_addition_step_in_lanes_is_its_casadi_block_bit_for_bit():
+    """The step of ``Carry.angle_addition`` (not the chart's: see points.ANGLE_ADDITION):
+    it differs from rk4_step by rounding only, and its lanes equal its CasADi block bit for
+    bit."""
+    from analysis.integrate.tangent import angle_addition
+
+    model = load_model("vakharia2015")
+    rk4 = model.functions((8,)).rk4_step
+    p = model.parameter_vector({**model.defaults, "speed_rpm": 7000.0})
+    z = np.array([1.2e-5, 3e-6, 0.004, -0.002])
+    for t in (0.0, 0.37, 4.3):
+        want, got = (np.asarray(f(t, z, p, 1e-5)).ravel() for f in (rk4, angle_addition(rk4)))
+        np.testing.assert_allclose(got, want, rtol=1e-14, atol=0)
+    kern = kernel(model, (8,), 100, True)
+    assert kern is not None
+    block = tangent_block(model, (8,), 1, 100, 2, angle_addition=True)
+    start = np.concatenate([z, [12345.0], [1.0, 0, 0, 0]])
+    s = np.ascontiguousarray(np.repeat(start[:, None], LANES, axis=1))
+    logs, _ = kern.run(s, np.repeat(p[:, None], LANES, axis=1), np.full(LANES, 1e-5),
+                       np.zeros(LANES), 2, 100)
+    want_s, want_logs = (np.asarray(x).ravel() for x in block(start, p, 1e-5, 0.0)[:2])
+    for k in range(LANES):
+        assert np.array_equal(s[:, k], want_s) and np.array_equal(logs[:, k], want_logs)

@@ -32,7 +32,7 @@ import xarray as xr
 
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import Runner, compiled_functions, library, test_state
-from analysis.integrate.lanes import LANES, Kernel
+from analysis.integrate.lanes import LANES, Kernel, StateKernel, state_kernel
 from analysis.integrate.lanes import kernel as lane_kernel
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import (
@@ -63,6 +63,16 @@ RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
 RENORMS_PER_CALL = (100, 10, 1)
 """Renormalisations per call of the compiled blocks, largest first (10⁴, 10³, 10² steps)."""
+ANGLE_ADDITION = False
+"""Whether the tangent part takes the step of ``tangent.Carry.angle_addition`` (the shaft
+angle of an RK4 step's later stages by angle addition: two sin/cos pairs fewer per step,
+in the lanes and the scalar blocks alike). Off: it changes quasi-periodic points of the
+benchmark chart by up to 1e-7 relative in λ1 (1.6e-3 at a point of λ1 ≈ 20 ± 11 1/s below
+the chaos floor), beyond the 1e-12 that a speed-up may change a non-chaotic result
+(docs/performance.md, "Two points per vector register")."""
+STATE_CHUNK = 10_000
+"""RK4 steps per call of the state lane kernel in a chart point's states-alone part (as the
+largest compiled block)."""
 LANE_RENORMS = 100
 """Renormalisations per call of the lane kernel at most (10⁴ steps, as the largest scalar
 block: in benchmarks/bench_lanes.py calls of 30 were 5 % slower)."""
@@ -74,8 +84,8 @@ def chart_blocks(model: Model, structure: Structure,
     """The blocks of ``RENORMS_PER_CALL`` renormalisations, ``(s, p, h, t0) -> (s', logs,
     Z)`` with ``s = [z; k; v]`` (v the tangent vector) and Z ``[z; k]`` after every step
     (``lyapunov.tangent_block``), compiled into one library of the cache, or in the VM."""
-    fns = [tangent_block(model, structure, 1, RENORM_EVERY, size, with_states=True)
-           for size in RENORMS_PER_CALL]
+    fns = [tangent_block(model, structure, 1, RENORM_EVERY, size, with_states=True,
+                         angle_addition=ANGLE_ADDITION) for size in RENORMS_PER_CALL]
     n = model.n_state
     s = np.concatenate([test_state(n), [3.0], np.eye(n)[:, 0]])
     args = (s, model.parameter_vector(model.defaults),
@@ -229,10 +239,12 @@ class _Point:
 
 
 def _prepare(system: System, duration: float, transient: float, dt: float,
-             section: str | None, tangent: bool, compiled: bool) -> _Point:
+             section: str | None, tangent: bool, compiled: bool,
+             states_alone: bool = True) -> _Point:
     """Check the run (``RunPlan.make``; a coarse step was reported by the grid's check),
-    schedule it and integrate the states alone up to the tangent's start (or to the end
-    without ``tangent``)."""
+    schedule it and, with ``states_alone``, integrate the states alone up to the tangent's
+    start (or to the end without ``tangent``); else ``z`` is the initial state, at step 0
+    (``_run_states_lanes`` does that part)."""
     model, structure, values = system.model, system.structure, dict(system.parameters)
     run = RunPlan.make(system, duration=duration, transient=transient, dt=dt,
                        warn=lambda message: None)
@@ -245,7 +257,7 @@ def _prepare(system: System, duration: float, transient: float, dt: float,
                      np.full(n, -np.inf))
     lib, z = library(model, structure, compiled), np.asarray(system.state, float)
     start = plan.start if tangent else plan.last
-    if start > 0:
+    if start > 0 and states_alone:
         for _, rows in Runner(lib, system.p, dt).blocks(z, start):  # k counted from step 0
             record.take(rows)
         z = rows[-1, :n].copy()
@@ -330,26 +342,74 @@ def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
             (np.concatenate(logs[k]) if logs[k] else np.empty(0)) for k in range(lanes)]
 
 
+def _run_states_lanes(kern: StateKernel, points: list[_Point], dt: float) -> list:
+    """The states-alone part of up to ``LANES`` points (same model and balls) in lockstep in
+    the state lane kernel (each lane ``simulate``'s steps bit for bit): steps 1 … its
+    ``schedule.start`` fed to its record, and its ``z`` set to the state at that step.
+    Returns per point None, or the ``SimulationError`` of its blow-up (the other lanes go
+    on)."""
+    n, lanes = kern.n, len(points)
+    s = np.empty((n + 1, LANES))
+    p = np.empty((kern.n_par, LANES))
+    for k in range(LANES):  # lanes beyond the points repeat the first (results unused)
+        point = points[min(k, lanes - 1)]
+        s[:, k] = np.append(point.z, 0.0)
+        p[:, k] = point.system.p
+    left = [point.schedule.start for point in points]
+    outcome: list = [None] * lanes
+    done = 0
+    while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):
+        count = min(STATE_CHUNK, max(left[k] for k in range(lanes) if outcome[k] is None))
+        states = kern.run(s, p, np.full(LANES, dt), np.zeros(LANES), count, 1)
+        steps = np.arange(done + 1, done + count + 1, dtype=float)
+        for k, point in enumerate(points):
+            used = min(count, left[k])
+            if outcome[k] is not None or used == 0:
+                continue
+            rows = np.column_stack([states[k, :used], steps[:used]])
+            try:
+                point.record.take(rows)
+            except SimulationError as exc:
+                outcome[k] = exc
+                continue
+            left[k] -= used
+            if left[k] == 0:
+                point.z = rows[-1, :n].copy()
+        done += count
+    return outcome
+
+
 def one_pass_lanes(systems: list[System], durations: list[float], transient: float,
                    dt: float, section: str | None, compiled: bool = True) -> list:
-    """``one_pass`` with the tangent of every system (all of one model and balls) run
-    ``LANES`` at a time in the vector kernel of ``analysis.integrate.lanes`` (each result is
-    ``one_pass``'s bit for bit); per system its ``PointResult`` or its ``SimulationError``.
-    Without a kernel (an operation it does not write, no compiler) the points run one by
-    one."""
+    """``one_pass`` with every system (all of one model and balls) run ``LANES`` at a time
+    in the vector kernels of ``analysis.integrate.lanes``: the states alone in the state
+    kernel (``_run_states_lanes``), then the tangent in the tangent kernel (each result is
+    ``one_pass``'s bit for bit); per system its ``PointResult`` or its
+    ``SimulationError``. Without a kernel (an operation it does not write, no compiler) the
+    points run one by one."""
     first = systems[0]
-    kern = lane_kernel(first.model, first.structure, RENORM_EVERY) if compiled else None
+    kern = lane_kernel(first.model, first.structure, RENORM_EVERY, ANGLE_ADDITION) \
+        if compiled else None
+    skern = state_kernel(first.model, first.structure) if kern is not None else None
     results: list = [None] * len(systems)
     prepared: list[tuple[int, _Point]] = []
     for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):
         try:
             prepared.append((i, _prepare(system, duration, transient, dt, section, True,
-                                         compiled)))
+                                         compiled, states_alone=skern is None)))
         except SimulationError as exc:
             results[i] = exc
     size = LANES if kern is not None else 1
     for g in range(0, len(prepared), size):
         group = prepared[g:g + size]
+        if skern is not None:
+            failed = _run_states_lanes(skern, [point for _, point in group], dt)
+            for (i, _), outcome in zip(group, failed, strict=True):
+                results[i] = outcome
+            group = [item for item, outcome in zip(group, failed, strict=True)
+                     if outcome is None]
+            if not group:
+                continue
         if kern is not None:
             outcomes = _run_lanes(kern, [point for _, point in group], dt)
         else:
