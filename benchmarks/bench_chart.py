@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import tempfile
 import time
@@ -56,6 +57,14 @@ def rk4_only(n_balls: int, values: dict[str, float], duration: float, dt: float)
     for _ in runner.blocks(z0, round(duration / dt)):
         pass
     return time.perf_counter() - start
+
+
+def cpu_seconds() -> float:
+    """User + system CPU seconds of this process and of its children that have ended (the
+    workers of a process pool, once it is closed)."""
+    own, children = (resource.getrusage(who) for who in (resource.RUSAGE_SELF,
+                                                           resource.RUSAGE_CHILDREN))
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def timed(fn, *args) -> float:
@@ -144,6 +153,7 @@ def main() -> None:
         return
 
     executor = make_executor(args.executor, args.workers)
+    cpu_before = cpu_seconds()
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         try:
@@ -152,6 +162,7 @@ def main() -> None:
         finally:
             executor.close()
         wall = time.perf_counter() - start
+    cpu = cpu_seconds() - cpu_before
     points = chart.sizes["speed_rpm"] * chart.sizes["n_balls"]
     counts = {k: int((chart.nature == k).sum()) for k in sorted(set(chart.nature.values.ravel()))}
     verdict = ("met" if wall <= WALL_TARGET else "MISSED") if points == 1600 and \
@@ -160,6 +171,9 @@ def main() -> None:
           f"{args.workers} workers ({executor.name}): {wall:.1f} s wall, "
           f"{points / wall / args.workers:.3f} points/s/core; target <= {WALL_TARGET:g} s for "
           f"1600 points on 2 cores: {verdict}")
+    print(f"CPU time of this process and its finished workers: {cpu:.1f} s; / {args.workers} "
+          f"workers = {cpu / args.workers:.1f} s, the wall time on free cores at perfect "
+          f"parallel efficiency (less sensitive than the wall time to other load)")
     print("classes:", counts)
     if args.save is not None:
         chart.to_netcdf(args.save)
