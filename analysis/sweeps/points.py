@@ -4,8 +4,9 @@
 and keep every state, then integrate the states again with a tangent vector for λ1), with
 the same signature and result. One run covers the setting's transient and record:
 
-1. the states alone (the model's compiled RK4 blocks, ``compiled.library``) up to the start
-   of the tangent transient;
+1. the states alone (the model's compiled RK4 blocks, ``compiled.library``; for points in
+   lanes, the state lane kernel of ``analysis.integrate.lanes``, the same steps bit for bit)
+   up to the start of the tangent transient;
 2. the states with one tangent vector, renormalised every ``RENORM_EVERY`` steps, in
    compiled blocks (``lyapunov.tangent_block`` with its states, one library per model and
    balls in the cache of ``analysis.integrate.compiled``); the logs of the first
