@@ -2,7 +2,8 @@
 
 Every attractor is named in the legend by its id, class and period; axes carry units (µm,
 mm/s … as the other figures, ``plots.scale_of``). Colours: one per attractor id (the same
-id the same colour in every figure of a study), grey for diverged, white for undecided.
+id the same colour in every figure of a study), grey for diverged, white for undecided,
+black for failed.
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ from matplotlib.figure import Figure
 from analysis.reports import canvas as plt
 from analysis.reports.plots import SPECIAL_MARKERS, cell_edges, run_title, scale_of
 
-SPECIAL_COLORS = {-1: "#9e9e9e", -2: "#ffffff"}
-"""Colours of the labels that are not attractors: diverged (grey), undecided (white)."""
+SPECIAL_COLORS = {-1: "#9e9e9e", -2: "#ffffff", -3: "#000000"}
+"""Colours of the labels that are not attractors: diverged (grey), undecided (white),
+failed (black: a block whose integration failed)."""
 
 
 def attractor_color(i: int) -> str:

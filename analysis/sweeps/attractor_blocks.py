@@ -37,7 +37,7 @@ from analysis.model import System, load_model
 from analysis.stability.attractors.continuation import MATCH_DISTANCE
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions, Scale
-from analysis.stability.attractors.sampling import Box, Range, grid_states
+from analysis.stability.attractors.sampling import Box, Range, check_pair
 from analysis.stability.attractors.studies import (
     basin_fractions,
     basins,
@@ -204,8 +204,8 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
     study = check_study(system, period, dt, options, label_options, block)
     check_count("x", x.num)
     check_count("y", y.num)
-    states = grid_states(system, x, y)
-    check_memory(len(states), system.n_state, study.options)
+    check_pair(system, x, y)
+    check_memory(x.num * y.num, system.n_state, study.options)  # no grid allocated
     return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
 
 

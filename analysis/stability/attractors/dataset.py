@@ -15,6 +15,11 @@ diverged, undecided), ``period`` (forcing periods; 0: not periodic), ``lambda1``
 ``lambda1_ci95`` (1/s), ``fraction`` and ``fraction_stderr``, ``amplitude`` (attractor,
 state; (max − min)/2 in the state's unit), ``representative`` (attractor, state) and
 ``section_points`` (attractor, point, state; NaN-padded).
+
+The studies (``studies``) add ``label_periods`` (the forcing periods each initial state was
+integrated before it was labelled), the attr ``block`` (states per block, part of the
+result's definition) and, when a block failed, ``failed_blocks`` (its states are labelled
+``failed``, −3).
 """
 
 from __future__ import annotations

@@ -122,13 +122,20 @@ class Box:
         return states
 
 
-def grid_states(system: System, x: Range, y: Range) -> np.ndarray:
-    """The states of a grid over two coordinates (y.num × x.num rows, x fastest, SI
-    units); the others at the System's state."""
+def check_pair(system: System, x: Range, y: Range) -> tuple[int, int]:
+    """The state indices of a grid's two coordinates, or ``InputError`` when either is not
+    a state or both are the same (nothing allocated: checked before any work)."""
     ix, iy = x.check_state(system, "x"), y.check_state(system, "y")
     if ix == iy:
         raise InputError(f"{y.field or 'y'}: must be another coordinate than "
                          f"{x.field or 'x'}'s, got {y.coordinate!r} twice")
+    return ix, iy
+
+
+def grid_states(system: System, x: Range, y: Range) -> np.ndarray:
+    """The states of a grid over two coordinates (y.num × x.num rows, x fastest, SI
+    units); the others at the System's state."""
+    ix, iy = check_pair(system, x, y)
     gx, gy = np.meshgrid(x.points, y.points)
     states = np.repeat(system.state[None, :], gx.size, axis=0)
     states[:, ix], states[:, iy] = gx.ravel(), gy.ravel()

@@ -28,7 +28,7 @@ from analysis.stability.attractors.dataset import (
 )
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions
-from analysis.stability.attractors.sampling import Box, Range, grid_states
+from analysis.stability.attractors.sampling import Box, Range, check_pair, grid_states
 from analysis.stability.attractors.study import (
     BLOCK,
     AttractorStudy,
@@ -75,8 +75,9 @@ def basins(system: System, x: Range, y: Range, *, period: str | Period | None = 
     how = Blocks(block, runner)
     check_count("x", x.num)
     check_count("y", y.num)
+    check_pair(system, x, y)
+    check_memory(x.num * y.num, system.n_state, options or MapperOptions())  # before the grid
     states = grid_states(system, x, y)
-    check_memory(len(states), system.n_state, options or MapperOptions())
     study = AttractorStudy(system, period, dt, options, label_options)
     result = study.find(states, progress, how)
     ds = basins_dataset(study, result, x, y)
