@@ -12,6 +12,7 @@ from analysis.cli import models, runs, stability, continuation, sweeps, reports,
 from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
 from analysis.cli import explore, cite  # noqa: F401
 from analysis.cli import attractors  # noqa: F401  (global dynamics: basins, attractors)
+from analysis.cli import frequency  # noqa: F401  (harmonic balance: hb)
 # isort: on
 
 __all__ = ["app", "main"]

@@ -32,10 +32,15 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.frequency.harmonic import HarmonicSystem, blas_threads, check_harmonics
 from analysis.frequency.hill import SORTS, hill_stability
-from analysis.frequency.solve import DENSE_POINTS, harmonic_balance, prepare, response_scale
+from analysis.frequency.solve import (
+    DENSE_POINTS,
+    harmonic_balance,
+    prepare,
+    response_scale,
+    responses_dataset,
+)
 from analysis.integrate.flow import Period
 from analysis.model import BallCounts, Model, System, as_system
-from analysis.provenance import run_attrs
 from analysis.stability.continuation.detect import fold_between, lp_test, points_between
 from analysis.stability.continuation.options import (
     ContinuationOptions,
@@ -302,52 +307,26 @@ def _step(prob: HarmonicBranchProblem, prev: BranchPoint, ds: float, tol: float,
 
 def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoint],
                             status: str, **extra: object) -> xr.Dataset:
-    """The branch as a Dataset along ``point``: the parameter (its unit), ``amplitude``
-    ((max − min)/2 of each state over the period, dims point × state, the states' units),
-    ``stable`` (Hill), ``special`` (LP, PD, BP, NS, 'grazing?' or ''), ``residual`` (max
-    |R_i| / (ω_0 s_i)), ``coefficients`` (point × harmonic × state: c_0, a_1, b_1, …),
-    Hill's multipliers (real, imaginary, modulus; dim ``k``), the tangent and the planned
-    step ``ds``; attrs: ``run_attrs`` (model, spec, balls, parameters, frequencies,
-    versions), ``method``, ``param``, ``period``, ``harmonics``, ``samples``, ``sort``,
-    ``status``, ``param_scale`` and ``extra``."""
+    """The branch as a Dataset (``solve.responses_dataset``: amplitude per state, stable,
+    special, residual, coefficients, Hill's multipliers) with the parameter along ``point``
+    (its unit), the tangent (dim ``w``) and the planned step ``ds``; attrs ``param``,
+    ``param_scale``, ``sort``, ``status``, ``branch`` and ``extra``."""
     model, hs = prob.model, prob.hs
-    param, n = prob.param_name, hs.n
-    size = 2 * hs.harmonics + 1
-    coeffs = np.array([p.z0 for p in branch]).reshape(len(branch), size, n)
-    mult = np.array([p.multipliers for p in branch])
-    attrs = run_attrs(model, hs.system.structure, prob.values)
-    attrs.pop(param, None)
-    attrs.update(method="harmonic balance (AFT), Hill stability", param=param,
-                 period=str(hs.period), harmonics=hs.harmonics, samples=hs.samples,
-                 sort=prob.sort, status=status, param_scale=prob.s_lam,
-                 branch=f"harmonic balance, period {hs.period}, H = {hs.harmonics}", **extra)
-    units = model.state_units
-    harmonic_names = ["c0"] + [f"{kind}{k}" for k in range(1, hs.harmonics + 1)
-                               for kind in ("a", "b")]
+    param = prob.param_name
     residuals = [prob.residual_norm(np.concatenate([p.z0 / prob.s_z, [p.lam / prob.s_lam]]))
                  for p in branch]
-    return xr.Dataset(
-        {param: ("point", np.array([p.lam for p in branch]), {"units": model.units[param]}),
-         "amplitude": (("point", "state"), np.array([prob.amplitudes(p.z0) for p in branch]),
-                       {"long_name": "(max - min)/2 of each state over one period, in the "
-                                     "state's unit (units attribute of each state: "
-                                     + ", ".join(f"{k} {v}" for k, v in units.items()) + ")"}),
-         "stable": ("point", np.array([int(p.stable) for p in branch])),
-         "special": ("point", np.array([p.special for p in branch], dtype=object)),
-         "residual": ("point", np.array(residuals),
-                      {"long_name": "max |R_i| / (omega_0 s_i) of the harmonic-balance "
-                                    "equations at the point"}),
-         "coefficients": (("point", "harmonic", "state"), coeffs,
-                          {"long_name": "Fourier coefficients: c0 + sum a_k cos(k w t) + "
-                                        "b_k sin(k w t), w = 2 pi / T, t from 0"}),
-         "multiplier_real": (("point", "k"), mult.real),
-         "multiplier_imag": (("point", "k"), mult.imag),
-         "multiplier_abs": (("point", "k"), np.abs(mult)),
-         "newton_iterations": ("point", np.array([p.newton_iterations for p in branch])),
-         "tangent": (("point", "w"), np.array([p.tangent for p in branch])),
-         "ds": ("point", np.array([p.ds for p in branch])),
-         "state_scale": ("state", np.asarray(prob.state_scale, dtype=float))},
-        coords={"point": np.arange(len(branch)), "state": list(model.state_names),
-                "harmonic": harmonic_names, "k": np.arange(1, n + 1),
-                "state_units": ("state", [units[s] for s in model.state_names])},
-        attrs=attrs)
+    values = {k: v for k, v in prob.values.items() if k != param}
+    system = hs.system.replace(**values)
+    data = responses_dataset(
+        system, str(hs.period), hs.harmonics, hs.samples, np.array([p.z0 for p in branch]),
+        np.array([p.multipliers for p in branch]), np.array(residuals),
+        [p.special for p in branch], prob.state_scale,
+        variables={
+            param: ("point", np.array([p.lam for p in branch]), {"units": model.units[param]}),
+            "newton_iterations": ("point", np.array([p.newton_iterations for p in branch])),
+            "tangent": (("point", "w"), np.array([p.tangent for p in branch])),
+            "ds": ("point", np.array([p.ds for p in branch]))},
+        param=param, param_scale=prob.s_lam, sort=prob.sort, status=status,
+        branch=f"harmonic balance, period {hs.period}, H = {hs.harmonics}", **extra)
+    data.attrs.pop(param, None)
+    return data

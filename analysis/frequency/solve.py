@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
 from analysis.errors import InputError
 from analysis.frequency.harmonic import (
@@ -37,6 +38,7 @@ from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
 from analysis.model import BallCounts, Model, System, as_system
+from analysis.provenance import run_attrs
 from analysis.stability.periodic import (
     STABILITY_MARGIN,
     as_period,
@@ -294,3 +296,66 @@ def harmonic_convergence(response: PeriodicResponse, factor: int = 2) -> dict[st
             "residual_in_more": in_more,
             "residual_more": more.residual, "converged_more": more.converged,
             "change": float(np.max(np.abs(z_h - z_more) / response.scale[None, :]))}
+
+
+def responses_dataset(system: System, period: str, harmonics: int, samples: int,
+                      coefficients: np.ndarray, multipliers: np.ndarray,
+                      residuals: np.ndarray, specials: list[str], state_scale: np.ndarray,
+                      variables: dict | None = None, **extra: object) -> xr.Dataset:
+    """Responses as a Dataset along ``point``: ``amplitude`` ((max − min)/2 of each state
+    over the period, point × state, the states' units: coordinate ``state_units``),
+    ``stable`` (Hill: every |μ| < 1 − ``STABILITY_MARGIN``), ``special`` (LP, PD, BP, NS,
+    'grazing?' or ''), ``residual`` (max |R_i| / (ω s_i)), ``coefficients`` (point ×
+    harmonic × state: c0, a1, b1, …), Hill's multipliers (real, imaginary, modulus; dim
+    ``k``), ``state_scale``, and ``variables`` (name -> (dims, values[, attrs])); attrs:
+    ``run_attrs`` of ``system`` (model, spec, balls, parameters, frequencies, versions),
+    ``method``, ``period``, ``harmonics``, ``samples`` and ``extra``."""
+    model = system.model
+    n = system.n_state
+    size = 2 * harmonics + 1
+    coeffs = np.asarray(coefficients, dtype=float).reshape(-1, size, n)
+    hs = HarmonicSystem(system, Period.parse(period), harmonics, samples)
+    points = max(samples, DENSE_POINTS)
+    amplitude = np.array([np.ptp(hs.sample(c.reshape(-1), points), axis=0) / 2
+                          for c in coeffs])
+    mult = np.asarray(multipliers, dtype=complex).reshape(len(coeffs), -1)
+    stable = np.array([bool(m.size) and float(np.max(np.abs(m))) < 1 - STABILITY_MARGIN
+                       for m in mult], dtype=int)
+    attrs = run_attrs(model, system.structure, dict(system.parameters))
+    attrs.update(method="harmonic balance (AFT), Hill stability", period=period,
+                 harmonics=harmonics, samples=samples, **extra)
+    units = model.state_units
+    names = ["c0"] + [f"{kind}{k}" for k in range(1, harmonics + 1) for kind in ("a", "b")]
+    data = {
+        "amplitude": (("point", "state"), amplitude,
+                      {"long_name": "(max - min)/2 of each state over one period, in the "
+                                    "state's unit (coordinate state_units)"}),
+        "stable": ("point", stable),
+        "special": ("point", np.array(specials, dtype=object)),
+        "residual": ("point", np.asarray(residuals, dtype=float),
+                     {"long_name": "max |R_i| / (omega s_i) of the harmonic-balance "
+                                   "equations"}),
+        "coefficients": (("point", "harmonic", "state"), coeffs,
+                         {"long_name": "Fourier coefficients: c0 + sum_k a_k cos(k w t) + "
+                                       "b_k sin(k w t), w = 2 pi / T, t from 0 s"}),
+        "multiplier_real": (("point", "k"), mult.real),
+        "multiplier_imag": (("point", "k"), mult.imag),
+        "multiplier_abs": (("point", "k"), np.abs(mult)),
+        "state_scale": ("state", np.asarray(state_scale, dtype=float),
+                        {"long_name": "scale of each state in the unknowns"}),
+        **(variables or {})}
+    return xr.Dataset(data, coords={
+        "point": np.arange(len(coeffs)), "state": list(model.state_names),
+        "state_units": ("state", [units[s] for s in model.state_names]),
+        "harmonic": names, "k": np.arange(1, n + 1)}, attrs=attrs)
+
+
+def response_dataset(response: PeriodicResponse) -> xr.Dataset:
+    """One response as the Dataset of ``responses_dataset`` (one point, no parameter),
+    with attrs ``period_s`` (s), ``converged``, ``iterations`` and ``message``."""
+    return responses_dataset(
+        response.system, response.period, response.harmonics, response.samples,
+        response.coefficients[None, :], response.multipliers[None, :],
+        np.array([response.residual]), [""], response.scale, period_s=response.period_s,
+        converged=int(response.converged), iterations=response.iterations,
+        message=response.message)
