@@ -130,10 +130,10 @@ def duffing_hb_fold(coefficients: np.ndarray, omega: float, harmonics: int,
         x, w, phi = u[:2 * h + 1], u[2 * h + 1], u[2 * h + 2:]
         return np.concatenate([residual(x, w), jacobian(x, w) @ phi, [phi @ phi0 - 1]])
 
-    u, _info, ok, msg = scipy.optimize.fsolve(extended, np.concatenate([x0, [omega], phi0]),
-                                             xtol=1e-14, full_output=True)
-    assert ok == 1, msg
-    assert np.abs(extended(u)).max() < 1e-10
+    u, _info, _ok, msg = scipy.optimize.fsolve(extended, np.concatenate([x0, [omega], phi0]),
+                                              xtol=1e-13, full_output=True)
+    assert np.abs(extended(u)).max() < 1e-10, msg  # converged (to rounding: fsolve may
+    # still say 'not making good progress' there)
     return float(u[2 * h + 1])
 
 

@@ -284,14 +284,35 @@ def _refusal(prob: HarmonicBranchProblem, a: BranchPoint, b: BranchPoint, correc
     return ""
 
 
+def _branch_point(prob: HarmonicBranchProblem, corrected: Newton,
+                  previous: np.ndarray) -> BranchPoint:
+    """``continuation.branch_point`` of a corrected step, its tangent from one bordered
+    solve [∂G/∂w; τ_prev] τ = e_last (normalised, oriented along τ_prev) instead of an SVD:
+    the same null vector, a tenth of the work at a few hundred unknowns."""
+    border = np.vstack([corrected.jac, previous])
+    rhs = np.zeros(border.shape[0])
+    rhs[-1] = 1.0
+    try:
+        tau = np.linalg.solve(border, rhs)
+    except np.linalg.LinAlgError:
+        return branch_point(prob, corrected.w, corrected.jac, corrected.mono, previous,
+                            math.copysign(1.0, previous[-1]), corrected.iterations)
+    tau /= np.linalg.norm(tau)
+    if np.dot(tau, previous) < 0:
+        tau = -tau
+    return BranchPoint(lam=corrected.w[-1] * prob.s_lam, z0=corrected.w[:-1] * prob.s_z,
+                       multipliers=np.linalg.eigvals(corrected.mono), monodromy=corrected.mono,
+                       tangent=tau, amplitude=prob.amplitude(corrected.w),
+                       newton_iterations=corrected.iterations)
+
+
 def _step(prob: HarmonicBranchProblem, prev: BranchPoint, ds: float, tol: float,
           guards: StepGuards) -> tuple[list[BranchPoint], BranchPoint] | str:
     direction = math.copysign(1.0, prev.tangent[-1])
     corrected = newton(prob, scaled(prob, prev) + ds * prev.tangent, prev.tangent, tol)
     if corrected is None:
         return "no convergence"
-    point = branch_point(prob, corrected.w, corrected.jac, corrected.mono, prev.tangent,
-                         direction, corrected.iterations)
+    point = _branch_point(prob, corrected, prev.tangent)
     point.angle = _angle(prev.tangent, point.tangent)
     point.contraction = corrected.contraction
     reason = _refusal(prob, prev, point, corrected, ds, guards)
