@@ -195,6 +195,21 @@ def test_rotor_period_doublings_match_shooting_continuation():
     assert br.residual.values.max() < 1e-9
 
 
+def test_subharmonic_response_vc2():
+    """Between the rotor's period doublings the attractor is the period-2 response: HB with
+    period vc:2 finds it (odd harmonics of VC/2 present), stable, with shooting's verdict
+    and multipliers (H = 40 over two VC periods: 20 per VC period, hence 2e-2)."""
+    r = harmonic_balance("balanced-rotor", 8, "vc:2", 40, radial_load=50.0, speed_rpm=8250.0)
+    orbit = shoot("balanced-rotor", 8, "vc:2", radial_load=50.0, speed_rpm=8250.0)
+    assert r.converged and orbit.converged and r.residual < 1e-10
+    assert r.stability == orbit.stability == "stable"
+    for mu in orbit.multipliers:
+        assert np.min(np.abs(r.multipliers - mu)) < 2e-2
+    c = r.coefficients.reshape(-1, 4)  # rows c0, a1, b1, a2, b2, …
+    odd = np.abs(c[1::4]).max() + np.abs(c[2::4]).max()
+    assert odd > 1e-3 * np.abs(c[3::4]).max()
+
+
 def test_bad_inputs_of_the_api():
     with pytest.raises(InputError, match="harmonics: must be a whole number >= 1"):
         harmonic_balance("duffing", None, "shaft", 0)
