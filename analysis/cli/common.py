@@ -75,6 +75,8 @@ def _fail(exc: BaseException, line: str, code: int) -> None:
     if _state["debug"]:
         raise exc
     typer.echo(line, err=True)
+    for note in getattr(exc, "__notes__", ()):  # e.g. a sweep's points kept, how to resume
+        typer.echo(note, err=True)
     raise typer.Exit(code) from None
 
 

@@ -254,8 +254,8 @@ def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner
         ds = run(StoredRunner(store, executor, on_damaged))
         save_dataset(ds, output)
         store.remove()
-    except BaseException:  # a refusal or failure before the first block: no trace
-        store.discard()
+    except BaseException as exc:  # a refusal or failure before the first block: no trace
+        store.stopped(exc, what="blocks of states")
         raise
     return ds
 

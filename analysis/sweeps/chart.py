@@ -171,8 +171,8 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         ds = _assemble_chart(store, setting, x, y, ics)
         save_dataset(ds, output)
         store.remove()
-    except BaseException:  # a refusal or failure before the first point: no trace
-        store.discard()
+    except BaseException as exc:  # a refusal or failure before the first point: no trace
+        store.stopped(exc, len(x.values) * len(y.values))
         raise
     return ds
 

@@ -53,6 +53,7 @@ from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.io import save_dataset
 from analysis.model import System, as_system
 from analysis.provenance import completed_attrs, state_at, to_dataset
+from analysis.signal.phasor import phasor_fields, phasor_record
 from analysis.signal.poincare import poincare_section
 from analysis.stability.classify import failure_text
 from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
@@ -94,9 +95,10 @@ def record_from(setting: Setting, system: System, start: Start) -> xr.Dataset:
 
 
 def diagram_point(setting: Setting, system: System, start: Start | None = None) -> dict:
-    """Poincaré samples of every state variable, amplitudes, and the run's start and end
-    (``t_start``, ``t_final`` in s, ``final`` the end state) at one grid value; from the
-    spec's initial state at t = 0 without ``start``."""
+    """Poincaré samples of every state variable, amplitudes, the 1X amplitude and phase of
+    the first body's displacements (``analysis.signal.phasor.phasor_record``), and the
+    run's start and end (``t_start``, ``t_final`` in s, ``final`` the end state) at one grid
+    value; from the spec's initial state at t = 0 without ``start``."""
     if start is None:
         ds, t_start = record(setting, system), 0.0
     else:
@@ -108,6 +110,7 @@ def diagram_point(setting: Setting, system: System, start: Start | None = None) 
     out["t_start"] = t_start
     out["t_final"] = float(ds.t[-1])
     out.update(amplitudes(ds))
+    out.update(phasor_record(ds))
     return out
 
 
@@ -178,7 +181,13 @@ def safe_diagram_point(setting: Setting, system: System, start: Start | None = N
         return {**{v: np.zeros(0) for v in model.state_names},
                 "final": np.full(model.n_state, np.nan), "t_start": np.nan,
                 "t_final": np.nan, "status": failure_text(exc),
-                **dict.fromkeys(amplitude_fields(model), np.nan)}
+                **dict.fromkeys(amplitude_fields(model), np.nan),
+                **dict.fromkeys(phasor_fields(_displacements(model)), np.nan)}
+
+
+def _displacements(model) -> tuple[str, ...]:
+    """The first body's displacements of ``model`` (the variables of its 1X record)."""
+    return tuple(name[len("amplitude_"):] for name in amplitude_fields(model))
 
 
 def _point_task(args: tuple) -> tuple[str, dict]:
@@ -222,8 +231,8 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
         ds = _assemble_diagram(store, setting, axis, directions, follow)
         save_dataset(ds, output)
         store.remove()
-    except BaseException:  # a refusal or failure before the first point: no trace
-        store.discard()
+    except BaseException as exc:  # a refusal or failure before the first point: no trace
+        store.stopped(exc, len(directions) * len(axis.values))
         raise
     return ds
 
@@ -238,8 +247,9 @@ def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, direction
     arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
               for v in model.state_names}
     amplitude_names = [v for v in first if v.startswith("amplitude_")]
+    phasor_names = [v for v in phasor_fields(_displacements(model)) if v in first]
     per_value = {v: np.full((len(directions), n), np.nan)
-                 for v in [*amplitude_names, "t_start"]}
+                 for v in [*amplitude_names, *phasor_names, "t_start"]}
     status = np.full((len(directions), n), "", dtype=object)
     for d, direction in enumerate(directions):
         for i in range(n):
@@ -247,13 +257,19 @@ def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, direction
             for v in arrays:
                 arrays[v][d, i, :len(point[v])] = point[v]
             for v in per_value:
-                per_value[v][d, i] = point[v]
+                per_value[v][d, i] = point.get(v, np.nan)  # no 1X in an older store
             status[d, i] = str(point.get("status", ""))
     data = {v: (("direction", axis.name, "k"), arrays[v],
                 {"units": units[v], "long_name": f"{v} on the {section} section"})
             for v in arrays}
     data.update({v: (("direction", axis.name), per_value[v],
                      {"units": units.get(v[len("amplitude_"):], "m")}) for v in amplitude_names})
+    for v in phasor_names:  # the 1X record: amplitude (unit of the variable), lag (rad)
+        amplitude, var = v.startswith("amplitude1x_"), v.partition("_")[2]
+        data[v] = (("direction", axis.name), per_value[v],
+                   {"units": units.get(var, "m") if amplitude else "rad",
+                    "long_name": f"1X amplitude of {var}" if amplitude else
+                    f"1X phase lag of {var} after the shaft's zero angle"})
     data["status"] = (("direction", axis.name), status.astype(str),
                       {"long_name": "empty, or why the value's run failed (failed: …)"})
     data["t_start"] = (("direction", axis.name), per_value["t_start"],

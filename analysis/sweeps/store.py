@@ -15,6 +15,12 @@ definition is refused. When every point is done the sweep assembles the final ne
   ``on_damaged`` and computed again. An unreadable ``sweep.json`` is rewritten only when
   no point is stored; otherwise the folder is refused (its points cannot be matched to a
   definition).
+- **Resuming is said, not guessed.** ``command`` (beside ``sweep.json``) records the command
+  line that started the sweep; a re-run with another definition is refused naming it and
+  the fields that differ. A sweep stopped part way (Ctrl-C, SIGTERM, an error) leaves its
+  points and ``kept_note`` says so: ``88 of 200 points kept in out.nc.parts; run the same
+  command to resume``, added to the exception as a note (``BaseException.add_note``) that
+  the command line prints under its one line.
 """
 
 from __future__ import annotations
@@ -23,7 +29,9 @@ import contextlib
 import errno
 import json
 import os
+import shlex
 import shutil
+import sys
 import tempfile
 import zipfile
 from collections.abc import Callable
@@ -36,6 +44,34 @@ from analysis.errors import InputError
 
 MANIFEST = "sweep.json"
 LOCK = "lock"
+COMMAND = "command"
+"""The file (in ``OUTPUT.parts``) holding the command line that started the sweep."""
+
+
+def command_line(argv: list[str] | None = None) -> str:
+    """The command line of this process as a user would type it again: ``bearingdyn …``
+    for the console command (or ``python -m analysis.cli``), else the script and its
+    arguments."""
+    argv = list(sys.argv if argv is None else argv)
+    head = Path(argv[0]).name if argv else "python3"
+    if head == "bearingdyn" or Path(argv[0] if argv else "").parts[-3:] == (
+            "analysis", "cli", "__main__.py"):
+        head = "bearingdyn"
+    return shlex.join([head, *argv[1:]])
+
+
+def _differences(stored: Any, given: Any, where: str = "") -> list[str]:
+    """The dotted names of the fields where two definitions differ (at most the leaves)."""
+    if isinstance(stored, dict) and isinstance(given, dict):
+        found = []
+        for key in sorted(set(stored) | set(given), key=str):
+            name = f"{where}.{key}" if where else str(key)
+            if key not in stored or key not in given:
+                found.append(name)
+            else:
+                found += _differences(stored[key], given[key], name)
+        return found
+    return [] if stored == given else [where or "definition"]
 
 
 class PointStore:
@@ -66,12 +102,16 @@ class PointStore:
             stored = None
         if stored is not None and stored != json.loads(text) and self.done():
             self.close()
+            differ = _differences(stored, json.loads(text))
+            shown = ", ".join(differ[:4]) + (", …" if len(differ) > 4 else "")
             raise InputError(
                 f"output: {self.folder} holds an unfinished sweep with a different "
-                "definition; finish it with the same command, or delete the folder")
+                f"definition ({len(self.done())} points stored; differs in {shown}); "
+                f"{self.stored_command_text()}, or delete the folder")
         if stored != json.loads(text):  # none yet, or one of no stored point: replaced
             self.folder.mkdir(parents=True, exist_ok=True)
             _atomic_bytes(manifest, text.encode())
+            _atomic_bytes(self.folder / COMMAND, (command_line() + "\n").encode())
         if lock:
             self.check(on_damaged)
 
@@ -109,6 +149,40 @@ class PointStore:
     def done(self) -> set[str]:
         """Keys of the points already stored."""
         return {p.stem for p in self.folder.glob("*.npz")}
+
+    def stored_command(self) -> str | None:
+        """The command line that started the stored sweep (None: not recorded)."""
+        try:
+            return (self.folder / COMMAND).read_text().strip() or None
+        except OSError:
+            return None
+
+    def stored_command_text(self) -> str:
+        """How to finish the stored sweep, in words: its command, when recorded."""
+        command = self.stored_command()
+        if command is None:
+            return "finish it with the command that started it (not recorded)"
+        return f"finish it with the command that started it: {command}"
+
+    def kept_note(self, total: int | None = None, what: str = "points") -> str | None:
+        """After a sweep stopped part way: ``88 of 200 points kept in OUT.parts; run the
+        same command to resume`` (``total``: the sweep's points; None: not counted), or
+        None when the folder is gone (nothing was kept)."""
+        if not self.folder.exists():
+            return None
+        kept = len(self.done())
+        count = f"{kept} of {total}" if total is not None else f"{kept}"
+        return f"{count} {what} kept in {self.folder}; run the same command to resume"
+
+    def stopped(self, exc: BaseException, total: int | None = None,
+                what: str = "points") -> None:
+        """The sweep stopped on ``exc``: ``discard`` the folder if it holds nothing, and
+        note on ``exc`` how many points are kept and how to resume (``kept_note``). A
+        refusal before any point gets no note."""
+        self.discard()
+        note = self.kept_note(total, what)
+        if note and self.done():
+            exc.add_note(note)
 
     def save(self, key: str, values: dict[str, Any]) -> None:
         def write(handle):
