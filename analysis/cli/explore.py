@@ -42,9 +42,11 @@ def explore(
     check_spectrum_bins(spectrum_bins)
     chart = load_chart(chart_file)  # judged before a worker starts
     ex = executor_of(executor, workers, scheduler)
+    progress = ProgressReporter("explore: recomputing each point's run", quiet, after=2.0)
+    progress(0, chart.sizes[chart.attrs["x"]] * chart.sizes[chart.attrs["y"]])  # at once
     try:
         path = write_explorer(chart, output, spectrum_bins=spectrum_bins, executor=ex,
-                              progress=ProgressReporter("explore", quiet))
+                              progress=progress)
     finally:
         ex.close()
     typer.echo(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB, {ex.name})")

@@ -14,6 +14,7 @@ from analysis.cli.common import (
     ModelArgument,
     NBallsOption,
     PeriodOption,
+    QuietOption,
     SetOption,
     SpeedOption,
     app,
@@ -28,6 +29,8 @@ from analysis.cli.common import (
 
 RUNNING_ROWS = 200
 """Most rows of each running estimate in the JSON output (evenly thinned, the last kept)."""
+PROGRESS_AFTER = 2.0
+"""Seconds before ``classify`` shows the progress of its Lyapunov exponent (none sooner)."""
 
 
 @app.command()
@@ -186,18 +189,21 @@ def classify(
         help="shaft, cage, vc, cage[BEARING], vc[BEARING] or param:NAME (default: vc for a "
              "balanced bearing, else shaft).")] = None,
     as_json: JsonOption = False,
+    quiet: QuietOption = False,
 ):
     """Periodic-n, quasi-periodic or chaotic (computes the largest Lyapunov exponent when
-    the Poincaré points alone cannot tell)."""
+    the Poincaré points alone cannot tell, with its progress on stderr)."""
     from analysis.provenance import load_dataset
+    from analysis.reports.progress import ProgressReporter
     from analysis.stability.classify import classify as run_classify
 
-    result = run_classify(load_dataset(run_file), section)
+    result = run_classify(load_dataset(run_file), section, progress=ProgressReporter(
+        "classify: largest Lyapunov exponent", quiet, unit="blocks", after=PROGRESS_AFTER))
     if as_json:
         from analysis.provenance import provenance
 
         typer.echo(json.dumps({**result.as_dict(), "provenance": provenance(run_file)},
                               indent=2))
     else:
-        typer.echo(f"{result.nature}: {result.detail} ({result.n_points} points, "
+        typer.echo(f"{result.label}: {result.detail} ({result.n_points} points, "
                    f"{result.section} section)")

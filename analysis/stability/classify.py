@@ -16,7 +16,13 @@ points alone cannot decide, the largest Lyapunov exponent:
    frequencies), one phase does not reduce it, and this test is skipped.
 3. Otherwise **chaotic** if the largest Lyapunov exponent is positive beyond its 95 %
    confidence interval and above ``chaos_floor`` × the section's angular frequency, and
-   **quasi-periodic** (a frequency of its own, largest exponent ≈ 0) if not.
+   **quasi-periodic** if not. The detail says which of three cases it is, by the interval:
+   it contains 0 (a frequency of its own, λ1 ≈ 0); it lies below 0 (a stable response: with
+   several forcing frequencies not in a small-integer ratio, X, VC of each bearing, a
+   parameter's period, the response follows them, and the verdict reads
+   ``quasi-periodic (forced by X, VC, …)``, ``Classification.label``); or it lies above 0
+   but below the floor (too weak to call chaotic). "≈ 0" is never said of an exponent whose
+   interval excludes 0.
 
 Sections: those of ``analysis.signal.poincare`` (``shaft``, ``cage``, ``vc``,
 ``vc[<bearing>]``, ``param:NAME`` …), which keep every state variable.
@@ -26,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
+from fractions import Fraction
 
 import numpy as np
 import xarray as xr
@@ -51,9 +58,20 @@ class Classification:
     """Largest Lyapunov exponent, 1/s (None when the section decided alone)."""
     ci95: float | None = None
     graph_ratio: float | None = None
+    forced_by: tuple[str, ...] = ()
+    """The forcing frequencies a stable quasi-periodic response follows (``X``, ``VC``,
+    ``VC[left]``, ``1/forcing_period``), empty otherwise."""
+
+    @property
+    def label(self) -> str:
+        """The verdict as a reader sees it: the class, and for a response forced at several
+        frequencies, which: ``quasi-periodic (forced by X, VC)``."""
+        if self.forced_by:
+            return f"{self.nature} (forced by {', '.join(self.forced_by)})"
+        return self.nature
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        return {**asdict(self), "forced_by": list(self.forced_by), "label": self.label}
 
 
 # --- the class vocabulary ------------------------------------------------------------------
@@ -267,13 +285,15 @@ def classify(
     max_period: int = 16,
     chaos_floor: float = 0.01,
     lyapunov_duration: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Classification:
     """Classify the motion in ``ds`` (a run from ``simulate`` of any model, transient
     dropped) on ``section`` (default: ``default_section``).
 
     ``exponents`` (from ``analysis.stability.lyapunov.lyapunov``) is computed from the run's
     own model, parameters and final state when needed and not given (``lyapunov_duration``
-    seconds, default: the run's length).
+    seconds, default: the run's length); ``progress(done, total)`` is called meanwhile
+    (``lyapunov``'s; never when the points decide alone, in well under a second).
     """
     section = section or default_section(ds)
     pts = poincare_section(ds, section)
@@ -286,7 +306,8 @@ def classify(
     ptp = {v: float(np.ptp(ds[v].values)) for v in state_names(ds)}
 
     def largest() -> tuple[float, float]:
-        found = exponents if exponents is not None else exponents_of_run(ds, lyapunov_duration)
+        found = exponents if exponents is not None else exponents_of_run(
+            ds, lyapunov_duration, progress)
         return float(found.exponents[0]), float(found.ci95[0])
 
     return classify_section(pts, ptp, largest, rel_tol=rel_tol, max_period=max_period,
@@ -320,24 +341,98 @@ def classify_section(
         if ratio < GRAPH_RATIO:
             return Classification("quasi-periodic", "two-frequency torus locked to X and VC "
                                    "(points on a smooth curve of the ball-set phase)",
-                                   section, len(points), graph_ratio=ratio)
+                                   section, len(points), graph_ratio=ratio,
+                                   forced_by=tuple(forcing_frequencies(attrs)))
     lam, ci = largest()
     floor = chaos_floor * 2 * np.pi / attrs["section_period_s"]
+    exponent = f"largest Lyapunov exponent {lam:.4g} ± {ci:.2g} 1/s (95 %)"
+    found = dict(section=section, n_points=len(points), largest_exponent=lam, ci95=ci,
+                 graph_ratio=ratio)
     if lam - ci > 0 and lam > floor:
-        return Classification("chaotic", f"largest Lyapunov exponent {lam:.4g} ± {ci:.2g} 1/s "
-                              "(95 %) > 0", section, len(points), largest_exponent=lam,
-                              ci95=ci, graph_ratio=ratio)
-    return Classification("quasi-periodic", f"a frequency of its own: largest Lyapunov "
-                          f"exponent {lam:.3g} ± {ci:.2g} 1/s ≈ 0", section, len(points),
-                          largest_exponent=lam, ci95=ci, graph_ratio=ratio)
+        return Classification("chaotic", f"{exponent} > 0", **found)
+    if lam - ci > 0:
+        return Classification("quasi-periodic", f"{exponent} > 0 but below the chaos floor "
+                              f"{floor:.3g} 1/s ({chaos_floor:g} of the section's angular "
+                              "frequency): too weak to call chaotic", **found)
+    if lam + ci < 0:
+        forcings = forcing_frequencies(attrs)
+        groups = commensurate_groups(forcings)
+        if len(groups) > 1:
+            named = ", ".join(f"{k} = {v:.4g} Hz" for k, v in forcings.items())
+            return Classification("quasi-periodic", f"{exponent} < 0: a stable response "
+                                  f"that follows its forcing frequencies ({named}), "
+                                  f"{len(groups)} incommensurate groups of them ("
+                                  + "; ".join(", ".join(g) for g in groups) +
+                                  f": no ratio of integers up to {RATIO_DENOMINATOR} "
+                                  "between groups)",
+                                  forced_by=tuple(forcings), **found)
+        why = ("its forcing frequencies are in a ratio of integers, " +
+               ", ".join(groups[0]) + ": " if len(forcings) > 1 else "")
+        return Classification("quasi-periodic", f"{exponent} < 0, a stable response, but "
+                              f"the {section} section does not repeat within {max_period} "
+                              f"samples ({why}a longer period, or a run not yet settled: "
+                              "simulate longer)", **found)
+    return Classification("quasi-periodic", f"a frequency of its own: {exponent} ≈ 0 (the "
+                          "interval contains 0)", **found)
 
 
-def exponents_of_run(ds: xr.Dataset, duration: float | None) -> xr.Dataset:
+def forcing_frequencies(attrs: Mapping) -> dict[str, float]:
+    """The distinct forcing frequencies (Hz) of a run, from its attrs: ``X`` (the shaft,
+    with unbalance, or as the forcing of a model without bearings), ``VC`` (one bearing) or
+    ``VC[<bearing>]`` (each of several), ``1/<parameter>`` (a model forced at a parameter's
+    period). A frequency equal to one already named (two equal bearings) is not repeated."""
+    shaft = float(attrs.get("shaft_hz", 0.0))
+    forcing = run_period_parameter(attrs)
+    period = float(attrs[forcing]) if forcing else 0.0
+    vc = {"VC": float(attrs["vc_hz"])} if "vc_hz" in attrs else {
+        f"VC[{k.removeprefix('vc_hz_')}]": float(v) for k, v in attrs.items()
+        if str(k).startswith("vc_hz_")}
+    found: dict[str, float] = {}
+    if shaft > 0 and (float(attrs.get("unbalance_force", 0.0)) != 0.0
+                      or (_bearings_of_attrs(attrs) == 0 and not period > 0)):
+        found["X"] = shaft
+    found.update({k: v for k, v in vc.items() if v > 0})
+    if period > 0:
+        found[f"1/{forcing}"] = 1.0 / period
+    distinct: dict[str, float] = {}
+    for name, f in found.items():
+        if not any(abs(f - g) <= 1e-9 * max(f, g) for g in distinct.values()):
+            distinct[name] = f
+    return distinct
+
+
+RATIO_DENOMINATOR = 1000
+"""Two forcing frequencies are commensurate when their ratio is p/q with q up to this (to
+1e-9 relative): a response to them alone is periodic."""
+
+
+def commensurate_groups(forcings: Mapping[str, float],
+                        largest: int = RATIO_DENOMINATOR) -> list[list[str]]:
+    """The ``forcings`` (name: Hz) grouped by rational ratio: frequencies in one group are
+    in ratios p/q of integers with q up to ``largest`` (to 1e-9 relative), two groups have
+    no such ratio. One group: the forcing is periodic; two or more: quasi-periodic (e.g.
+    ``[["X"], ["VC[left]", "VC[right]"]]`` for two bearings of 7 and 11 balls on one cage
+    frequency)."""
+    groups: list[list[str]] = []
+    for name, f in forcings.items():
+        for group in groups:
+            g = forcings[group[0]]
+            ratio = Fraction(f / g).limit_denominator(largest)
+            if ratio > 0 and abs(float(ratio) - f / g) <= 1e-9 * f / g:
+                group.append(name)
+                break
+        else:
+            groups.append([name])
+    return groups
+
+
+def exponents_of_run(ds: xr.Dataset, duration: float | None,
+                     progress: Callable[[int, int], None] | None = None) -> xr.Dataset:
+    """λ1 (``lyapunov``) of the run's own model, parameters and final state over
+    ``duration`` s (None: the run's length); ``progress``: ``lyapunov``'s."""
     from analysis.stability.lyapunov import lyapunov
 
-    """λ1 (``lyapunov``) of the run's own model, parameters and final state over
-    ``duration`` s (None: the run's length)."""
     system = system_of_attrs(ds.attrs, state_at(ds, -1))
     length = float(ds.t[-1] - ds.t[0])
     return lyapunov(system, duration=duration or length, transient=0.0,
-                    dt=float(ds.attrs["dt"]))
+                    dt=float(ds.attrs["dt"]), progress=progress)

@@ -19,7 +19,7 @@ converge more slowly in Δt than smooth ones.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -107,6 +107,7 @@ def lyapunov(
     renorm_every: int = 100,
     initial_state: Sequence[float] | None = None,
     compiled: bool = True,
+    progress: Callable[[int, int], None] | None = None,
     **parameters: float,
 ) -> xr.Dataset:
     """Lyapunov exponents (1/s), largest first, averaged over ``duration`` seconds.
@@ -125,6 +126,8 @@ def lyapunov(
     transient is rounded up to whole blocks of ten renormalisations. The states are those of
     ``simulate`` bit for bit (the same RK4 steps at times k·dt), wherever the tangent starts.
     ``n_exponents`` in [1, n] (default n, the model's state size: the whole spectrum).
+    ``progress(done, total)``: called with the compiled blocks of ``BLOCKS`` renormalisations
+    done (0 before the block is compiled, then after each).
 
     Returns a Dataset with ``exponents`` (dim ``index``), their 95 % confidence half-widths
     ``ci95`` (batch means over ten blocks), ``running`` (the running estimates over the
@@ -152,10 +155,15 @@ def lyapunov(
     z0 = _state_after(system, start, dt)
     p = system.p
     state = np.concatenate([z0, [start], np.eye(n)[:, :n_exponents].T.ravel()])
+    calls = (discarded + averaged) // BLOCKS
+    if progress:
+        progress(0, calls)
     block = compiled_function(tangent_block(model, structure, n_exponents, renorm_every,
                                             BLOCKS), (state, p, dt, 0.0), compiled)
     logs, traces, jac = [], [], system.functions.jac
-    for call in range((discarded + averaged) // BLOCKS):
+    for call in range(calls):
+        if progress and call:
+            progress(call, calls)
         out_state, out_logs = block(state, p, dt, 0.0)
         state = np.asarray(out_state).ravel()
         if not np.all(np.isfinite(state)):
@@ -164,6 +172,8 @@ def lyapunov(
         logs.append(np.asarray(out_logs))
         if call >= discarded // BLOCKS:
             traces.append(np.trace(np.asarray(jac(state[n] * dt, state[:n], p))))
+    if progress:
+        progress(calls, calls)
     logs_all = np.concatenate(logs, axis=1)
     interval = dt * renorm_every
     res = _result(model, structure, values, logs_all[:, discarded:], interval,
