@@ -59,11 +59,14 @@ def run_attrs(model: Model, structure: Structure, values: dict[str, float]) -> d
 def completed_attrs(system: System, *, method: str, dt: float, save_every: int,
                     duration: float, transient: float, t_start: float | None = None,
                     initial_state: bool = False,
-                    tolerances: tuple[float, float] | None = None) -> dict:
+                    tolerances: tuple[float, float] | None = None,
+                    speed_profile: Mapping[str, Any] | None = None) -> dict:
     """The attrs of a time run of ``system``: ``run_attrs``, then in this order ``method``,
     ``dt`` (s), ``save_every``, ``duration`` (s), ``transient`` (s), ``t_start`` (s, when
-    given), the initial state as ``<state>0`` (SI units, with ``initial_state``) and
-    ``rtol``, ``atol`` (with ``tolerances``)."""
+    given), the initial state as ``<state>0`` (SI units, with ``initial_state``),
+    ``rtol``, ``atol`` (with ``tolerances``) and a speed profile's attrs (``speed_profile``,
+    ``speed_profile_t`` (s), ``speed_profile_rpm`` (rpm): ``SpeedProfile.attrs``; then
+    ``speed_rpm`` and the frequencies are those at t = 0)."""
     model = system.model
     attrs = run_attrs(model, system.structure, dict(system.parameters))
     attrs.update(method=method, dt=dt, save_every=save_every, duration=duration,
@@ -75,6 +78,8 @@ def completed_attrs(system: System, *, method: str, dt: float, save_every: int,
                       for name, v in zip(model.state_names, system.state, strict=True)})
     if tolerances is not None:
         attrs.update(rtol=tolerances[0], atol=tolerances[1])
+    if speed_profile:
+        attrs.update(speed_profile)
     return attrs
 
 

@@ -182,19 +182,24 @@ def vm_library(funcs: Any) -> Library:
     return Library("casadi-vm", rk4_blocks(funcs), funcs.rhs, funcs.jac, funcs.rk4_step)
 
 
-def library(model: Any, structure: Any, compiled: bool = True) -> Library:
+def library(model: Any, structure: Any, compiled: bool = True,
+            functions: Any = None) -> Library:
     """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``structure`` balls per
     bearing (one number for a one-bearing model, a mapping or a tuple).
 
     ``compiled``: load the shared library from the cache, or build it there once; when no
     compiler works, warn once and use the VM. ``compiled=False``: the VM. Memoised per
-    process.
+    process. ``functions``: other Functions of the model to run in place of its own (the
+    speed-profile step, ``analysis.integrate.speed_profile.ProfileFunctions``: named by its
+    ``tag``, self-tested on its ``test_parameters``).
     """
     command = compiler_command() if compiled else []
     structure = model.structure(structure)  # one number, a mapping or a tuple
     memo = (model.name, model.spec_sha256, structure, tuple(command), str(cache_dir()))
+    if functions is not None:
+        memo += (functions.tag,)
     if memo not in _REGISTRY.libraries:
-        funcs = model.functions(structure)
+        funcs = model.functions(structure) if functions is None else functions
         lib = None
         if compiled:
             try:
@@ -221,10 +226,13 @@ def cached_path(stem: str, source: str, command: list[str]) -> Path:
 def _compiled_library(model: Any, structure: tuple[int, ...], funcs: Any,
                       command: list[str]) -> Library:
     functions = _library_functions(funcs)
-    stem = library_stem("bd", model, structure)
+    tag = getattr(funcs, "tag", "")
+    stem = library_stem(f"bd{tag}", model, structure)
     source = _c_source(functions, stem)
     path = cached_path(stem, source, command)
     p = model.parameter_vector(model.defaults)
+    if hasattr(funcs, "test_parameters"):
+        p = funcs.test_parameters(p)
     if path.exists():
         lib = _checked_load(path, functions, p)
         if lib is not None:

@@ -20,6 +20,7 @@ import xarray as xr
 from analysis.errors import Interrupt, SimulationError
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.plan import Method, RunPlan
+from analysis.integrate.speed_profile import SpeedProfile
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.provenance import completed_attrs, state_variable_attrs, to_dataset
 
@@ -60,7 +61,13 @@ def simulate(
         the system's, else the spec's; the paper's 1e-6 m for its model).
     compiled: run RK4 as compiled C (built once per model and balls, then cached; see
         ``analysis.integrate.compiled``); ``False``: the CasADi virtual machine (same results).
-    **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``.
+    **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``;
+        ``speed_rpm`` may be a ``SpeedProfile`` (a run-up or coast-down:
+        ``SpeedProfile.ramp(1000, 10000)``, ``SpeedProfile.table(t, rpm)``,
+        ``read_table(path)``; see ``analysis.integrate.speed_profile``), recorded in the
+        attrs (``speed_profile``, ``speed_profile_t``, ``speed_profile_rpm``; ``speed_rpm``
+        and the frequencies are then those at t = 0). A constant profile is the constant
+        speed: the same run, bit for bit.
 
     Returns an ``xarray.Dataset`` with one variable per state (units and meaning in its
     attributes) over ``t`` (s) and the run's provenance in ``attrs``.
@@ -69,11 +76,11 @@ def simulate(
                    method, save_every, rtol, atol, in_memory=True)
     if method == "rk4":
         plan = run.plan
-        states = _run_rk4(run.system, run.system.p, run.z0, plan.dt, save_every, plan.n_saved,
-                          run.limit, compiled)
+        states = _run_rk4(run.system, run.p, run.z0, plan.dt, save_every, plan.n_saved,
+                          run.limit, compiled, functions=run.functions)
     else:
-        states = _run_cvodes(run.system, run.system.p, run.z0, run.plan.times(), rtol, atol,
-                             run.limit)
+        states = _run_cvodes(run.system, run.p, run.z0, run.plan.times(), rtol, atol,
+                             run.limit, run.functions)
     times = run.plan.times()
     first = run.plan.first
     return to_dataset(times[first:], states[:, first:], run.attrs, run.system.model)
@@ -81,11 +88,31 @@ def simulate(
 
 @dataclass(frozen=True)
 class _Run:
-    """A checked run: its plan, provenance and blow-up limit (m)."""
+    """A checked run: its plan, provenance and blow-up limit (m); with a speed profile,
+    the profile's Functions and their parameter vector."""
 
     plan: RunPlan
     attrs: dict
     limit: float
+    profile: SpeedProfile | None = None
+
+    @property
+    def functions(self):
+        """The profile's ``ProfileFunctions`` (None: the model's own)."""
+        if self.profile is None:
+            return None
+        from analysis.integrate.speed_profile import hinge_count, profile_functions
+
+        return profile_functions(self.system.model, self.system.structure,
+                                 hinge_count(len(self.profile.rpm)))
+
+    @property
+    def p(self) -> np.ndarray:
+        """The parameter vector of the run's Functions."""
+        p = self.plan.system.p
+        if self.profile is None:
+            return p
+        return np.concatenate([p, self.profile.parameters(self.plan.duration)])
 
     @property
     def system(self) -> System:
@@ -98,13 +125,42 @@ class _Run:
 
 def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt, method,
              save_every, rtol, atol, in_memory: bool) -> _Run:
-    """Every check of a run (``RunPlan.make``), before any step is taken."""
+    """Every check of a run (``RunPlan.make``), before any step is taken; a speed
+    profile's (``check_profile``) after the plan's."""
+    parameters = dict(parameters)
+    profile = parameters.get("speed_rpm")
+    if isinstance(profile, SpeedProfile):
+        parameters["speed_rpm"] = profile.start_rpm  # a constant profile: today's run
+        profile = None if profile.is_constant else profile
+    else:
+        profile = None
     system = as_system(system, n_balls, initial_state, **parameters)
     plan = RunPlan.make(system, duration=duration, transient=transient, dt=dt, method=method,
                         save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory)
+    if profile is not None:
+        check_profile(plan, profile)
     attrs = completed_attrs(system, **plan.settings(), initial_state=True,
-                            tolerances=(rtol, atol) if method == "cvodes" else None)
-    return _Run(plan, attrs, blow_up_limit(system.model, dict(system.parameters)))
+                            tolerances=(rtol, atol) if method == "cvodes" else None,
+                            speed_profile=None if profile is None
+                            else profile.attrs(plan.duration))
+    return _Run(plan, attrs, blow_up_limit(system.model, dict(system.parameters)), profile)
+
+
+def check_profile(plan: RunPlan, profile: SpeedProfile) -> None:
+    """A speed profile's checks, on a run's ``plan``: the model can follow it
+    (``speed_profile.check_model``), a table reaches the end of the run, and the plan's
+    checks of the speed (its range, the resolution of the fastest forcing, the RK4
+    stability of the step) hold at every speed of the profile's rows."""
+    from analysis.integrate.checks import check_resolution, check_rk4_step
+    from analysis.integrate.speed_profile import check_model
+
+    system = plan.system
+    check_model(system.model, system.structure, dict(system.parameters))
+    profile.check_covers(plan.duration)
+    for speed in sorted(set(profile.rpm)):
+        values = system.model.parameters({**system.parameters, "speed_rpm": speed})
+        check_resolution(system.model, system.structure, values, plan.dt)
+        check_rk4_step(system.model, system.structure, values, plan.dt, plan.method)
 
 
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
@@ -172,8 +228,8 @@ def simulate_to_file(
                     var[out] = kept[i, lo - start:]
 
             plan = run.plan
-            _run_rk4(run.system, run.system.p, run.z0, plan.dt, plan.save_every, plan.n_saved,
-                     run.limit, compiled, sink=sink)
+            _run_rk4(run.system, run.p, run.z0, plan.dt, plan.save_every, plan.n_saved,
+                     run.limit, compiled, sink=sink, functions=run.functions)
 
     return atomic_write(path, write, size=8 * (model.n_state + 1) * size)
 
@@ -246,8 +302,9 @@ def check_bounded(states: np.ndarray, times: np.ndarray, limit: float,
 
 def _run_rk4(system: System, p: np.ndarray, z0: np.ndarray, dt: float,
              save_every: int, n_saved: int, limit: float, compiled: bool = True,
-             sink=None) -> np.ndarray | None:
-    """RK4 in blocks of up to 1e4 steps (``analysis.integrate.compiled``: compiled C, or the VM).
+             sink=None, functions=None) -> np.ndarray | None:
+    """RK4 in blocks of up to 1e4 steps (``analysis.integrate.compiled``: compiled C, or the VM);
+    ``functions``: a speed profile's (``p`` then holds its parameters too).
 
     Every kept state of every block is checked against the blow-up limit before the next
     block runs, and a blow-up is reported with the time of the first bad state: no run that
@@ -257,13 +314,14 @@ def _run_rk4(system: System, p: np.ndarray, z0: np.ndarray, dt: float,
     def check(block: np.ndarray) -> None:
         check_bounded(block[:, :n].T, block[:, n] * dt, limit, pairs)
 
-    return run_rk4(library(system.model, system.structure, compiled), p, z0, dt,
+    return run_rk4(library(system.model, system.structure, compiled, functions), p, z0, dt,
                    n_saved * save_every, save_every, check=check, sink=sink)
 
 
 def _run_cvodes(system: System, p: np.ndarray, z0: np.ndarray,
-                times: np.ndarray, rtol: float, atol: float, limit: float) -> np.ndarray:
-    rhs = system.functions.rhs
+                times: np.ndarray, rtol: float, atol: float, limit: float,
+                functions=None) -> np.ndarray:
+    rhs = (system.functions if functions is None else functions).rhs
     t, z, par = ca.SX.sym("t"), ca.SX.sym("z", system.n_state), ca.SX.sym("p", len(p))
     dae = {"t": t, "x": z, "p": par, "ode": rhs(t, z, par)}
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10_000_000,

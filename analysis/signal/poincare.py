@@ -26,6 +26,7 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.forcing import SECTION
+from analysis.integrate.speed_profile import refuse_profile
 from analysis.provenance import cage_frequencies, state_names, vc_frequencies
 
 SECTIONS = SECTION.kinds
@@ -157,6 +158,7 @@ def poincare_section(ds: xr.Dataset, section: str = "shaft", phase: float = 0.0)
     their attrs); attrs are those of ``ds`` plus ``section``, ``section_period_s`` and
     ``phase``.
     """
+    refuse_profile(ds.attrs, "poincare")  # a run-up: no fixed period
     period = section_period(ds, section)
     phase = float(phase)
     if not 0.0 <= phase < 1.0:

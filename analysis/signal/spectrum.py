@@ -30,6 +30,7 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.forcing import run_period_parameter
+from analysis.integrate.speed_profile import refuse_profile
 from analysis.provenance import displacement_names, vc_frequencies
 
 _DEFAULT_UNITS = {"x": "m", "y": "m", "vx": "m/s", "vy": "m/s"}
@@ -73,6 +74,7 @@ def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> 
     if var not in ds.data_vars:
         raise InputError(f"var: no variable '{var}' in the dataset; "
                          f"variables: {', '.join(map(str, ds.data_vars))}")
+    refuse_profile(ds.attrs, "spectrum")  # a run-up: bearingdyn waterfall
     dt = time_step(ds)
     values = np.asarray(ds[var].values, dtype=float)
     n = values.size
