@@ -265,10 +265,70 @@ def plot(
                                          callback=figure_output)],
     var: Annotated[list[str] | None, typer.Option(
         "--var", help="State variable to draw, repeatable (a diagram's section points, or a "
-                      "run's spectra; default: the first body's displacements).")] = None,
+                      "run's spectra; default: the first body's displacements; with --orbit "
+                      "or --full-spectrum two: X and Y).")] = None,
+    orbit: Annotated[bool, typer.Option(
+        "--orbit", help="A run's orbits: each body's centre and each bearing's relative "
+                        "displacement (µm), the clearance circle, a mark once per "
+                        "revolution.")] = False,
+    full_spectrum: Annotated[bool, typer.Option(
+        "--full-spectrum", help="A run's full spectrum of x + i·y: forward whirl at "
+                                "positive frequencies, backward at negative; prints its "
+                                "named lines.")] = False,
+    bode: Annotated[bool, typer.Option(
+        "--bode", help="A sweep's Bode plot: 1X amplitude and phase lag against the "
+                       "swept parameter.")] = False,
+    polar: Annotated[bool, typer.Option(
+        "--polar", help="A sweep's polar plot of the 1X amplitude and phase lag.")] = False,
 ):
-    """Draw the natural figure of a result file (run, branch, diagram or chart)."""
+    """Draw the natural figure of a result file (run, branch, diagram or chart), or a run's
+    orbits or full spectrum, or a sweep's Bode or polar plot."""
     from analysis.io import open_result
     from analysis.reports.plots import any_figure
 
-    write_figure(any_figure(open_result(result), var, result), output)
+    chosen = [name for name, on in (("--orbit", orbit), ("--full-spectrum", full_spectrum),
+                                    ("--bode", bode), ("--polar", polar)) if on]
+    if len(chosen) > 1:
+        raise InputError(f"{chosen[1]}: give one of --orbit, --full-spectrum, --bode, "
+                         f"--polar, got {' and '.join(chosen)}")
+    if not chosen:
+        write_figure(any_figure(open_result(result), var, result), output)
+        return
+    write_figure(_special_figure(chosen[0], result, var), output)
+
+
+def _special_figure(option: str, result: Path, var: list[str] | None):
+    """The figure of `plot --orbit`, `--full-spectrum`, `--bode` or `--polar` (lines of a
+    full spectrum printed); every input checked before the figure is drawn."""
+    from analysis.io import open_result
+
+    data = open_result(result)
+    if option in ("--bode", "--polar"):
+        from analysis.reports.bode_plots import bode_figure, polar_figure
+
+        draw = bode_figure if option == "--bode" else polar_figure
+        return draw(data, var, str(result))
+    from analysis.provenance import as_run
+
+    ds = as_run(data, result)
+    if var is not None and len(var) != 2:
+        raise InputError(f"--var: {option} takes two coordinates (--var X --var Y), got "
+                         f"{len(var)}")
+    x, y = var if var else (None, None)
+    if option == "--orbit":
+        from analysis.reports.orbit_plots import orbit_figure
+
+        return orbit_figure(ds, x, y)
+    from analysis.reports.orbit_plots import full_spectrum_figure
+    from analysis.signal.full_spectrum import full_spectrum_peaks, orbit_pair
+
+    x, y = orbit_pair(ds, x, y)
+    peaks = full_spectrum_peaks(ds, x, y)
+    typer.echo(f"full spectrum of {x} + i·{y} ({frequency_words(ds.attrs)}): "
+               f"+ forward whirl, - backward")
+    typer.echo(f"{'whirl':>8} {'frequency (Hz)':>15} {'amplitude':>14}  label")
+    for p in peaks:
+        unit = ds[x].attrs.get("units", "")
+        typer.echo(f"{p.whirl:>8} {p.signed_frequency_hz:15.2f} {p.amplitude:10.3e} "
+                   f"{unit:<4} {p.name}")
+    return full_spectrum_figure(ds, x, y, peaks)

@@ -1,18 +1,29 @@
 """Figures without pyplot: ``subplots`` and ``close`` as pyplot has them, for a ``Figure`` on
-its own Agg canvas.
+its own Agg canvas; and the provenance a figure carries into its file.
 
 A figure made here never joins pyplot's list of open figures, so making one needs no backend
 (it renders headless, on any machine), changes no backend (a notebook's inline backend or a
 script's choice stay as they were), and shows once where it is displayed (a notebook shows a
-returned ``Figure`` itself; pyplot would show it a second time at the end of the cell)."""
+returned ``Figure`` itself; pyplot would show it a second time at the end of the cell).
+
+Provenance: a figure function calls ``stamp(fig, result)`` with the result it draws; every
+figure file is written by ``analysis.reports.plots.save_figure``, which passes
+``file_metadata(fig, format)`` to ``savefig``: a PNG carries the model, the spec path, its
+SHA-256 and the versions as text chunks (``model``, ``spec_file``, ``spec_sha256``,
+``bearingdyn_version``, ``Software``), a PDF or SVG the same in its ``Subject`` or
+``Description``."""
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Mapping
 from typing import Any
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+
+PROVENANCE_KEYS = ("model", "spec_file", "spec_sha256", "bearingdyn_version")
+"""The attributes of a result that its figure's file carries."""
 
 
 def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] | None = None,
@@ -30,3 +41,98 @@ def close(fig: Figure) -> None:
     pyplot = sys.modules.get("matplotlib.pyplot")
     if pyplot is not None:
         pyplot.close(fig)
+
+
+def stamp(fig: Figure, source: Any) -> Figure:
+    """Record on ``fig`` the provenance of the result it draws (``source``: a Dataset or
+    DataArray, or a mapping of attrs): model, spec path, SHA-256 and the version that
+    computed it (``PROVENANCE_KEYS``). Returns ``fig``."""
+    attrs = getattr(source, "attrs", source)
+    if isinstance(attrs, Mapping):
+        fig.bearingdyn_provenance = {key: str(attrs[key]) for key in PROVENANCE_KEYS
+                                     if key in attrs}
+    return fig
+
+
+def figure_provenance(fig: Figure) -> dict[str, str]:
+    """What ``stamp`` recorded on ``fig`` ({} for a figure never stamped)."""
+    return dict(getattr(fig, "bearingdyn_provenance", {}))
+
+
+def file_metadata(fig: Figure, fmt: str) -> dict[str, str] | None:
+    """The ``metadata`` argument of ``fig.savefig`` for a file of format ``fmt`` (``png``,
+    ``pdf``, ``svg``; None for others): the figure's provenance (``stamp``) and the version
+    of bearingdyn that drew it (``Software``)."""
+    from analysis.provenance import package_version
+
+    drawn = f"bearingdyn {package_version()}"
+    found = figure_provenance(fig)
+    words = "; ".join(f"{key}={value}" for key, value in found.items())
+    fmt = fmt.lower()
+    if fmt == "png":
+        return {"Software": drawn, **found}
+    if fmt == "pdf":
+        return {"Creator": drawn, **({"Subject": words} if words else {})}
+    if fmt == "svg":
+        return {"Creator": drawn, **({"Description": words} if words else {})}
+    return None
+
+
+def _wrapped(text: str, width_px: float, measure) -> str:
+    """``text`` with line breaks after ", " or "; " (else spaces) so that each line measures
+    at most ``width_px`` (``measure(line)`` in pixels); a word longer than the width keeps
+    its line."""
+    lines: list[str] = []
+    for paragraph in text.split("\n"):
+        pieces = [p for p in _pieces(paragraph)]
+        line = ""
+        for piece in pieces:
+            trial = line + piece
+            if line and measure(trial.rstrip()) > width_px:
+                lines.append(line.rstrip())
+                line = piece.lstrip()
+            else:
+                line = trial
+        lines.append(line.rstrip())
+    return "\n".join(lines)
+
+
+def _pieces(text: str) -> list[str]:
+    """``text`` cut after each ", ", "; " or ": " (or after each space when it has none)."""
+    import re
+
+    parts = [p for p in re.split(r"(?<=[,;:] )", text) if p]
+    if len(parts) <= 1:
+        parts = [p for p in re.split(r"(?<= )", text) if p]
+    return parts
+
+
+def fit_text(artist, width_px: float) -> None:
+    """Break the text of ``artist`` (a title, suptitle or label) into lines no wider than
+    ``width_px`` display pixels, measured with the figure's renderer."""
+    from matplotlib.text import Text
+
+    fig = artist.get_figure(root=True) if hasattr(artist, "get_figure") else artist.figure
+    renderer = fig.canvas.get_renderer()
+    probe = Text(0, 0, "", fontproperties=artist.get_fontproperties(), figure=fig)
+
+    def measure(line: str) -> float:
+        probe.set_text(line)
+        return probe.get_window_extent(renderer).width
+
+    artist.set_text(_wrapped(artist.get_text(), width_px, measure))
+
+
+def fit_titles(fig: Figure, margin_px: float = 8.0) -> Figure:
+    """Make every title of ``fig`` fit: the suptitle within the figure's width, each axes
+    title within its axes (and the figure), broken into lines at commas where too wide.
+    Call once the axes are drawn; returns ``fig``."""
+    fig.canvas.draw()
+    width = fig.bbox.width - 2 * margin_px
+    if fig._suptitle is not None and fig._suptitle.get_text():
+        fit_text(fig._suptitle, width)
+    for ax in fig.axes:
+        for title in (ax.title, ax._left_title, ax._right_title):
+            if title.get_text():
+                fit_text(title, min(max(ax.bbox.width, 0.3 * width), width))
+    return fig

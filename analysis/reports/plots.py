@@ -42,12 +42,18 @@ def display_label(label: str) -> str:
     return label.replace("-", "\u2212")
 
 
+def unit_scale(unit: str) -> tuple[float, str]:
+    """(factor, unit) to draw a quantity in ``unit`` (SI) in: µm for m, mm/s for m/s, µrad
+    for rad, mrad/s for rad/s, else the unit itself (factor 1)."""
+    return _SCALES.get(unit, (1.0, unit))
+
+
 def scale_of(ds: xr.Dataset, var: str) -> tuple[float, str]:
     """(factor, unit) to draw ``ds[var]`` in: µm for m, mm/s for m/s, µrad for rad, else the
     variable's own unit (from its attrs)."""
     unit = str(ds[var].attrs.get("units", "m" if var in ("x", "y") else
                                  "m/s" if var in ("vx", "vy") else ""))
-    return _SCALES.get(unit, (1.0, unit))
+    return unit_scale(unit)
 
 
 def _axis_label(ds: xr.Dataset, var: str) -> str:
@@ -285,10 +291,16 @@ def poincare_figure(ds: xr.Dataset, section: str = "shaft",
 
 
 def save_figure(fig: Figure, path) -> None:
-    """Render ``fig`` to a file (PNG by suffix) and release it."""
+    """Render ``fig`` to a file (format by suffix: PNG, PDF, SVG, …) and release it: the one
+    place every figure file is written (atomically). The file carries the provenance the
+    figure was stamped with (``canvas.stamp``: model, spec path, SHA-256, version) in its
+    metadata (``canvas.file_metadata``: PNG text chunks, a PDF's Subject, an SVG's
+    Description)."""
     from analysis.io import atomic_write
 
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=130, format=str(path).rsplit(".", 1)[-1]))
+    fmt = str(path).rsplit(".", 1)[-1].lower()
+    metadata = plt.file_metadata(fig, fmt)
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=130, format=fmt, metadata=metadata))
     plt.close(fig)
 
 
@@ -302,7 +314,7 @@ def nature_colormap():
     return cmap, BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)
 
 
-def _grid_label(ds: xr.Dataset, name: str) -> str:
+def grid_label(ds: xr.Dataset, name: str) -> str:
     """A sweep axis for a figure: ``speed_rpm (rpm)``, ``n_balls[left] (balls in bearing
     left)``."""
     if name == "speed_rpm":
@@ -356,7 +368,7 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
                       + (f" ({unit})" if unit else ""))
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel(_grid_label(ds, param))
+    axes[-1].set_xlabel(grid_label(ds, param))
     structure = balls_text(ds.attrs, "$N_b$", "")
     fig.suptitle(f"{ds.attrs['model']}" + (f", {structure}" if structure else "")
                  + f": bifurcation diagram ({ds.sizes['k']} section points per value)",
@@ -407,8 +419,8 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     from matplotlib.ticker import MaxNLocator
 
     for ax in axes:
-        ax.set_xlabel(_grid_label(ds, xname))
-        ax.set_ylabel(_grid_label(ds, yname))
+        ax.set_xlabel(grid_label(ds, xname))
+        ax.set_ylabel(grid_label(ds, yname))
         for axis, name, values in ((ax.xaxis, xname, xs), (ax.yaxis, yname, ys)):
             if values.size == 1:
                 axis.set_ticks([float(values[0])], [f"{float(values[0]):g}"])
@@ -459,7 +471,7 @@ def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
         ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
         ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
         ax.set_xlabel(f"{xname} ({unit})" if unit else xname)
-        ax.set_ylabel(_grid_label(ds, yname) if not yname.startswith("n_balls")
+        ax.set_ylabel(grid_label(ds, yname) if not yname.startswith("n_balls")
                       else "$N_b$ (balls)")
     fig.suptitle(f"{ds.attrs['model']}: sensitivity to {xname}"
                  + (f" ({unit}), values tried" if unit else ", values tried"), fontsize=10)
