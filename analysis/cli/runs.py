@@ -32,7 +32,9 @@ def simulate(
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
                                          callback=netcdf_output)],
     n_balls: NBallsOption = None,
-    speed_rpm: Annotated[float | None, typer.Option(help="Shaft speed, rpm.")] = None,
+    speed_rpm: Annotated[str | None, typer.Option(
+        help="Shaft speed, rpm; a ramp A:B (A at t = 0, B at the end of the run), or a CSV "
+             "speed table t_s,speed_rpm (see docs/guide/waterfall.md).")] = None,
     sets: SetOption = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time, s.")] = None,
     transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
@@ -54,7 +56,16 @@ def simulate(
     from analysis.model import balls_text
     from analysis.provenance import state_names
 
-    params = parameter_values(speed_rpm, sets)
+    from analysis.integrate.speed_profile import SpeedProfile, describe_speed, parse_speed
+
+    speed = None if speed_rpm is None else parse_speed(speed_rpm)
+    profile = speed if isinstance(speed, SpeedProfile) else None
+    params = parameter_values(None if profile else speed, sets)
+    if profile is not None:
+        if "speed_rpm" in params:
+            raise InputError("--speed-rpm: given twice (--speed-rpm and --set speed_rpm); "
+                             "give the speed once")
+        params["speed_rpm"] = profile
     start = time.perf_counter()
     options = dict(duration=duration, transient=transient, dt=dt, save_every=save_every,
                    compiled=not no_compile, **params)
@@ -66,7 +77,7 @@ def simulate(
     with h5netcdf.File(output, "r") as f:  # the file's ends only: a long run stays on disk
         attrs, times = dict(f.attrs), f.variables["t"]
         t = float(times[0]), float(times[-1])
-        speed = f"{attrs['speed_rpm']:g} rpm, " if "speed_rpm" in attrs else ""
+        speed = describe_speed(attrs)
         typer.echo(f"wrote {output}: {attrs['model']}, {balls_text(attrs)}, {speed}"
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "

@@ -418,3 +418,11 @@ class ProfileFunctions:
 def profile_functions(model: Any, structure: tuple[int, ...], hinges: int) -> ProfileFunctions:
     """The ``ProfileFunctions`` of a model, its balls and a number of hinges (memoised)."""
     return ProfileFunctions(model, structure, hinges)
+
+
+def describe_speed(attrs: Mapping) -> str:
+    """'5000 rpm, ' or 'ramp 1000 → 10000 rpm, ' of a run's attrs ('' without a speed)."""
+    profile = profile_of(attrs)
+    if profile is not None:
+        return f"{profile.describe()}, "
+    return f"{float(attrs['speed_rpm']):g} rpm, " if "speed_rpm" in attrs else ""
