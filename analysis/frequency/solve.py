@@ -167,7 +167,7 @@ def newton_solve(hs: HarmonicSystem, coeffs: np.ndarray, p: np.ndarray, scale: n
     """Newton with backtracking on the scaled residual from ``coeffs``: (coefficients,
     Jacobian ∂R/∂X at them, iterations, scaled residual, converged, message)."""
     omega = 2 * math.pi / hs.period_s(p)
-    sx = np.tile(scale, 2 * hs.harmonics + 1)
+    sx = np.tile(scale, hs.size // hs.n)  # 2H + 1 columns (M of a torus)
     x = np.asarray(coeffs, dtype=float).copy()
 
     def scaled(xx):
