@@ -62,11 +62,17 @@ def _axis_label(ds: xr.Dataset, var: str) -> str:
 
 
 def run_title(ds: xr.Dataset) -> str:
-    """A figure's title for a run: model, balls, speed and its forcing frequencies."""
+    """A figure's title for a run: model, balls, speed and its forcing frequencies (a run
+    whose speed follows a profile: the profile, 'ramp 1000 → 10000 rpm')."""
     parts = [str(ds.attrs.get("model", "?"))]
     structure = balls_text(ds.attrs, "$N_b$", "")
     if structure:
         parts.append(structure)
+    from analysis.integrate.speed_profile import profile_of
+
+    profile = profile_of(ds.attrs)
+    if profile is not None:  # a run-up: its frequencies change along the run
+        return ", ".join([*parts, f"speed {profile.describe()}"])
     if "speed_rpm" in ds.attrs:
         parts.append(f"{float(ds.attrs['speed_rpm']):g} rpm")
     freqs = []

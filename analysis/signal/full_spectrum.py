@@ -25,6 +25,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.integrate.speed_profile import refuse_profile
 from analysis.provenance import displacement_names
 from analysis.signal.spectrum import Peak, find_peaks, time_step
 
@@ -90,6 +91,7 @@ def full_spectrum(ds: xr.Dataset, x: str | None = None, y: str | None = None
     """The full spectrum of ``ds[x] + i·ds[y]`` (default: the first body's displacements),
     in their unit (m), over ``frequency`` (Hz, −fs/2 … fs/2, increasing): positive is
     forward whirl, negative backward (module docstring)."""
+    refuse_profile(ds.attrs, "full spectrum")  # a run-up: its lines move
     x, y = orbit_pair(ds, x, y)
     dt = time_step(ds)
     z = _complex(ds, x, y)
@@ -111,6 +113,7 @@ def whirl_components(ds: xr.Dataset, x: str | None = None, y: str | None = None
     attrs (so the spectrum tools name their lines). z₊ holds the positive FFT
     frequencies of z = x + i·y (mean removed), z₋ the negative; the Nyquist bin, when
     there is one, is split evenly between them."""
+    refuse_profile(ds.attrs, "full spectrum")
     x, y = orbit_pair(ds, x, y)
     z = _complex(ds, x, y)
     n = z.size

@@ -10,9 +10,10 @@ balls touch when the relative displacement along a ball's angle exceeds the radi
 clearance γ0 (the circle of radius γ0 drawn with it).
 
 The marks are the state at the shaft angles 2πk: the shaft section
-(``analysis.signal.poincare``: t_k = k/X at constant speed). A run that carries its shaft
-angle (a variable ``shaft_angle``, rad: a run whose speed follows a profile) is marked
-where that angle crosses 2πk instead (linear interpolation between samples).
+(``analysis.signal.poincare``: t_k = k/X at constant speed). A run whose speed follows a
+profile is marked where its shaft angle (``analysis.signal.phasor.shaft_angle``: the
+profile's ∫ω dt) crosses 2πk (the times from the profile's exact inverse, the state
+interpolated linearly between samples).
 """
 
 from __future__ import annotations
@@ -24,7 +25,9 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.integrate.speed_profile import profile_of
 from analysis.provenance import state_names, system_of_attrs
+from analysis.signal.phasor import shaft_angle
 from analysis.signal.poincare import poincare_section
 
 
@@ -50,12 +53,15 @@ def revolution_marks(ds: xr.Dataset) -> xr.Dataset | None:
     for a run without a turning shaft; see the module docstring for runs with a
     ``shaft_angle``."""
     names = state_names(ds)
-    if "shaft_angle" in ds.variables:  # the speed follows a profile: marks at 2πk
-        angle = np.asarray(ds["shaft_angle"].values, dtype=float)
+    if "shaft_angle" in ds.variables or profile_of(ds.attrs) is not None:
+        angle = shaft_angle(ds)  # the speed follows a profile: marks at 2πk
         t = np.asarray(ds["t"].values, dtype=float)
         turns = np.arange(math.ceil(angle[0] / (2 * math.pi)),
                           math.floor(angle[-1] / (2 * math.pi)) + 1)
-        t_k = np.interp(turns * 2 * math.pi, angle, t)
+        profile = profile_of(ds.attrs)
+        t_k = np.interp(turns * 2 * math.pi, angle, t) if profile is None else \
+            np.clip(profile.time_at_angle(turns * 2 * math.pi, float(ds.attrs["duration"])),
+                    t[0], t[-1])  # the profile's exact inverse
         return xr.Dataset({n: ("k", np.interp(t_k, t, ds[n].values)) for n in names},
                           coords={"k": turns, "t": ("k", t_k)})
     if not float(ds.attrs.get("shaft_hz", 0.0)) > 0:

@@ -3,8 +3,9 @@ frequency, referred to the shaft angle, as a keyphasor measures them.
 
 The shaft angle is φ(t) = ω·t (rad) for a run at constant speed (``shaft_angle``; ω from
 the ``shaft_hz`` attr), the angle of the unbalance force P_u·(cos φ, sin φ) of the shipped
-models. A run that carries its angle as a variable ``shaft_angle`` (rad, over ``t``: a run
-whose speed follows a profile) is referred to that angle instead.
+models; for a run whose speed follows a profile (``analysis.integrate.speed_profile``, in
+its attrs) it is the profile's φ(t) = ∫ω dt; a dataset that carries its angle as a
+variable ``shaft_angle`` (rad, over ``t``) is referred to that angle.
 
 The phasor of order k of a signal s(t) is
 
@@ -26,6 +27,7 @@ import scipy.signal
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.integrate.speed_profile import profile_of
 from analysis.provenance import displacement_names
 
 PHASOR_PREFIXES = ("amplitude1x_", "phase1x_")
@@ -40,6 +42,10 @@ def shaft_angle(ds: xr.Dataset) -> np.ndarray:
     a turning shaft."""
     if "shaft_angle" in ds.variables:
         return np.asarray(ds["shaft_angle"].values, dtype=float)
+    profile = profile_of(ds.attrs)
+    if profile is not None:  # a run-up or coast-down: φ = ∫ω dt, exactly
+        return profile.shaft_angle(np.asarray(ds["t"].values, dtype=float),
+                                   float(ds.attrs["duration"]))
     shaft_hz = float(ds.attrs.get("shaft_hz", 0.0))
     if not (math.isfinite(shaft_hz) and shaft_hz > 0):
         raise InputError(f"shaft_hz: a 1X phasor needs a turning shaft (shaft_hz > 0), got "
@@ -77,7 +83,8 @@ def phasor_record(ds: xr.Dataset, variables: tuple[str, ...] | None = None
     turning shaft (no 1X to refer to)."""
     variables = displacement_names(ds) if variables is None else variables
     out: dict[str, float] = {}
-    turning = "shaft_angle" in ds.variables or float(ds.attrs.get("shaft_hz", 0.0)) > 0
+    turning = "shaft_angle" in ds.variables or profile_of(ds.attrs) is not None or \
+        float(ds.attrs.get("shaft_hz", 0.0)) > 0
     for v in variables:
         s = synchronous_phasor(ds, v) if turning else complex(np.nan, np.nan)
         out[f"amplitude1x_{v}"] = abs(s)
