@@ -13,6 +13,7 @@ from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, 
 from analysis.cli import explore, cite  # noqa: F401
 from analysis.cli import attractors  # noqa: F401  (global dynamics: basins, attractors)
 from analysis.cli import frequency  # noqa: F401  (harmonic balance: hb)
+from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
 # isort: on
 
 __all__ = ["app", "main"]

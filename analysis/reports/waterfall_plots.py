@@ -1,0 +1,102 @@
+"""Figures of run-ups: the waterfall (short-time spectra against speed) with its named
+order lines, and the order spectrum (``analysis.signal.waterfall``, ``analysis.signal.orders``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from analysis.reports import canvas as plt
+from analysis.reports.plots import display_label, run_title, unit_scale
+from analysis.signal.orders import order_lines
+
+_SHAFT_COLOUR, _FAULT_COLOUR = "white", "#ffb000"
+DYNAMIC_RANGE_DB = 60.0
+"""Colours span this many dB below the largest amplitude of the waterfall."""
+
+
+def _f_max(wf: xr.Dataset) -> float:
+    """Top of the frequency axis (Hz): 1.1 × the highest named line at the highest speed,
+    at most the spectra's top."""
+    lines = wf["line_hz"].values
+    top = float(np.max(lines)) * 1.1 if lines.size else float(wf["frequency"].values[-1])
+    return min(top, float(wf["frequency"].values[-1]))
+
+
+def plot_waterfall(ax, wf: xr.Dataset) -> None:
+    """The waterfall on ``ax``: amplitude in dB (colour) over frequency (Hz) and speed
+    (rpm), each named line dashed and labelled at the top."""
+    amp = wf["amplitude"].values
+    ref = float(amp.max()) if amp.max() > 0 else 1.0
+    db = 20 * np.log10(np.maximum(amp / ref, 10 ** (-DYNAMIC_RANGE_DB / 20)))
+    f = wf["frequency"].values
+    speed = wf["speed_rpm"].values
+    f_max = _f_max(wf)
+    keep = f <= f_max
+    mesh = ax.pcolormesh(f[keep], speed, db[:, keep], shading="nearest", cmap="viridis",
+                         vmin=-DYNAMIC_RANGE_DB, vmax=0.0, rasterized=True)
+    cbar = ax.figure.colorbar(mesh, ax=ax, pad=0.01)
+    scale, unit = unit_scale(str(wf.attrs.get("units", "")))
+    cbar.set_label(f"amplitude, dB re {ref * scale:.3g} {unit}")
+    for name, kind, line in zip(wf["line"].values, wf["line_kind"].values,
+                                wf["line_hz"].values, strict=True):
+        if line[-1] > f_max and line[0] > f_max:
+            continue
+        colour = _FAULT_COLOUR if kind == "fault" else _SHAFT_COLOUR
+        ax.plot(line, speed, ls="--", lw=0.7, color=colour, alpha=0.8)
+        top = np.argmax(speed) if line[np.argmax(speed)] <= f_max else \
+            int(np.nonzero(line <= f_max)[0][-1])
+        ax.annotate(display_label(str(name)), (line[top], speed[top]), xytext=(0, 3),
+                    textcoords="offset points", rotation=90, fontsize=7, color=colour,
+                    ha="center", va="bottom", annotation_clip=False,
+                    bbox={"boxstyle": "round,pad=0.1", "fc": "black", "alpha": 0.4,
+                          "lw": 0})
+    ax.set_xlim(0, f_max)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("speed (rpm)")
+    ax.set_title(f"waterfall of {wf.attrs.get('variable', '')}: window "
+                 f"{float(wf.attrs['window_s']) * 1e3:.3g} ms, bin "
+                 f"{float(wf.attrs['bin_hz']):.3g} Hz; lines: orders (white), defect "
+                 "orders (amber)", fontsize=9, pad=44)
+
+
+def plot_orders(ax, spectrum: xr.DataArray, max_order: float | None = None) -> None:
+    """An order spectrum on ``ax``: amplitude (µm for m) over order (cycles/rev), each
+    named line a dotted vertical line, labelled."""
+    scale, unit = unit_scale(str(spectrum.attrs.get("units", "")))
+    order = spectrum["order"].values
+    lines = order_lines(spectrum.attrs)
+    top = max_order or max((line.order for line in lines), default=10.0) * 1.1
+    keep = order <= top
+    ax.plot(order[keep], spectrum.values[keep] * scale, lw=0.8, color="C0")
+    peak = float(spectrum.values[keep][1:].max() * scale) if keep.sum() > 1 else 1.0
+    for line in lines:
+        if line.order > top:
+            continue
+        colour = "C3" if line.kind == "fault" else "0.4"
+        ax.axvline(line.order, ls=":", lw=0.7, color=colour)
+        ax.annotate(display_label(line.name), (line.order, peak), xytext=(2, 0),
+                    textcoords="offset points", rotation=90, fontsize=7, color=colour,
+                    va="top")
+    ax.set_xlim(0, top)
+    ax.set_ylim(0, peak * 1.25)
+    ax.set_xlabel("order (cycles per shaft revolution)")
+    ax.set_ylabel(f"{spectrum.attrs.get('variable', '')} amplitude ({unit})")
+    ax.set_title(f"order spectrum: {int(spectrum.attrs['samples_per_rev'])} samples/rev, "
+                 f"bin {float(spectrum.attrs['order_bin']):.3g} orders", fontsize=9)
+
+
+def waterfall_figure(wf: xr.Dataset, orders: xr.DataArray | None = None) -> Figure:
+    """The waterfall of ``wf`` and, with ``orders``, the order spectrum below it."""
+    rows = 2 if orders is not None else 1
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 5.5 + 3.2 * (rows - 1)), layout="constrained",
+                             squeeze=False,
+                             gridspec_kw={"height_ratios": [5, 3][:rows]})
+    plot_waterfall(axes[0][0], wf)
+    if orders is not None:
+        plot_orders(axes[1][0], orders)
+    fig.suptitle(run_title(wf), fontsize=10)
+    plt.stamp(fig, wf)
+    return fig

@@ -1,0 +1,234 @@
+"""Order tracking: a run resampled in shaft angle, and its spectrum in orders.
+
+In a run-up (a run whose speed follows a profile, ``analysis.integrate.speed_profile``) every
+line that turns with the shaft (X, 2X, VC, VC±X, the defect frequencies) sweeps in
+frequency, but keeps its *order*, its number of cycles per shaft revolution. Sampling the
+record at equal steps of the shaft angle φ(t) = ∫ω dt instead of equal steps of time makes
+those lines stand still: the spectrum of the resampled record has them at fixed orders.
+
+Resampling: the angle grid φ_k = φ(t_0) + k·2π/S (S samples per revolution) is mapped to
+times t_k = φ⁻¹(φ_k), exactly from the profile (``SpeedProfile.time_at_angle``: the angle is
+piecewise quadratic in t), and the record is interpolated at t_k by a cubic spline through
+its samples (error O((ω_max·dt)⁴) of the amplitude at the highest order kept). The order
+spectrum is the Hann amplitude spectrum of the resampled record (the scaling of
+``analysis.signal.spectrum.amplitude_spectrum``: a line of amplitude A shows height A), over
+orders in bins of 1/(revolutions in the record). A constant-speed run can be order-tracked
+too (φ = 2π·X·t): its order spectrum is its spectrum divided by X.
+
+Named order lines: the combinations m·X + n·VC (named by
+``analysis.signal.spectrum.frequency_names``) and the defect frequencies FTF, BPFO (= VC
+with a stationary outer race), BPFI and BSF of each bearing, each at the order its frequency
+has at t = 0 (the run's attrs): every characteristic frequency is proportional to the speed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.interpolate
+import scipy.signal
+import xarray as xr
+
+from analysis.errors import InputError
+from analysis.integrate.speed_profile import SpeedProfile, profile_of
+from analysis.provenance import displacement_names, vc_frequencies
+from analysis.signal.spectrum import FAULT_NAMES, fault_frequencies, frequency_names
+
+
+@dataclass(frozen=True)
+class OrderLine:
+    """A named line that turns with the shaft: ``name`` (X, 2X, VC, VC-X, BPFI, …) at
+    ``order`` cycles per revolution; ``kind`` is ``"shaft"`` (m·X + n·VC) or ``"fault"``."""
+
+    name: str
+    order: float
+    kind: str = "shaft"
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "order": self.order, "kind": self.kind}
+
+
+def shaft_order_base(attrs) -> float:
+    """The shaft frequency X (Hz) at t = 0 of a run (``shaft_hz``), which every order is
+    relative to; ``InputError`` for a run without a turning shaft."""
+    shaft = float(attrs.get("shaft_hz", 0.0))
+    if not shaft > 0:
+        raise InputError("orders: the run has no turning shaft (shaft_hz 0); orders are "
+                         "cycles per shaft revolution")
+    return shaft
+
+
+def order_lines(attrs, max_order: float = 12.0, max_shaft_order: int = 2,
+                max_vc_order: int = 2, faults: bool = True) -> list[OrderLine]:
+    """The named lines of a run up to ``max_order``: m·X + n·VC with |m| ≤
+    ``max_shaft_order`` and n ≤ ``max_vc_order`` (names as in spectra: X, 2X, VC, VC-X,
+    VC+X, 2VC, VC[left]…), then with ``faults`` each bearing's FTF, BPFI and BSF (BPFO is
+    VC for a stationary outer race: named VC), by increasing order."""
+    shaft = shaft_order_base(attrs)
+    vcs = vc_frequencies(attrs)
+    lines: dict[str, OrderLine] = {}
+    vc_list = [(b, f) for b, f in vcs.items() if f > 0] or [("", 0.0)]
+    for bearing, vc in vc_list:
+        for n in range(max_vc_order + 1 if vc > 0 else 1):
+            for m in range(-max_shaft_order, max_shaft_order + 1):
+                f = m * shaft + n * vc
+                if not f > 0 or f / shaft > max_order:
+                    continue
+                names = frequency_names(f, shaft, {bearing: vc} if vc > 0 else 0.0,
+                                        tol_hz=1e-9 * f, max_shaft_order=max_shaft_order,
+                                        max_vc_order=max_vc_order)
+                if names and names[0][0] not in lines:
+                    lines[names[0][0]] = OrderLine(names[0][0], f / shaft)
+    if faults:
+        for bearing, table in fault_frequencies(dict(attrs)).items():
+            for key in FAULT_NAMES:
+                f = table.get(key, 0.0)
+                if key == "BPFO" or not f > 0 or f / shaft > max_order:
+                    continue
+                name = f"{key}[{bearing}]" if bearing else key
+                lines.setdefault(name, OrderLine(name, f / shaft, "fault"))
+    return sorted(lines.values(), key=lambda line: line.order)
+
+
+def shaft_angle(ds: xr.Dataset) -> np.ndarray:
+    """The shaft angle φ (rad) at each sample of a run: ∫ω dt of its speed profile, or
+    2π·X·t at constant speed (t from the run's start at t = 0)."""
+    t = np.asarray(ds["t"].values, dtype=float)
+    profile = profile_of(ds.attrs)
+    if profile is not None:
+        return profile.shaft_angle(t, _duration(ds))
+    return 2 * math.pi * shaft_order_base(ds.attrs) * t
+
+
+def _duration(ds: xr.Dataset) -> float:
+    return float(ds.attrs.get("duration", float(ds["t"].values[-1])))
+
+
+def _profile_or_constant(ds: xr.Dataset) -> SpeedProfile:
+    profile = profile_of(ds.attrs)
+    if profile is not None:
+        return profile
+    return SpeedProfile("ramp", (float(ds.attrs.get("speed_rpm", 0.0)),) * 2)
+
+
+def default_samples_per_rev(ds: xr.Dataset) -> int:
+    """Samples per revolution of the angle grid: as many as the record has per revolution
+    at its highest speed (even, >= 8), so no part of the record is sampled more coarsely
+    in angle than it was in time."""
+    t = np.asarray(ds["t"].values, dtype=float)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    profile = _profile_or_constant(ds)
+    top = max(profile.rpm) / 60.0  # Hz
+    return max(8, 2 * int(1.0 / (dt * top) // 2))
+
+
+def angle_resample(ds: xr.Dataset, var: str | None = None,
+                   samples_per_rev: int | None = None) -> xr.DataArray:
+    """``ds[var]`` (default: the first displacement) at equal steps of the shaft angle:
+    ``samples_per_rev`` per revolution (default: ``default_samples_per_rev``) from the
+    record's first sample to its last. Coordinate ``revolution`` (shaft turns since t = 0)
+    and, along it, the times ``t`` (s) of the samples."""
+    var = displacement_names(ds)[0] if var is None else var
+    if var not in ds.data_vars:
+        raise InputError(f"--var: no state variable {var!r} in this run; variables: "
+                         f"{', '.join(map(str, ds.data_vars))}")
+    samples_per_rev = default_samples_per_rev(ds) if samples_per_rev is None \
+        else samples_per_rev
+    if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, (int, np.integer)) \
+            or samples_per_rev < 4:
+        raise InputError(f"--samples-per-rev: must be an integer >= 4, got {samples_per_rev!r}")
+    t = np.asarray(ds["t"].values, dtype=float)
+    values = np.asarray(ds[var].values, dtype=float)
+    phi = shaft_angle(ds)
+    step = 2 * math.pi / samples_per_rev
+    count = math.floor((phi[-1] - phi[0]) / step * (1 + 1e-12)) + 1
+    if count < 16:
+        raise InputError(f"orders: the record holds {(phi[-1] - phi[0]) / (2 * math.pi):.3g} "
+                         "shaft revolutions; order tracking needs several")
+    grid = phi[0] + step * np.arange(count)
+    profile = profile_of(ds.attrs)
+    if profile is not None:
+        times = profile.time_at_angle(grid, _duration(ds))
+    else:
+        times = grid / (2 * math.pi * shaft_order_base(ds.attrs))
+    times = np.clip(times, t[0], t[-1])
+    resampled = scipy.interpolate.CubicSpline(t, values)(times)
+    attrs = dict(ds.attrs)
+    attrs.update(units=str(ds[var].attrs.get("units", "")), samples_per_rev=samples_per_rev)
+    return xr.DataArray(resampled, dims="revolution",
+                        coords={"revolution": ("revolution", grid / (2 * math.pi),
+                                               {"units": "rev"}),
+                                "t": ("revolution", times, {"units": "s"})},
+                        name=var, attrs=attrs)
+
+
+def amplitude(values: np.ndarray, window: str = "hann") -> np.ndarray:
+    """The one-sided amplitude spectrum of ``values`` as ``amplitude_spectrum`` scales it:
+    mean removed, ``window`` applied, 2·|rfft|/Σw (DC and Nyquist not doubled). Along the
+    last axis."""
+    values = np.asarray(values, dtype=float)
+    n = values.shape[-1]
+    w = scipy.signal.get_window(window, n)
+    centred = values - values.mean(axis=-1, keepdims=True)
+    out = 2.0 * np.abs(np.fft.rfft(centred * w, axis=-1)) / w.sum()
+    out[..., 0] /= 2.0
+    if n % 2 == 0:
+        out[..., -1] /= 2.0
+    return out
+
+
+def order_spectrum(ds: xr.Dataset, var: str | None = None,
+                   samples_per_rev: int | None = None) -> xr.DataArray:
+    """The order spectrum of ``ds[var]``: the Hann amplitude spectrum (unit of the
+    variable) of the record resampled in shaft angle (``angle_resample``), over
+    ``order`` (cycles per revolution; bin 1/revolutions of the record). A line turning
+    with the shaft stands at its order however the speed changed. attrs: the run's, the
+    ``order_bin`` and the named ``lines`` as text ``name=order`` (``order_lines``)."""
+    resampled = angle_resample(ds, var, samples_per_rev)
+    spr = int(resampled.attrs["samples_per_rev"])
+    spectrum = amplitude(resampled.values)
+    order = np.fft.rfftfreq(resampled.size, d=1.0 / spr)
+    attrs = dict(resampled.attrs)
+    attrs.update(order_bin=float(order[1]), variable=str(resampled.name))
+    return xr.DataArray(spectrum, dims="order",
+                        coords={"order": ("order", order, {"units": "cycles/rev"})},
+                        name=f"{resampled.name}_order_amplitude", attrs=attrs)
+
+
+@dataclass(frozen=True)
+class OrderPeak:
+    """A peak of an order spectrum: its ``order``, ``amplitude`` (unit of the variable)
+    and the named line within ``tolerance`` orders (None: unnamed)."""
+
+    order: float
+    amplitude: float
+    name: str | None
+
+    def as_dict(self) -> dict:
+        return {"order": self.order, "amplitude": self.amplitude, "name": self.name}
+
+
+def order_peaks(spectrum: xr.DataArray, max_peaks: int = 8,
+                min_relative_height: float = 0.02,
+                tolerance_bins: float = 1.5) -> list[OrderPeak]:
+    """The ``max_peaks`` largest peaks of an ``order_spectrum`` (height >=
+    ``min_relative_height`` × the largest), each named by the nearest named order line
+    within ``tolerance_bins`` order bins (``order_lines``), by decreasing amplitude."""
+    values = np.asarray(spectrum.values)
+    orders = np.asarray(spectrum["order"].values)
+    search = values[1:]
+    if not search.size or not search.max() > 0:
+        return []
+    found, _ = scipy.signal.find_peaks(search, height=min_relative_height * search.max())
+    found = found[np.argsort(-search[found])][:max_peaks] + 1
+    lines = order_lines(spectrum.attrs, max_order=float(orders[-1]))
+    tol = tolerance_bins * float(spectrum.attrs["order_bin"])
+    out = []
+    for k in found:
+        near = [line for line in lines if abs(line.order - orders[k]) <= tol]
+        near.sort(key=lambda line: abs(line.order - orders[k]))
+        out.append(OrderPeak(float(orders[k]), float(values[k]),
+                             near[0].name if near else None))
+    return out
