@@ -100,6 +100,35 @@ def series_f_max(model, n_balls: Sequence[int], **parameters: float) -> float | 
     return largest([model.frequencies(nb, values).as_dict() for nb in n_balls])
 
 
+def case_verdict(ds, progress=None):
+    """The motion class of one N_b's run ``ds`` (``analysis.stability.classify``) with its
+    largest Lyapunov exponent λ1 (1/s, 95 % interval), averaged over the whole recorded
+    span (the run's duration − transient) from the record's first state, with the run's
+    model, parameters and step: what ``reproduce`` computes for its Table 2. Returns the
+    ``Classification`` (its ``largest_exponent``, ``ci95`` always set)."""
+    from dataclasses import replace
+
+    from analysis.provenance import state_at, system_of_attrs
+    from analysis.stability.classify import classify
+    from analysis.stability.lyapunov import lyapunov
+
+    system = system_of_attrs(ds.attrs, state_at(ds, 0))
+    exps = lyapunov(system, duration=float(ds.attrs["duration"] - ds.attrs["transient"]),
+                    transient=0.0, n_exponents=1, dt=float(ds.attrs["dt"]), progress=progress)
+    verdict = classify(ds, exponents=exps)
+    return replace(verdict, largest_exponent=float(exps.exponents[0]),
+                   ci95=float(exps.ci95[0]))
+
+
+def paper_nature(model: str, n_balls: int) -> str:
+    """The paper's class for ``n_balls`` (Table 2, or its conclusions for N_b = 5), or
+    ``-`` for an N_b it does not report or a model that is not the paper's
+    (``vakharia2015…``)."""
+    if not str(model).startswith("vakharia2015"):
+        return "-"
+    return PAPER_NATURE.get(n_balls, "-")
+
+
 def simulate_case(model, n_balls: int, netcdf: Path, figure: Path,
                   f_max: float | None = None, **kwargs):
     """Simulate one N_b, write its run and its paper figure (spectra up to ``f_max`` Hz and

@@ -11,6 +11,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from analysis.errors import InputError
 from analysis.io import atomic_write
 from analysis.model import load_model
 from analysis.provenance import provenance
@@ -18,18 +19,22 @@ from analysis.reports.paper import (
     PAPER_N_BALLS,
     PAPER_NATURE,
     SENSITIVITY,
+    case_verdict,
     major_name,
     other_peak_names,
+    paper_nature,
     series_f_max,
     simulate_case,
 )
 from analysis.reports.reproduce import Reproduction
 from analysis.signal.spectrum import Peak
+from analysis.stability.classify import Classification
 
 
 @dataclass
 class CaseResult:
-    """One simulated N_b: its files and labelled spectral peaks (x and y)."""
+    """One simulated N_b: its files, labelled spectral peaks (x and y) and motion class
+    (``verdict``, with λ1; None when not computed), beside the paper's (``paper``)."""
 
     n_balls: int
     netcdf: Path
@@ -37,6 +42,21 @@ class CaseResult:
     peaks: dict[str, list[Peak]]
     wall_s: float
     frequencies: dict[str, float] = field(default_factory=dict)
+    verdict: Classification | None = None
+    paper: str = "-"
+    unclassified: str = ""
+    """Why ``verdict`` is None ('' when it was not asked for): e.g. a record too short."""
+
+    def motion(self) -> str:
+        """The class as the table shows it (``-`` when not computed)."""
+        return self.verdict.label if self.verdict else "-"
+
+    def exponent(self) -> str:
+        """λ1 ± its 95 % half-width (1/s) as the table shows it."""
+        v = self.verdict
+        if v is None or v.largest_exponent is None:
+            return "-"
+        return f"{v.largest_exponent:.3g} ± {v.ci95:.2g}"
 
     def major(self, var: str) -> str:
         return major_name(self.peaks[var])
@@ -53,10 +73,13 @@ def run_paper_case(
     duration: float | None = None,
     transient: float | None = None,
     progress: Callable[[str], None] | None = None,
+    classify: bool = True,
     **parameters: float,
 ) -> list[CaseResult]:
-    """Simulate each N_b, save ``nb<N>.nc`` and ``nb<N>.png`` in ``out_dir``, and write
-    ``peaks.md`` and ``peaks.json`` (the peak table). Returns one result per N_b."""
+    """Simulate each N_b, save ``nb<N>.nc`` and ``nb<N>.png`` in ``out_dir``, classify its
+    motion with λ1 over the recorded span (``case_verdict``; ``classify=False``: not), and
+    write ``peaks.md`` and ``peaks.json`` (the table: peaks, the paper's class and ours).
+    Returns one result per N_b."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
@@ -67,27 +90,43 @@ def run_paper_case(
         nc, png = out / f"nb{nb}.nc", out / f"nb{nb}.png"
         ds, peaks = simulate_case(mdl, nb, nc, png, f_max, duration=duration,
                                   transient=transient, **parameters)
+        verdict, why = None, ""
+        if classify:
+            try:
+                verdict = case_verdict(ds)
+            except InputError as exc:  # a record too short for a verdict: said, not fatal
+                why = str(exc).removeprefix("run: ")
         results.append(CaseResult(nb, nc, png, peaks, time.perf_counter() - start,
-                                  {k: ds.attrs[k] for k in ("shaft_hz", "cage_hz", "vc_hz")}))
+                                  {k: ds.attrs[k] for k in ("shaft_hz", "cage_hz", "vc_hz")},
+                                  verdict, paper_nature(mdl.name, nb), why))
         if progress:
-            progress(f"[{i + 1}/{len(n_balls)}] N_b = {nb}: {png} "
+            said = f", {results[-1].motion()} (λ1 = {results[-1].exponent()} 1/s)" \
+                if verdict else (f", not classified: {why}" if why else "")
+            progress(f"[{i + 1}/{len(n_balls)}] N_b = {nb}: {png}{said} "
                      f"({results[-1].wall_s:.1f} s)")
     atomic_write(out / "peaks.md", lambda tmp: tmp.write_text(peak_table_markdown(results)))
     atomic_write(out / "peaks.json", lambda tmp: tmp.write_text(json.dumps(
         [{"n_balls": r.n_balls, **r.frequencies,
           "peaks": {v: [p.as_dict() for p in ps] for v, ps in r.peaks.items()},
+          "paper_nature": r.paper,
+          "classification": r.verdict.as_dict() if r.verdict else None,
+          **({"not_classified": r.unclassified} if r.unclassified else {}),
           "provenance": provenance(r.netcdf)}
          for r in results], indent=2)))
     return results
 
 
 def peak_table_markdown(results: Sequence[CaseResult]) -> str:
-    """The shape of the paper's Table 2 (without the nature-of-response column)."""
-    lines = ["| N_b | VC (Hz) | major peak, x | major peak, y | other peaks, x | other peaks, y |",
-             "|---|---|---|---|---|---|"]
+    """The shape of the paper's Table 2: the peaks, the paper's class of motion (Table 2,
+    ``-`` where it gives none) and this model's (``classify`` with λ1 and its 95 %
+    interval, over the recorded span)."""
+    lines = ["| N_b | VC (Hz) | major peak, x | major peak, y | other peaks, x | other peaks, y "
+             "| class (paper) | class (this model) | λ1 (1/s, 95 %) |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         lines.append(f"| {r.n_balls} | {r.frequencies['vc_hz']:.1f} | {r.major('x')} | "
-                     f"{r.major('y')} | {r.others('x')} | {r.others('y')} |")
+                     f"{r.major('y')} | {r.others('x')} | {r.others('y')} | {r.paper} | "
+                     f"{r.motion()} | {r.exponent()} |")
     return "\n".join(lines) + "\n"
 
 
