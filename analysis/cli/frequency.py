@@ -138,7 +138,7 @@ def points_json(data) -> list[dict]:
             amplitude={str(s): float(a) for s, a in zip(data.state.values,
                                                           data.amplitude.values[j],
                                                           strict=True)},
-            stable=bool(data.stable.values[j]),
+            stable=bool(data.stable.values[j] == 1),  # a torus: -1 not computed
             special=str(data.special.values[j]) if str(data.special.values[j]) in
             ("LP", "PD", "NS") else "",
             residual=plain(float(data.residual.values[j]), finite=True))
@@ -201,4 +201,203 @@ def response_figure(data):
     ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({unit})")
     ax.set_title(f"{data.attrs['model']}: harmonic balance, period {data.attrs['period']}, "
                  f"H = {data.attrs['harmonics']}", fontsize=9)
+    return fig
+
+
+def _as_flag(err: InputError, flag: str, field: str) -> InputError:
+    """``err`` with its leading ``field:`` written as the command's ``flag:``."""
+    text = str(err)
+    return InputError(flag + text[len(field):] if text.startswith(field) else text)
+
+
+@app.command()
+@reports_errors
+def torus(
+    model: ModelArgument,
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the "
+                                         "torus (or branch of tori).", callback=netcdf_output)],
+    frequencies: Annotated[str, typer.Option(
+        "--frequencies", help="Two base frequencies F1,F2: shaft, vc, vc[name] or "
+                              "param:NAME.")] = "shaft,vc",
+    harmonics: Annotated[str, typer.Option(
+        "--harmonics", help="Harmonics H1,H2 of F1 and F2 (each >= 1).")] = "8,4",
+    n_balls: NBallsOption = None,
+    sets: SetOption = None,
+    param: Annotated[str | None, typer.Option(
+        help="Runtime parameter to continue in (with --from and --to).")] = None,
+    start: Annotated[float | None, typer.Option(
+        "--from", help="Start value (parameter unit).")] = None,
+    stop: Annotated[float | None, typer.Option(
+        "--to", help="End value (parameter unit).")] = None,
+    max_points: Annotated[int, typer.Option(help="Points per branch.")] = 100,
+    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
+    lyapunov_duration: Annotated[float, typer.Option(
+        help="Averaging time of λ1 from the torus, s (0: no λ1).")] = 1.0,
+    dt: Annotated[float | None, typer.Option(
+        help="Largest RK4 step of the simulations (guess, λ1, figure), s (default: the "
+             "spec's).")] = None,
+    settle: Annotated[float | None, typer.Option(
+        help="Simulated time before the guess's fit, s (default: the spec's transient)."
+    )] = None,
+    run: Annotated[Path | None, typer.Option(
+        help="Also write a run sampled from the (last) torus, readable by spectrum, "
+             "poincare and plot.", callback=netcdf_output)] = None,
+    duration: Annotated[float, typer.Option(
+        help="Length of the --run series and of the figure's time run, s.")] = 2.0,
+    plot: Annotated[Path | None, typer.Option(
+        help="Figure: the torus's shaft section u(0, θ2) against the Poincaré section of a "
+             "time run.", callback=figure_output)] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    as_json: JsonOption = False,
+):
+    """Quasi-periodic response on a 2-torus by harmonic balance with two base frequencies
+    (2-D AFT, exact Jacobian by CasADi AD) and its λ1; with --param, --from and --to its
+    continuation, and where and why it stops."""
+    from analysis.frequency.harmonic import check_forced
+    from analysis.frequency.torus import (
+        check_frequencies,
+        check_torus_harmonics,
+        parse_frequencies,
+    )
+    from analysis.model import as_system
+
+    values = parse_sets(sets)
+    continued = [name for name, value in (("--param", param), ("--from", start),
+                                          ("--to", stop)) if value is not None]
+    if continued and len(continued) < 3:
+        missing = [n for n in ("--param", "--from", "--to") if n not in continued]
+        raise InputError(f"{continued[0]}: continuation needs --param, --from and --to; "
+                         f"give {', '.join(missing)}")
+    if not (lyapunov_duration >= 0 and np.isfinite(lyapunov_duration)):
+        raise InputError(f"--lyapunov-duration: must be a finite number >= 0 s, got "
+                         f"{lyapunov_duration!r}")
+    if not (duration > 0 and np.isfinite(duration)):
+        raise InputError(f"--duration: must be a finite number > 0 s, got {duration!r}")
+    system = as_system(model, parse_n_balls(n_balls), **values)
+    try:
+        pair = check_torus_harmonics(harmonics, system.n_state, "--harmonics")
+        freqs = parse_frequencies(frequencies, system.model)
+    except InputError as err:
+        raise _as_flag(err, "--frequencies", "frequencies") from None
+    end = None
+    if param is not None:
+        if param not in system.model.parameter_names:
+            raise InputError(f"--param: '{param}' is not a parameter of "
+                             f"'{system.model.name}'; choose one of "
+                             f"{', '.join(system.model.parameter_names)}")
+        system.model.parameters({param: start})
+        system.model.parameters({param: stop})
+        if start == stop:
+            raise InputError("--to: must differ from --from")
+        end = system.replace(**{param: stop})
+        system = system.replace(**{param: start})
+    check_forced(system)
+    try:
+        for s in (system, end) if end is not None else (system,):
+            check_frequencies(s, freqs, pair)
+    except InputError as err:
+        raise _as_flag(err, "--frequencies", "frequencies") from None
+
+    def say(text: str) -> None:
+        if not quiet:
+            typer.echo(text, err=True)
+
+    options = given_options(dt=dt, settle=settle)
+    stability = lyapunov_duration > 0
+    if param is None:
+        from analysis.frequency.torus_dataset import torus_dataset
+        from analysis.frequency.torus_solve import solve_torus
+
+        response = solve_torus(system, None, freqs, pair, stability=stability,
+                               lyapunov_duration=lyapunov_duration or 1.0, **options)
+        if not response.converged:
+            raise InputError(f"torus: no torus found ({response.message})")
+        data = torus_dataset(response)
+    else:
+        from analysis.frequency.torus_continuation import continue_torus
+
+        data = continue_torus(system, None, param=param, start=start, stop=stop,
+                              frequencies=freqs, harmonics=pair, max_points=max_points,
+                              ds_max=ds_max, stability=stability,
+                              lyapunov_duration=lyapunov_duration or 1.0, progress=say,
+                              **options)
+    from analysis.io import save_dataset
+
+    save_dataset(data, output)
+    if run:
+        from analysis.frequency.torus_dataset import torus_run
+
+        save_dataset(torus_run(data, duration, dt), run)
+    if not as_json:
+        _print_torus(data, output, run)
+    if plot:
+        write_figure(torus_figure(data, duration, dt), plot, err=as_json)
+    if as_json:
+        from analysis.provenance import provenance
+
+        out = {"points": points_json(data), "file": str(output),
+               "provenance": provenance(output)}
+        if "stop_report" in data.attrs:
+            out["stop_report"] = str(data.attrs["stop_report"])
+        typer.echo(json.dumps(out, indent=2))
+
+
+def _print_torus(data, output: Path, run: Path | None) -> None:
+    param = data.attrs.get("param", "")
+    lam = data.lambda1.values
+    head = (f"wrote {output}: torus {data.attrs['frequencies']}, H = "
+            f"{data.attrs['harmonics']}, ")
+    if not param:
+        amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
+            data.state.values, data.amplitude.values[0], data.state_units.values,
+            strict=True))
+        typer.echo(head + f"residual {float(data.residual.values[0]):.2e} (finer grid "
+                   f"{float(data.residual_fine.values[0]):.2e}), lambda1 "
+                   f"{float(lam[0]):.4g} ± {float(data.lambda1_ci95.values[0]):.2g} 1/s; "
+                   f"amplitude {amp}")
+    else:
+        typer.echo(head + f"{data.sizes['point']} tori")
+        typer.echo(str(data.attrs["stop_report"]))
+    if run:
+        typer.echo(f"wrote {run}")
+
+
+def torus_figure(data, duration: float, dt: float | None = None):
+    """The shaft section of the (last) torus, u(0, θ2) for θ2 in [0, 2π), against the
+    Poincaré section (shaft) of a time run of the same system from a state on the torus,
+    in the first two states."""
+    from matplotlib.figure import Figure
+
+    from analysis.frequency.torus_dataset import torus_of
+    from analysis.integrate.simulate import simulate
+    from analysis.reports.plots import scale_of
+    from analysis.signal.poincare import poincare_section
+
+    ts, coeffs = torus_of(data, -1)
+    phi = np.linspace(0, 2 * np.pi, 721)
+    curve = ts.basis.evaluate(coeffs, np.zeros_like(phi), phi, ts.n)
+    z0 = ts.at_times(coeffs, np.array([0.0]))[0]
+    settle = float(ts.system.model.simulation_defaults["transient"])
+    ds = simulate(ts.system.replace(state=z0), duration=settle + max(duration, 2.0),
+                  transient=settle, dt=dt)
+    sec = poincare_section(ds, "shaft")
+    a, b = ts.system.state_names[:2]
+    fa, ua = scale_of(ds, a)
+    fb, ub = scale_of(ds, b)
+    fig = Figure(figsize=(6.5, 5.5), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot(sec[a].values * fa, sec[b].values * fb, ".", ms=3, color="C1",
+            label=f"Poincaré section of a time run ({len(sec[a])} revolutions)")
+    ax.plot(curve[:, 0] * fa, curve[:, 1] * fb, "-", color="C0", lw=1.2,
+            label=f"torus section u(0, θ2), H = {data.attrs['harmonics']}")
+    ax.set_xlabel(f"{a} ({ua})")
+    ax.set_ylabel(f"{b} ({ub})")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    where = ""
+    param = data.attrs.get("param", "")
+    if param:
+        where = f", {param} = {float(data[param].values[-1]):.6g}"
+    ax.set_title(f"{data.attrs['model']}: torus {data.attrs['frequencies']} at the shaft "
+                 f"section (t = k/X){where}", fontsize=9)
     return fig

@@ -126,7 +126,7 @@ def tori_dataset(ts: TorusSystem, coefficients: np.ndarray, params: list[np.ndar
         "residual_fine": ("point", np.asarray(residual_fine, dtype=float),
                           {"long_name": "max |R_i| / (w1 s_i) of the same coefficients on a "
                                         "grid twice as fine in each hyper-time"}),
-        "tail": ("point", np.asarray(tails, dtype=float),
+        "border": ("point", np.asarray(tails, dtype=float),
                  {"long_name": "largest harmonic on the border of the set / largest "
                                "harmonic (states scaled)"}),
         "lambda1": ("point", lam, {"units": "1/s", "long_name": "largest Lyapunov exponent "

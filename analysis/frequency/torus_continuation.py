@@ -1,0 +1,256 @@
+"""Continuation of tori in a runtime parameter, and an honest report of where it stops.
+
+The branch problem ``TorusBranchProblem`` is ``continuation.HarmonicBranchProblem`` for the
+torus equations: unknowns w = (X / s_X, λ / s_λ), equations G = R(X, λ) / (ω1,0 s_i). Its
+monodromy is empty (a torus has no Floquet multipliers; its stability is λ1, computed at
+the converged points only), so the periodic branch's step (``continuation._step``: Keller's
+bordered Newton, the same ``StepGuards`` in the same words, folds where the tangent's λ
+component flips) runs unchanged, and its PD, BP and NS tests never fire.
+
+The continuation stops at the end of the range, after ``max_points``, or when a step is
+refused or fails down to ``ds_min``. Then ``stop_report`` says why, in numbers: the last
+converged parameter value; the growth of the truncation measures (``torus_solve``:
+``residual_fine``, ``tail``) from the first point to the last; the scaled residual of the
+predictor of the last, smallest step tried (how far the torus moved); and λ1 along the
+branch (a torus whose λ1 approaches 0 loses its attraction: it breaks up or bifurcates).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from analysis.errors import InputError
+from analysis.frequency.continuation import _step
+from analysis.frequency.harmonic import blas_threads
+from analysis.frequency.torus import TorusSystem, check_frequencies
+from analysis.frequency.torus_dataset import tori_dataset
+from analysis.frequency.torus_solve import (
+    prepare_torus,
+    solve_torus,
+    torus_lambda1,
+    truncation,
+)
+from analysis.model import BallCounts, Model, System, as_system
+from analysis.stability.continuation.options import (
+    ContinuationOptions,
+    StepGuards,
+    options_with,
+)
+from analysis.stability.continuation.problem import branch_point, newton, scaled
+
+Progress = Callable[[str], None] | None
+
+
+@dataclass
+class TorusBranchProblem:
+    """Tori of ``ts`` as parameter number ``param_index`` varies, the others at ``values``;
+    scales ``state_scale`` (per state), ``s_lam`` (the parameter's unit) and ``omega_ref``
+    (rad/s)."""
+
+    ts: TorusSystem
+    param_index: int
+    values: dict[str, float]
+    state_scale: np.ndarray
+    s_lam: float
+    omega_ref: float
+    s_z: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.s_z = np.tile(self.state_scale, self.ts.basis.size)
+
+    @property
+    def model(self) -> Model:
+        return self.ts.system.model
+
+    @property
+    def param_name(self) -> str:
+        return self.model.parameter_names[self.param_index]
+
+    @property
+    def n(self) -> int:
+        return self.ts.size
+
+    def p(self, lam: float) -> np.ndarray:
+        p = self.model.parameter_vector(self.values)
+        p[self.param_index] = lam
+        return p
+
+    def residual(self, w: np.ndarray):
+        """G(w), its Jacobian (n M × (n M + 1)) and an empty monodromy."""
+        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
+        r, jac, along = self.ts.evaluate(x, self.p(lam), self.param_index)
+        unit = self.omega_ref * self.s_z
+        jx = jac * (self.s_z[None, :] / unit[:, None])
+        return r / unit, np.column_stack([jx, along * self.s_lam / unit]), np.zeros((0, 0))
+
+    def residual_norm(self, w: np.ndarray) -> float:
+        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
+        r = self.ts.residual(x, self.p(lam))
+        return float(np.max(np.abs(r / (self.omega_ref * self.s_z))))
+
+    def amplitude(self, w: np.ndarray) -> float:
+        """(max − min)/2 of the first state over the grid (its unit)."""
+        z = self.ts.on_grid(w[:-1] * self.s_z)[..., 0]
+        return float(np.ptp(z) / 2)
+
+
+def continue_torus(
+    system: System | Model | str | Path,
+    n_balls: BallCounts = None,
+    *,
+    param: str,
+    start: float,
+    stop: float,
+    frequencies: str | tuple = "shaft,vc",
+    harmonics: tuple[int, int] | str = (8, 4),
+    samples: tuple[int, int] | None = None,
+    shear: int = 0,
+    dt: float | None = None,
+    settle: float | None = None,
+    stability: bool = True,
+    lyapunov_duration: float = 1.0,
+    ds: float | None = None,
+    ds_min: float | None = None,
+    ds_max: float | None = None,
+    max_points: int | None = None,
+    tol: float | None = None,
+    guards: StepGuards | None = None,
+    options: ContinuationOptions | None = None,
+    progress: Progress = None,
+    **parameters: float,
+) -> xr.Dataset:
+    """Continue the torus of ``frequencies`` with ``harmonics`` in ``param`` from ``start``
+    towards ``stop`` (the parameter's unit); λ1 at every point with ``stability``
+    (``lyapunov_duration`` s each). The first torus is ``solve_torus`` at ``start``.
+    ``options`` and its keywords as in ``continue_harmonic``. Returns the branch Dataset
+    (``tori_dataset`` with the parameter along ``point``) whose attrs ``status`` and
+    ``stop_report`` say where and why it stopped."""
+    options = options_with(options, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                           max_points=max_points, tol=tol, guards=guards)
+    system = as_system(system, n_balls, **parameters)
+    model = system.model
+    if param not in model.parameter_names:
+        raise InputError(f"param: '{param}' is not a parameter of '{model.name}'; "
+                         f"choose one of {', '.join(model.parameter_names)}")
+    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise InputError(f"stop: must be finite and differ from start, got {start!r}, "
+                         f"{stop!r}")
+    model.parameters({param: stop})
+    system = system.replace(**{param: start})
+    system, freqs, pair = prepare_torus(system, frequencies, harmonics)
+    check_frequencies(system, freqs, pair, system.replace(**{param: stop}).p)
+    first = solve_torus(system, None, freqs, pair, samples=samples, shear=shear, dt=dt,
+                        settle=settle, stability=False)
+    if not first.converged:
+        raise InputError(f"start: no torus found at {param} = {start:g} ({first.message})")
+    ts = first.torus
+    prob = TorusBranchProblem(ts, model.parameter_names.index(param),
+                              dict(first.system.parameters), first.scale,
+                              abs(stop - start), ts.basis_omegas()[0])
+    with blas_threads():
+        branch, status, tried = trace_torus_branch(prob, first.coefficients, stop, options,
+                                                   progress)
+    lam1 = np.full((len(branch), 2), np.nan)
+    fine = np.array([truncation(ts, pt.z0, prob.state_scale, prob.p(pt.lam)) for pt in branch])
+    if stability:
+        for j, pt in enumerate(branch):
+            lam1[j] = torus_lambda1(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
+            if progress:
+                progress(f"lambda1 at {param} = {pt.lam:.6g}: {lam1[j, 0]:.4g} 1/s")
+    residuals = [prob.residual_norm(np.concatenate([pt.z0 / prob.s_z, [pt.lam / prob.s_lam]]))
+                 for pt in branch]
+    report = stop_report(prob, branch, status, fine, lam1[:, 0], tried)
+    values = {k: v for k, v in prob.values.items() if k != param}
+    data = tori_dataset(
+        ts, np.array([pt.z0 for pt in branch]), [prob.p(pt.lam) for pt in branch],
+        np.array(residuals), fine[:, 0], fine[:, 1], lam1[:, 0], lam1[:, 1],
+        [pt.special for pt in branch], prob.state_scale,
+        variables={param: ("point", np.array([pt.lam for pt in branch]),
+                           {"units": model.units[param]}),
+                   "newton_iterations": ("point", np.array([pt.newton_iterations
+                                                            for pt in branch])),
+                   "ds": ("point", np.array([pt.ds for pt in branch]))},
+        param=param, param_scale=prob.s_lam, status=status, stop_report=report,
+        last_converged=float(branch[-1].lam))
+    data.attrs.update({k: v for k, v in values.items()})
+    data.attrs.pop(param, None)
+    return data
+
+
+def trace_torus_branch(prob: TorusBranchProblem, coeffs: np.ndarray, stop: float,
+                       options: ContinuationOptions, progress: Progress = None):
+    """The branch points from ``coeffs`` towards ``stop``, the status, and the scaled
+    residual of the last predictor tried (NaN when no step failed)."""
+    param, lam0 = prob.param_name, prob.values[prob.param_name]
+    direction = math.copysign(1.0, stop - lam0)
+    w = np.concatenate([coeffs / prob.s_z, [lam0 / prob.s_lam]])
+    out = newton(prob, w, np.eye(prob.n + 1)[-1], options.tol)
+    if out is None:
+        raise InputError(f"start: the torus at {param} = {lam0:g} does not converge again "
+                         "in the branch's unknowns")
+    first = branch_point(prob, out.w, out.jac, out.mono, None, direction, out.iterations)
+    first.ds = options.first_ds
+    branch, ds = [first], first.ds
+    lo, hi = min(lam0, stop), max(lam0, stop)
+    status, tried = "reached the end of the range", math.nan
+    while len(branch) < options.max_points:
+        prev = branch[-1]
+        result = _step(prob, prev, ds, options.tol, options.guards)
+        if isinstance(result, str):
+            tried = prob.residual_norm(scaled(prob, prev) + ds * prev.tangent)
+            ds /= 2
+            if ds < options.ds_min:
+                status = (f"no convergence down to ds_min = {options.ds_min:g} from "
+                          f"{param} = {prev.lam:.8g}" if result == "no convergence" else
+                          f"refused every step down to ds_min = {options.ds_min:g} from "
+                          f"{param} = {prev.lam:.8g} ({result})")
+                break
+            continue
+        found, point = result
+        branch.extend(found)
+        branch.append(point)
+        ds = min(ds * 1.5, options.ds_max) if point.newton_iterations <= 3 else \
+            max(ds / 1.5, options.ds_min)
+        point.ds = ds
+        if progress:
+            progress(f"{len(branch)} tori, {param} = {point.lam:.6g}")
+        if not lo <= point.lam <= hi:
+            break
+    else:
+        status = f"stopped after max_points = {options.max_points}"
+    return branch, status, tried
+
+
+def stop_report(prob: TorusBranchProblem, branch: list, status: str, fine: np.ndarray,
+                lambda1: np.ndarray, tried: float) -> str:
+    """Where and why the branch stopped, in one paragraph of numbers."""
+    param, unit = prob.param_name, prob.model.units[prob.param_name]
+    a, b = branch[0], branch[-1]
+    text = (f"{status}. Last converged torus at {param} = {b.lam:.8g} {unit} "
+            f"({len(branch)} points from {a.lam:.8g}). Truncation: residual on the finer "
+            f"grid {fine[0, 0]:.2e} -> {fine[-1, 0]:.2e} (x{fine[-1, 0] / fine[0, 0]:.3g}), "
+            f"border harmonics {fine[0, 1]:.3g} -> {fine[-1, 1]:.3g} of the largest")
+    if math.isfinite(tried):
+        text += f"; the last predictor tried had scaled residual {tried:.2e}"
+    if np.isfinite(lambda1).any():
+        good = lambda1[np.isfinite(lambda1)]
+        text += f"; lambda1 {good[0]:.4g} -> {good[-1]:.4g} 1/s"
+        if good[-1] >= 0:
+            text += " (no longer attracting)"
+    if status.startswith(("no convergence", "refused")):
+        growth = fine[-1, 0] / fine[0, 0]
+        why = ("the torus outgrew its harmonics (the finer-grid residual grew "
+               f"{growth:.3g} times)" if growth > 10 or fine[-1, 1] > 0.3 else
+               "Newton found no torus near the predictor although the harmonics still "
+               "resolve the last one: the torus turns sharply, loses smoothness or "
+               "ceases to exist there")
+        if np.isfinite(lambda1).any() and lambda1[np.isfinite(lambda1)][-1] >= 0:
+            why += "; it had lost its attraction (lambda1 >= 0)"
+        text += f". Why: {why}"
+    return text + "."
