@@ -149,7 +149,7 @@ def spectrum(
     if output:
         from analysis.reports.plots import save_figure, spectrum_figure
 
-        save_figure(spectrum_figure(ds, variables), output)
+        save_figure(spectrum_figure(ds, variables, peaks=peaks), output)
         typer.echo(f"wrote {output}", err=as_json)
 
 

@@ -125,22 +125,11 @@ def _echo_lyapunov(res, data: dict) -> None:
 
 
 def _lyapunov_figure(res):
-    """``lyapunov_figure`` with the running estimates of the discarded tangent transient
-    (dashed, grey span) before the averaging, at the averaged estimates' vertical scale."""
+    """``lyapunov_figure``: it draws the discarded tangent transient too (dashed, grey
+    span) at the averaged estimates' vertical scale."""
     from analysis.reports.plots import lyapunov_figure
 
-    fig = lyapunov_figure(res)
-    if res.sizes.get("t_transient", 0):
-        ax = fig.axes[0]
-        limits = ax.get_ylim()
-        t = res.t_transient.values
-        ax.axvspan(t[0] - (t[1] - t[0] if len(t) > 1 else 0.0), t[-1], color="0.9",
-                   label="tangent transient (discarded)")
-        for k in res.index.values:
-            ax.plot(t, res.transient_running.sel(index=k), ls="--", lw=0.8, color="0.4")
-        ax.set_ylim(limits)
-        ax.legend(fontsize=8)
-    return fig
+    return lyapunov_figure(res)
 
 
 @app.command()

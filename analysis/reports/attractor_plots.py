@@ -15,7 +15,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.reports import canvas as plt
-from analysis.reports.plots import SPECIAL_MARKERS, cell_edges, run_title, scale_of
+from analysis.reports.plots import SPECIAL_MARKERS, cell_edges, run_title, scale_of, scaled_axis
 
 SPECIAL_COLORS = {-1: "#9e9e9e", -2: "#ffffff", -3: "#000000"}
 """Colours of the labels that are not attractors: diverged (grey), undecided (white),
@@ -151,7 +151,7 @@ def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> 
                      edgecolor="k", lw=0.3)
     bottom.set_ylim(0, 1)
     bottom.set_ylabel("basin fraction")
-    bottom.set_xlabel(f"{param} ({unit})" if unit else param)
+    bottom.set_xlabel(f"{param} ({scaled_axis(bottom.xaxis, unit)})" if unit else param)
     bottom.legend(fontsize=8, loc="upper right", title="attractor", title_fontsize=8)
     fig.suptitle(f"{ds.attrs['model']}: attractors along {param} "
                  f"({int(ds.attrs['samples'])} random states per value, "
@@ -184,7 +184,7 @@ def study_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> Figure:
     """The figure of any attractor study file, by its ``kind``."""
     kind = ds.attrs.get("kind")
     if kind == "basins":
-        return basins_figure(ds)
+        return plt.finish(basins_figure(ds), ds)
     if kind == "attractor-continuation":
-        return continuation_figure(ds, branches)
-    return fractions_figure(ds)
+        return plt.finish(continuation_figure(ds, branches), ds)
+    return plt.finish(fractions_figure(ds), ds)

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from analysis.errors import InputError
 from analysis.model import balls_text
 from analysis.reports import canvas as plt
-from analysis.reports.plots import grid_label, unit_scale
+from analysis.reports.plots import grid_axis, unit_scale
 
 
 def phasor_variables(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None,
@@ -87,14 +87,13 @@ def bode_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = 
             bottom.plot(values, np.degrees(lag), **style)
     top.set_ylabel(f"1X amplitude ({unit})")
     bottom.set_ylabel("1X phase lag (degrees)")
-    bottom.set_xlabel(grid_label(ds, param))
+    grid_axis(bottom.xaxis, ds, param)
     for ax in (top, bottom):
         ax.grid(True, alpha=0.3)
     bottom.yaxis.set_major_locator(_degree_locator())
     top.legend(fontsize=8)
     fig.suptitle(_title(ds, "Bode plot"), fontsize=10)
-    plt.fit_titles(fig)
-    return plt.stamp(fig, ds)
+    return plt.finish(fig, ds)
 
 
 def _degree_locator():
@@ -134,8 +133,7 @@ def polar_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None =
     fig.suptitle(_title(ds, "polar plot") + (f"; points named by {param}"
                                              + (f" ({unit_name})" if unit_name else "")),
                  fontsize=10)
-    plt.fit_titles(fig)
-    return plt.stamp(fig, ds)
+    return plt.finish(fig, ds)
 
 
 __all__ = ["bode_figure", "phasor_variables", "polar_figure"]

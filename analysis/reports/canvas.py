@@ -136,3 +136,24 @@ def fit_titles(fig: Figure, margin_px: float = 8.0) -> Figure:
             if title.get_text():
                 fit_text(title, min(max(ax.bbox.width, 0.3 * width), width))
     return fig
+
+
+def no_offsets(fig: Figure) -> Figure:
+    """Turn off the offset ("+1.002e3") of every linear axis of ``fig``: an axis shows its
+    values in the unit its label names, never as an offset or a multiplier of them."""
+    from matplotlib.ticker import ScalarFormatter
+
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            formatter = axis.get_major_formatter()
+            if isinstance(formatter, ScalarFormatter):
+                formatter.set_useOffset(False)
+    return fig
+
+
+def finish(fig: Figure, source: Any) -> Figure:
+    """The last step of every figure function: titles that fit (``fit_titles``), axes
+    without offsets (``no_offsets``), the provenance of ``source`` recorded (``stamp``)."""
+    no_offsets(fig)
+    fit_titles(fig)
+    return stamp(fig, source)

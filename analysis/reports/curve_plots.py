@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 
 from analysis.errors import InputError
 from analysis.reports import canvas as plt  # pyplot's subplots, without pyplot
-from analysis.reports.plots import cell_edges, nature_colormap
+from analysis.reports.plots import cell_edges, nature_colormap, scaled_axis
 from analysis.stability.classify import NATURE_COLORS, NATURE_NAMES
 
 CURVE_STYLES = {"LP": ("C0", "-"), "PD": ("k", "-"), "NS": ("C3", "-")}
@@ -90,8 +90,9 @@ def curve_figure(curves: list[xr.Dataset], chart: xr.Dataset | None = None,
     ax.legend(handles=list(seen.values()), fontsize=8,
               loc="lower left" if outside else "upper right",
               bbox_to_anchor=(1.01, 0.0) if outside else None)
-    ax.set_xlabel(axis_label(curves[0], x))
-    ax.set_ylabel(axis_label(curves[0], y))
+    for axis, name in ((ax.xaxis, x), (ax.yaxis, y)):  # µm for a clearance in m, …
+        unit = str(curves[0][name].attrs.get("units", ""))
+        axis.set_label_text(name + (f" ({scaled_axis(axis, unit)})" if unit else ""))
     if chart is not None:
         ax.set_xlim(float(chart[x].min()), float(chart[x].max()))
         ax.set_ylim(float(chart[y].min()), float(chart[y].max()))
@@ -102,4 +103,4 @@ def curve_figure(curves: list[xr.Dataset], chart: xr.Dataset | None = None,
                                      for c in curves}))
                  + (" over a brute-force stability chart" if chart is not None else ""),
                  fontsize=9)
-    return fig
+    return plt.finish(fig, curves[0])

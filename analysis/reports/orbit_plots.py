@@ -62,8 +62,7 @@ def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> 
     t = ds["t"].values
     fig.suptitle(f"{run_title(ds)}; orbit over t = {float(t[0]):.4g}…{float(t[-1]):.4g} s",
                  fontsize=10)
-    plt.fit_titles(fig)
-    return plt.stamp(fig, ds)
+    return plt.finish(fig, ds)
 
 
 def full_spectrum_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None,
@@ -111,11 +110,11 @@ def full_spectrum_figure(ds: xr.Dataset, x: str | None = None, y: str | None = N
             color="C3")
     ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(run_title(ds) + f"; full spectrum of {x} + i·{y}", fontsize=10)
-    plt.fit_titles(fig)
+    plt.finish(fig, ds)
     from analysis.reports.plots import separate_peak_labels
 
     separate_peak_labels(fig)
-    return plt.stamp(fig, ds)
+    return fig
 
 
 __all__ = ["full_spectrum_figure", "orbit_figure", "plot_orbit"]

@@ -48,6 +48,20 @@ def unit_scale(unit: str) -> tuple[float, str]:
     return _SCALES.get(unit, (1.0, unit))
 
 
+def scaled_axis(axis, unit: str, magnitude: float | None = None) -> str:
+    """Show ``axis`` (of data in SI ``unit``) in the unit of ``unit_scale`` (µm for m, …),
+    by its tick labels: the data stay SI. With ``magnitude`` (the largest |value|, SI)
+    the SI unit is kept for values of a thousandth or more (a Duffing oscillator's metres).
+    Returns the unit shown."""
+    from matplotlib.ticker import FuncFormatter
+
+    factor, shown = unit_scale(unit)
+    if factor == 1.0 or (magnitude is not None and magnitude >= 1e-3):
+        return unit
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v * factor:.6g}"))
+    return shown
+
+
 def scale_of(ds: xr.Dataset, var: str) -> tuple[float, str]:
     """(factor, unit) to draw ``ds[var]`` in: µm for m, mm/s for m/s, µrad for rad, else the
     variable's own unit (from its attrs)."""
@@ -118,14 +132,19 @@ def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
     scale, peaks marked: named peaks (red ▼, label m·X + n·VC; ``*`` when another
     combination matches within the tolerance), unnamed peaks (grey ▽, their frequency in
     grey italics); a legend says which is which. Labels are kept apart by
-    ``separate_peak_labels`` (called by the figure functions once the layout is fixed)."""
+    ``separate_peak_labels`` (called by the figure functions once the layout is fixed).
+    The range reaches ``f_max`` (Hz; default ``f_max_of``) and at least every peak of
+    ``var`` in ``peaks`` (default ``find_peaks``), so a printed peak is always drawn."""
     spec = amplitude_spectrum(ds, var)
     peaks = find_peaks(ds, var) if peaks is None else peaks
-    f_max = f_max or f_max_of(ds.attrs) or float(spec.frequency[-1])
+    nyquist = float(spec.frequency[-1])
+    f_max = f_max or f_max_of(ds.attrs) or nyquist
+    top = max((p.frequency_hz for p in peaks if p.direction == var), default=0.0)
+    f_max = min(max(f_max, 1.06 * top), nyquist)  # every peak of the table is drawn
     factor, unit = scale_of(ds, var)
     sel = spec.sel(frequency=slice(0, f_max))
     ax.semilogy(sel.frequency, sel * factor, lw=0.8, color="C0")
-    shown = [p for p in peaks if p.frequency_hz <= f_max]
+    shown = [p for p in peaks if p.frequency_hz <= f_max and p.direction == var]
     kinds = set()
     for peak in shown:  # by descending amplitude: the larger peaks keep their place
         point = (peak.frequency_hz, peak.amplitude * factor)
@@ -264,21 +283,26 @@ def paper_figure(ds: xr.Dataset, section: str = "shaft", f_max: float | None = N
         axes[row, 0].set_title(f"({'abcdefgh'[row % 8]}) {name}: FFT", fontsize=9)
         plot_poincare(axes[row, 1], ds, var, section)
     fig.suptitle(run_title(ds), fontsize=10)
+    plt.finish(fig, ds)
     separate_peak_labels(fig)
     return fig
 
 
 def spectrum_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None,
-                    f_max: float | None = None) -> Figure:
+                    f_max: float | None = None, peaks: list[Peak] | None = None) -> Figure:
     """Spectra of ``variables`` (default: the first body's displacements) up to ``f_max``
-    (Hz; default: the run's own)."""
+    (Hz; default: the run's own, widened to every peak drawn); ``peaks``: the peaks to
+    mark (default: ``find_peaks`` of each variable; the ``spectrum`` command passes the
+    table it prints, named in its vocabulary)."""
     variables = tuple(variables or displacement_names(ds))
     fig, axes = plt.subplots(len(variables), 1, figsize=(8, 3.25 * len(variables)),
                              layout="constrained", squeeze=False)
     for ax, var in zip(axes[:, 0], variables, strict=True):
-        plot_spectrum(ax, ds, var, f_max=f_max)
+        mine = None if peaks is None else [p for p in peaks if p.direction == var]
+        plot_spectrum(ax, ds, var, mine, f_max=f_max)
         ax.set_title(AXIS_NAMES[var][2] if var in AXIS_NAMES else var, fontsize=9)
     fig.suptitle(run_title(ds), fontsize=10)
+    plt.finish(fig, ds)
     separate_peak_labels(fig)
     return fig
 
@@ -293,7 +317,7 @@ def poincare_figure(ds: xr.Dataset, section: str = "shaft",
     for ax, (var, against) in zip(axes[0], pairs, strict=True):
         plot_poincare(ax, ds, var, section, against)
     fig.suptitle(run_title(ds), fontsize=10)
-    return fig
+    return plt.finish(fig, ds)
 
 
 def save_figure(fig: Figure, path) -> None:
@@ -331,6 +355,16 @@ def grid_label(ds: xr.Dataset, name: str) -> str:
     unit = ds[name].attrs.get("units", ds.attrs.get(f"{name}_unit", "")) or \
         _model_unit(ds.attrs, name)
     return name + (f" ({unit})" if unit else "")
+
+
+def grid_axis(axis, ds: xr.Dataset, name: str) -> None:
+    """Label ``axis`` with the sweep axis ``name`` (``grid_label``) in the unit of
+    ``scaled_axis`` (µm for a clearance in m, …)."""
+    label = grid_label(ds, name)
+    unit = label[len(name) + 2:-1] if label.endswith(")") and "(" in label else ""
+    if unit and not name.startswith("n_balls"):
+        label = f"{name} ({scaled_axis(axis, unit)})"
+    axis.set_label_text(label)
 
 
 def _model_unit(attrs, name: str) -> str:
@@ -374,12 +408,12 @@ def diagram_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None
                       + (f" ({unit})" if unit else ""))
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel(grid_label(ds, param))
+    grid_axis(axes[-1].xaxis, ds, param)
     structure = balls_text(ds.attrs, "$N_b$", "")
     fig.suptitle(f"{ds.attrs['model']}" + (f", {structure}" if structure else "")
                  + f": bifurcation diagram ({ds.sizes['k']} section points per value)",
                  fontsize=10)
-    return fig
+    return plt.finish(fig, ds)
 
 
 def cell_edges(values: np.ndarray, whole: bool = False) -> np.ndarray:
@@ -425,15 +459,14 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     from matplotlib.ticker import MaxNLocator
 
     for ax in axes:
-        ax.set_xlabel(grid_label(ds, xname))
-        ax.set_ylabel(grid_label(ds, yname))
         for axis, name, values in ((ax.xaxis, xname, xs), (ax.yaxis, yname, ys)):
+            grid_axis(axis, ds, name)
             if values.size == 1:
-                axis.set_ticks([float(values[0])], [f"{float(values[0]):g}"])
+                axis.set_ticks([float(values[0])])
             elif name.startswith("n_balls"):
                 axis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{ds.attrs['model']}: stability chart", fontsize=10)
-    return fig
+    return plt.finish(fig, ds)
 
 
 def _mark_multistable(ax, ds: xr.Dataset, xname: str, yname: str, edges) -> Any:
@@ -473,15 +506,16 @@ def sensitivity_figure(ds: xr.Dataset, unit: str = "") -> Figure:
                            aspect="auto")
     fig.colorbar(image, ax=axes[1], label="largest Lyapunov exponent (1/s)")
     axes[1].set_title("largest Lyapunov exponent", fontsize=9)
+    factor, shown = unit_scale(unit)
     for ax in axes:
-        ax.set_xticks(range(len(xs)), [f"{v:.4g}" for v in xs])
+        ax.set_xticks(range(len(xs)), [f"{v * factor:.4g}" for v in xs])
         ax.set_yticks(range(len(ys)), [f"{v:g}" for v in ys])
-        ax.set_xlabel(f"{xname} ({unit})" if unit else xname)
+        ax.set_xlabel(f"{xname} ({shown})" if unit else xname)
         ax.set_ylabel(grid_label(ds, yname) if not yname.startswith("n_balls")
                       else "$N_b$ (balls)")
     fig.suptitle(f"{ds.attrs['model']}: sensitivity to {xname}"
-                 + (f" ({unit}), values tried" if unit else ", values tried"), fontsize=10)
-    return fig
+                 + (f" ({shown}), values tried" if unit else ", values tried"), fontsize=10)
+    return plt.finish(fig, ds)
 
 
 def any_figure(ds: xr.Dataset, variables: list[str] | None = None,
@@ -538,60 +572,138 @@ def branch_figure(branches: list[xr.Dataset]) -> Figure:
                 ax.annotate(str(kind), (lam[j], amp[j]), xytext=(4, 4),
                             textcoords="offset points", fontsize=8)
     first = branches[0]
-    unit = first[first.attrs["param"]].attrs.get("units", "")
-    ax.set_xlabel(f"{first.attrs['param']} ({unit})")
-    ax.set_ylabel("orbit amplitude, half peak-to-peak x (m)")
+    grid_axis(ax.xaxis, first, first.attrs["param"])
+    largest = max(float(np.nanmax(np.abs(br.amplitude.values), initial=0.0))
+                  for br in branches)
+    shown = scaled_axis(ax.yaxis, "m", largest)
+    ax.set_ylabel(f"orbit amplitude, half peak-to-peak x ({shown})")
     ax.plot([], [], "k-", label="stable")
     ax.plot([], [], "k--", label="unstable")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     ax.set_title(f"{first.attrs['model']}: periodic orbits ({first.attrs['period']}) "
                  "continued in " + first.attrs["param"], fontsize=9)
-    return fig
+    return plt.finish(fig, first)
+
+
+def distinct_colours(n: int) -> list:
+    """``n`` colours that tell lines apart: matplotlib's ten for up to 10, else evenly
+    spaced along a perceptual colormap (turbo)."""
+    if n <= 10:
+        return [f"C{i}" for i in range(n)]
+    from matplotlib import colormaps
+
+    cmap = colormaps["turbo"]
+    return [cmap(0.04 + 0.92 * i / (n - 1)) for i in range(n)]
+
+
+def converged_range(running: np.ndarray, ci95: np.ndarray, tail: float = 0.5
+                    ) -> tuple[float, float]:
+    """A vertical range (1/s) for running estimates (time × exponent): that of their last
+    ``tail`` of the averaging and the exponents' 95 % intervals, widened by a quarter of
+    itself (or 1/s when the estimates are flat), so the converged values fill the axes and
+    the first wild swings of the average leave them."""
+    running = np.asarray(running, dtype=float)
+    part = running[int((1 - tail) * running.shape[0]):]
+    finals = running[-1]
+    low = float(np.nanmin([np.nanmin(part), np.nanmin(finals - ci95)]))
+    high = float(np.nanmax([np.nanmax(part), np.nanmax(finals + ci95)]))
+    pad = 0.25 * (high - low) or 1.0
+    return low - pad, high + pad
 
 
 def lyapunov_figure(result: xr.Dataset) -> Figure:
-    """Running estimates of the Lyapunov exponents against time (convergence check)."""
-    fig, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
-    for k in result.index.values:
-        ax.plot(result.t, result.running.sel(index=k),
+    """Running estimates of the Lyapunov exponents against time (convergence check): one
+    distinct colour per exponent, the legend beside the axes, the vertical range set by the
+    converged values (``converged_range``), the sum rule under the title. A result with
+    its tangent transient (``t_transient``) shows it dashed, in a grey span, at the same
+    scale."""
+    index = result.index.values
+    colours = distinct_colours(len(index))
+    fig, ax = plt.subplots(figsize=(9.5 if len(index) > 4 else 8.5, 4.8),
+                           layout="constrained")
+    if result.sizes.get("t_transient", 0):
+        t = result.t_transient.values
+        ax.axvspan(t[0] - (t[1] - t[0] if len(t) > 1 else 0.0), t[-1], color="0.92",
+                   label="tangent transient (discarded)")
+        for k, colour in zip(index, colours, strict=True):
+            ax.plot(t, result.transient_running.sel(index=k), ls="--", lw=0.7,
+                    color=colour, alpha=0.6)
+    for k, colour in zip(index, colours, strict=True):
+        ax.plot(result.t, result.running.sel(index=k), color=colour, lw=1.1,
                 label=f"λ{k} = {float(result.exponents.sel(index=k)):.4g} ± "
                       f"{float(result.ci95.sel(index=k)):.2g} 1/s")
     ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_ylim(*converged_range(result.running.transpose("t", "index").values,
+                                 result.ci95.values))
     ax.set_xlabel("t (s)")
     ax.set_ylabel("running estimate (1/s)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     ax.grid(True, alpha=0.3)
-    ax.set_title(run_title(result) + f"; Σλ = {result.attrs['sum_of_exponents']:.5g}, "
-                 f"mean divergence {result.attrs['mean_divergence']:.5g} 1/s", fontsize=8)
-    return fig
+    ax.set_title(run_title(result) + f"\nΣλ = {result.attrs['sum_of_exponents']:.5g} 1/s, "
+                 f"mean divergence {result.attrs['mean_divergence']:.5g} 1/s", fontsize=9)
+    return plt.finish(fig, result)
+
+
+def _pitch_text(ds: xr.Dataset, pitch: float) -> str:
+    """'one ball pitch 2π/N_b = 45°' (one bearing) or 'the common pitch 2π/gcd(8, 10) =
+    180°' (several)."""
+    balls = [int(v) for k, v in ds.attrs.items() if str(k).startswith("n_balls")]
+    degrees = f"{math.degrees(pitch):.4g}°"
+    if len(balls) == 1:
+        return f"one ball pitch 2π/N_b = 2π/{balls[0]} = {degrees}"
+    if balls:
+        return (f"the common pitch 2π/gcd({', '.join(map(str, balls))}) = {degrees}")
+    return f"one pitch = {degrees}"
 
 
 def stiffness_figure(ds: xr.Dataset) -> Figure:
     """Linearised coefficients over one cage pitch (``analysis.stability.statics``): the
-    direct stiffnesses (MN/m, N·m/rad on tilts) and the equilibrium (µm, µrad) against the
-    cage angle (degrees), with the cage-angle means dashed."""
+    direct stiffnesses and the static equilibrium against the cage angle ψ (degrees, over
+    the pitch 2π/N_b, its first value repeated at its end), one axes per unit (MN/m for
+    translations, kN·m/rad for tilts; µm and µrad), the pitch means dashed, the legends
+    beside the lines they name."""
     coords = [str(c) for c in ds.row.values]
     units = dict(zip(coords, ds.position.attrs.get("units", "").split(", "), strict=False))
-    angle = np.degrees(ds.cage_angle.values)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
-    for i, c in enumerate(coords):
-        unit = "MN·m/rad" if units.get(c) == "rad" else "MN/m"
-        line, = axes[0].plot(angle, ds.stiffness.values[:, i, i] / 1e6, ".-", lw=1,
-                             label=f"k{c}{c} ({unit})")
-        axes[0].axhline(float(ds.stiffness_mean.values[i, i]) / 1e6, ls="--", lw=0.8,
-                        color=line.get_color())
-        factor, unit = _SCALES.get(units.get(c, "m"), (1.0, units.get(c, "")))
-        axes[1].plot(angle, ds.position.values[:, i] * factor, ".-", lw=1,
-                     label=f"{c} ({unit})")
-    axes[0].set_ylabel("direct stiffness (dashed: mean over the pitch)")
-    axes[1].set_ylabel("static equilibrium")
-    for ax in axes:
-        ax.set_xlabel("cage angle ψ (degrees; one ball pitch)")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
+    pitch = float(ds.attrs.get("cage_pitch", 0.0)) or float(
+        ds.cage_angle.values[-1] + (ds.cage_angle.values[1] - ds.cage_angle.values[0]))
+    angle = np.degrees(np.append(ds.cage_angle.values, pitch))  # ψ = pitch is ψ = 0 again
+
+    def closed(values):
+        return np.append(values, values[:1])
+
+    kinds = [kind for kind in ("m", "rad") if any(units.get(c, "m") == kind for c in coords)]
+    fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds) + 0.6),
+                             layout="constrained", squeeze=False, sharex=True)
+    stiff_unit = {"m": (1e-6, "MN/m"), "rad": (1e-3, "kN·m/rad")}
+    for row, kind in enumerate(kinds):
+        chosen = [(i, c) for i, c in enumerate(coords) if units.get(c, "m") == kind]
+        factor, unit = stiff_unit[kind]
+        for n, (i, c) in enumerate(chosen):
+            colour = f"C{n}"
+            axes[row, 0].plot(angle, closed(ds.stiffness.values[:, i, i]) * factor, ".-",
+                              lw=1, ms=3, color=colour, label=f"k_{c}{c}")
+            axes[row, 0].axhline(float(ds.stiffness_mean.values[i, i]) * factor, ls="--",
+                                 lw=0.8, color=colour, label=f"k_{c}{c} mean over the pitch")
+            pos_factor = unit_scale(kind)[0]
+            axes[row, 1].plot(angle, closed(ds.position.values[:, i]) * pos_factor, ".-",
+                              lw=1, ms=3, color=colour, label=c)
+        axes[row, 0].set_ylabel(f"direct stiffness ({unit})")
+        axes[row, 1].set_ylabel(f"static equilibrium ({unit_scale(kind)[1]})")
+        for ax in axes[row]:
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      borderaxespad=0)
+    from matplotlib.ticker import FixedLocator, FuncFormatter
+
+    ticks = np.degrees(pitch) * np.linspace(0, 1, 5)
+    for ax in axes[-1]:
+        ax.xaxis.set_major_locator(FixedLocator(ticks))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.4g}"))
+        ax.set_xlim(-0.02 * ticks[-1], 1.02 * ticks[-1])
+        ax.set_xlabel(f"cage angle ψ (degrees), over {_pitch_text(ds, pitch)}")
     fig.suptitle(run_title(ds) + ": static equilibrium and stiffness", fontsize=10)
-    return fig
+    return plt.finish(fig, ds)
 
 
 __all__ = [
