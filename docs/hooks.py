@@ -19,13 +19,16 @@
   repository (``../tests/test_x.py``): right on GitHub, but not part of the site. Such a link
   is shown as the file's path in code instead (``tests/test_x.py``); a link to a file that
   exists nowhere stays a link, and ``--strict`` fails on it.
-- **Spec reference.** ``<!-- bearingdyn:spec-reference -->`` (in ``docs/spec-reference.md``)
-  becomes the reference of every section and field of a spec, walked from the pydantic
-  schema ``modelgen.spec.Spec`` (field types, defaults, allowed values and ranges, the
-  fields' docstrings), every term class of ``modelgen.terms.TERM_CLASSES`` (where it
-  attaches, the parameters it needs) and the built-in quantities of
-  ``modelgen.quantities.QUANTITIES``: a new field or term is in the site without editing a
-  page, and ``tests/test_spec_guide.py`` fails on a field that has no docstring.
+- **Spec reference.** ``docs/spec-reference.md`` holds, between the lines
+  ``<!-- bearingdyn:spec-reference begin … -->`` and ``<!-- bearingdyn:spec-reference end -->``,
+  the reference of every section and field of a spec, walked from the pydantic schema
+  ``modelgen.spec.Spec`` (field types, defaults, allowed values and ranges, the fields'
+  docstrings), every term class of ``modelgen.terms.TERM_CLASSES`` (where it attaches, the
+  parameters it needs) and the built-in quantities of ``modelgen.quantities.QUANTITIES``.
+  The text is in the repository, readable without a build; ``python3 docs/hooks.py
+  spec-reference`` rewrites it from the schema, ``tests/test_docs.py`` fails when it differs
+  and a build warns (an error under ``--strict``). ``tests/test_spec_guide.py`` fails on a
+  field that has no docstring.
 - **Included files.** ``<!-- bearingdyn:include PATH -->`` (PATH relative to ``docs/``)
   becomes the file in a code block, so a page shows the example spec as it is.
 - **Math.** The ``$…$`` and ``$$…$$`` of the pages become MathML at build time
@@ -33,7 +36,8 @@
   to show an equation, opened from a server or from disk. A formula latex2mathml cannot
   convert is a build warning (an error under ``--strict``).
 
-Nothing here writes into the repository.
+The build writes nothing into the repository; ``python3 docs/hooks.py spec-reference``
+writes ``docs/spec-reference.md`` (atomically), and nothing else.
 """
 
 from __future__ import annotations
@@ -56,7 +60,10 @@ MODELS_SECTION = "Model cards"
 OPTIONS_MARKER = re.compile(r"^<!-- bearingdyn:options (\S+) -->[ \t]*$", re.M)
 COMMANDS_MARKER = re.compile(r"^<!-- bearingdyn:commands -->[ \t]*$", re.M)
 SUBMODULES_MARKER = re.compile(r"^<!-- bearingdyn:submodules ([\w.]+) -->[ \t]*$", re.M)
-SPEC_REFERENCE_MARKER = re.compile(r"^<!-- bearingdyn:spec-reference -->[ \t]*$", re.M)
+SPEC_REFERENCE_BEGIN = ("<!-- bearingdyn:spec-reference begin: written from the schema by "
+                        "`python3 docs/hooks.py spec-reference`; do not edit by hand -->")
+SPEC_REFERENCE_END = "<!-- bearingdyn:spec-reference end -->"
+SPEC_REFERENCE_PAGE = Path(__file__).resolve().parent / "spec-reference.md"
 INCLUDE_MARKER = re.compile(r"^<!-- bearingdyn:include (\S+) -->[ \t]*$", re.M)
 
 MATH = re.compile(r'<(span|div) class="arithmatex">(.*?)</\1>', re.S)
@@ -500,6 +507,32 @@ def spec_reference_markdown() -> str:
     return "\n".join(out)
 
 
+def spec_reference_page(page: str) -> str:
+    """``page`` (the text of ``docs/spec-reference.md``) with the part between its begin and
+    end lines replaced by ``spec_reference_markdown()``; the page's own text (its title and
+    introduction, before the begin line) is kept."""
+    head = page.split(SPEC_REFERENCE_BEGIN)[0].split("<!-- bearingdyn:spec-reference")[0]
+    return (f"{head.rstrip()}\n\n{SPEC_REFERENCE_BEGIN}\n\n{spec_reference_markdown().strip()}"
+            f"\n\n{SPEC_REFERENCE_END}\n")
+
+
+def write_spec_reference(path: Path = SPEC_REFERENCE_PAGE) -> bool:
+    """Rewrite ``path`` from the schema (atomically); True when it changed."""
+    import os
+    import tempfile
+
+    old = path.read_text(encoding="utf-8")
+    new = spec_reference_page(old)
+    if new == old:
+        return False
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        handle.write(new)
+    os.chmod(tmp, 0o644)
+    os.replace(tmp, path)
+    return True
+
+
 def include_markdown(path: str, docs_dir: Path) -> str:
     """A file of ``docs/`` in a code block (the language from its suffix)."""
     target = (docs_dir / path).resolve()
@@ -672,7 +705,11 @@ def on_page_markdown(markdown, page, config, files):
 
     markdown = repository_links(markdown, page.file.src_uri, Path(config.docs_dir))
     markdown = SUBMODULES_MARKER.sub(lambda m: submodules_markdown(m.group(1)), markdown)
-    markdown = SPEC_REFERENCE_MARKER.sub(lambda _m: spec_reference_markdown(), markdown)
+    if page.file.src_uri == "spec-reference.md":
+        if spec_reference_page(markdown) != markdown:
+            log.warning("docs/spec-reference.md differs from the schema: run `python3 "
+                        "docs/hooks.py spec-reference` to write it again")
+        markdown = markdown.replace(SPEC_REFERENCE_BEGIN, "").replace(SPEC_REFERENCE_END, "")
     markdown = INCLUDE_MARKER.sub(
         lambda m: include_markdown(m.group(1), Path(config.docs_dir)), markdown)
     markdown = OPTIONS_MARKER.sub(options, markdown)
@@ -720,3 +757,12 @@ def on_serve(server, config, builder):
     server.watch(str(ROOT / "generated"))
     server.watch(str(ROOT / "analysis" / "cli.py"))
     return server
+
+
+if __name__ == "__main__":  # python3 docs/hooks.py spec-reference
+    if sys.argv[1:] != ["spec-reference"]:
+        sys.exit("usage: python3 docs/hooks.py spec-reference (rewrite docs/spec-reference.md "
+                 "from the schema)")
+    changed = write_spec_reference()
+    print(f"{SPEC_REFERENCE_PAGE.relative_to(ROOT)}: "
+          + ("written from the schema" if changed else "already equal to the schema"))

@@ -285,3 +285,89 @@ def test_ci_installs_the_docs_extra_and_builds_the_site_strictly_outside_the_tre
     assert any(d.startswith("mkdocstrings[python]") for d in extra)
     assert "site/" in (ROOT / ".gitignore").read_text().splitlines()
     assert not (DOCS / "models").exists()  # the model pages exist in the built site only
+
+
+# --------------------------------------------------------------------------- pages that match
+
+
+def _hooks():
+    spec = importlib.util.spec_from_file_location("bearingdyn_docs_hooks", DOCS / "hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_spec_reference_in_the_repository_equals_the_schema():
+    """docs/spec-reference.md is complete without a build: its generated part is what the
+    schema gives now (`python3 docs/hooks.py spec-reference` rewrites it)."""
+    from modelgen.quantities import QUANTITIES
+    from modelgen.spec import Spec
+    from modelgen.terms import TERMS
+
+    hooks = _hooks()
+    page = (DOCS / "spec-reference.md").read_text(encoding="utf-8")
+    assert page == hooks.spec_reference_page(page), (
+        "docs/spec-reference.md differs from the schema: run python3 docs/hooks.py "
+        "spec-reference")
+    body = page.split(hooks.SPEC_REFERENCE_BEGIN)[1].split(hooks.SPEC_REFERENCE_END)[0]
+    for name in [*TERMS, *QUANTITIES, *Spec.model_fields]:
+        assert name in body, f"spec reference: {name} not shown"
+    # a hand edit of the generated part is not the schema's text: it would fail above
+    edited = page.replace('kind = "hertz_contact"', 'kind = "hertz"')
+    assert edited != page and hooks.spec_reference_page(edited) == page
+
+
+GUIDE_PROSE_WORDS = 60
+"""Words of text a guide page has beyond its code, headings and the command's own help."""
+
+
+def _prose(text: str, help_text: str) -> list[str]:
+    """The paragraphs of a guide page that are text for a reader: not code, not a heading,
+    not a marker, not a paragraph of the command's help (``--help``) copied."""
+    def plain(t: str) -> str:
+        return " ".join(re.sub(r"[`*_]", "", t).split()).lower()
+
+    text = re.sub(r"<!--.*?-->", "", FENCE.sub("", text), flags=re.S)
+    help_plain = plain(help_text)
+    return [p for p in (q.strip() for q in re.split(r"\n\s*\n", text))
+            if p and not p.startswith("#") and plain(p) not in help_plain]
+
+
+def test_every_command_has_a_guide_page():
+    pages = {p.stem for p in (DOCS / "guide").glob("*.md")}
+    missing = sorted(set(COMMANDS) - pages)
+    assert not missing, f"no docs/guide/<command>.md for: {', '.join(missing)}"
+
+
+def test_every_guide_page_has_text_beyond_its_help():
+    pages = {p.stem: p for p in (DOCS / "guide").glob("*.md") if p.stem in COMMANDS}
+    for name, page in sorted(pages.items()):
+        words = sum(len(p.split()) for p in _prose(page.read_text(encoding="utf-8"),
+                                                      COMMANDS[name].help or ""))
+        assert words >= GUIDE_PROSE_WORDS, (
+            f"{_rel(page)}: {words} words of text beyond the help and the examples "
+            f"(at least {GUIDE_PROSE_WORDS})")
+
+
+def test_prose_check_sees_a_page_of_help_only():
+    help_text = COMMANDS["classify"].help
+    page = (f"# `bearingdyn classify`\n\n{help_text}\n\n```bash\nbearingdyn classify r.nc\n"
+            "```\n\n<!-- bearingdyn:options classify -->\n")
+    assert _prose(page, help_text) == []
+
+
+def _models_lines(text: str) -> dict[str, str]:
+    """Model name: its line with the hash digits masked (a spec edit changes only those)."""
+    return {line.split()[0]: re.sub(r"sha256 [0-9a-f]{12}", "sha256 …", line.rstrip())
+            for line in text.strip().splitlines()}
+
+
+def test_getting_started_and_the_models_page_show_todays_models(cli):
+    res = cli("models", env={"BEARINGDYN_MODELS": ""})
+    assert res.returncode == 0, res.stderr
+    today = _models_lines(res.stdout)
+    for page in (DOCS / "getting-started.md", DOCS / "guide" / "models.md"):
+        text = page.read_text(encoding="utf-8")
+        after = text.split("bearingdyn models\n```", 1)[1]
+        shown = next(body for lang, body, _ in _fences(after) if lang == "text")
+        assert _models_lines(shown) == today, f"{_rel(page)}: not today's `bearingdyn models`"
