@@ -274,6 +274,7 @@ def torus(
     if not (duration > 0 and np.isfinite(duration)):
         raise InputError(f"--duration: must be a finite number > 0 s, got {duration!r}")
     system = as_system(model, parse_n_balls(n_balls), **values)
+    check_forced(system)
     try:
         pair = check_torus_harmonics(harmonics, system.n_state, "--harmonics")
         freqs = parse_frequencies(frequencies, system.model)
@@ -291,7 +292,6 @@ def torus(
             raise InputError("--to: must differ from --from")
         end = system.replace(**{param: stop})
         system = system.replace(**{param: start})
-    check_forced(system)
     try:
         for s in (system, end) if end is not None else (system,):
             check_frequencies(s, freqs, pair)

@@ -95,8 +95,9 @@ def parse_frequencies(text: str | tuple, model: Model) -> tuple[Period, Period]:
         except InputError as err:
             raise InputError(str(err).replace("period: ", "frequencies: ", 1)) from None
         out.append(per)
-    if _bearing_index(model, out[0]) == _bearing_index(model, out[1]) and \
-            out[0].kind == out[1].kind and out[0].name == out[1].name:
+    same_name = out[0].name == out[1].name or out[0].kind == "vc"
+    if out[0].kind == out[1].kind and same_name and \
+            _bearing_index(model, out[0]) == _bearing_index(model, out[1]):
         raise InputError(f"frequencies: {parts[0]} and {parts[1]} are the same frequency; "
                          "a torus needs two incommensurate ones")
     if all(per.kind != "vc" for per in out):
