@@ -54,7 +54,8 @@ def _setting_of_chart(chart: xr.Dataset) -> Setting:
 def point_detail(task: tuple) -> dict[str, Any]:
     """Spectra, Poincaré points and peaks of one chart point (``task``: setting, x name,
     x value, y name, y value); ``{"error": message}`` when its run fails."""
-    from analysis.reports.plots import default_partner, f_max_of
+    from analysis.provenance import vc_frequencies
+    from analysis.reports.plots import default_partner, display_label, f_max_of
     from analysis.signal.poincare import poincare_section
     from analysis.signal.spectrum import amplitude_spectrum, find_peaks
     from analysis.sweeps.chart import classified_section
@@ -64,17 +65,19 @@ def point_detail(task: tuple) -> dict[str, Any]:
     try:
         system = setting.system_at(**{xname: xv, yname: yv})
         run = record(setting, system)
-        f_max = f_max_of(run.attrs)
         spectra, sections, peaks = {}, [], []
         for var in displacement_names(run):
+            found = find_peaks(run, var)[:6]
             amp = amplitude_spectrum(run, var)
-            if f_max:
-                amp = amp.sel(frequency=slice(0.0, f_max))
+            f_max = f_max_of(run.attrs)
+            if f_max:  # the plots' range, reaching every peak of the table
+                top = max((p.frequency_hz for p in found), default=0.0)
+                amp = amp.sel(frequency=slice(0.0, max(f_max, 1.06 * top)))
             f, a = _thinned(amp.frequency.values, amp.values, bins)
             spectra[var] = {"f": _floats(f), "a": _floats(a),
                             "units": str(amp.attrs.get("units", ""))}
-            peaks += [{"var": var, "label": p.label, "f": p.frequency_hz, "a": p.amplitude}
-                      for p in find_peaks(run, var)[:6]]
+            peaks += [{"var": var, "label": p.label, "name": display_label(p.name),
+                       "f": p.frequency_hz, "a": p.amplitude} for p in found]
         points = poincare_section(run, classified_section(setting, system)).isel(
             k=slice(0, MAX_SECTION_POINTS))
         for var in displacement_names(run):
@@ -83,9 +86,11 @@ def point_detail(task: tuple) -> dict[str, Any]:
                              "yu": str(run[partner].attrs.get("units", "")),
                              "px": _floats(points[var].values),
                              "py": _floats(points[partner].values)})
+        vcs = vc_frequencies(run.attrs)
         return {"spectra": spectra, "sections": sections, "peaks": peaks,
                 "shaft_hz": float(run.attrs.get("shaft_hz", 0.0)),
-                "vc_hz": float(run.attrs.get("vc_hz", 0.0))}
+                "vc_hz": float(run.attrs.get("vc_hz", 0.0)),
+                "vc": {(f"VC[{b}]" if b else "VC"): f for b, f in vcs.items()}}
     except BearingdynError as exc:
         return {"error": str(exc)}
 
@@ -218,7 +223,8 @@ svg text{font-size:11px;fill:#333}.cell{stroke:#fff;stroke-width:1;cursor:pointe
 table{border-collapse:collapse;font-size:.88em;margin:.3em 0}
 td,th{padding:1px 8px;text-align:left;border-bottom:1px solid #eee}
 .plot{display:inline-block;margin:0 .6em .4em 0}.axis{stroke:#444}.grid{stroke:#eee}
-.line{fill:none;stroke:#1f5fa8;stroke-width:1.2}.dot{fill:#b8322a}
+.line{fill:none;stroke:#1f5fa8;stroke-width:1.2}.dot{fill:#b8322a}.mark{fill:#b8322a}
+svg text.peak-name{font-size:9px;fill:#222}
 footer{color:#666;font-size:.8em;margin:1.2em 0;word-break:break-all}
 """
 
@@ -298,8 +304,9 @@ function drawMap() {
     "initial states)</span>" : "");
 }
 
-function plot(container, title, xs, ys, xlabel, ylabel, kind) {
-  const W = 300, H = 220, L = 58, R = 10, T = 22, B = 38;
+function plot(container, title, xs, ys, xlabel, ylabel, kind, marks) {
+  const W = kind === "spectrum" ? 340 : 300, H = kind === "spectrum" ? 250 : 220;
+  const L = 58, R = 10, T = 22, B = 38;
   const div = document.createElement("div");
   div.className = "plot";
   container.appendChild(div);
@@ -307,9 +314,13 @@ function plot(container, title, xs, ys, xlabel, ylabel, kind) {
   const good = xs.map((x, i) => [x, ys[i]]).filter(([x, y]) => x !== null && y !== null);
   const xv = good.map(g => g[0]), yv = good.map(g => g[1]);
   let x0 = Math.min(...xv), x1 = Math.max(...xv), y0 = Math.min(...yv), y1 = Math.max(...yv);
-  if (kind === "spectrum") { x0 = 0; y0 = 0; }
+  if (kind === "spectrum") { x0 = 0; y0 = 0; y1 *= 1.5; }  // room for the peak names
   if (!(x1 > x0)) { x0 -= 1; x1 += 1; }
   if (!(y1 > y0)) { const d = Math.abs(y0) * 0.1 || 1; y0 -= d; y1 += d; }
+  if (kind !== "spectrum") {  // every point inside the axes, none on their lines
+    const dx = 0.06 * (x1 - x0), dy = 0.06 * (y1 - y0);
+    x0 -= dx; x1 += dx; y0 -= dy; y1 += dy;
+  }
   const px = x => L + (x - x0) / (x1 - x0) * (W - L - R);
   const py = y => H - B - (y - y0) / (y1 - y0) * (H - T - B);
   el("line", {x1: L, y1: H - B, x2: W - R, y2: H - B, class: "axis"}, svg);
@@ -325,6 +336,20 @@ function plot(container, title, xs, ys, xlabel, ylabel, kind) {
   if (kind === "spectrum") {
     const d = good.map(([x, y], i) => `${i ? "L" : "M"}${px(x).toFixed(1)},${py(y).toFixed(1)}`);
     el("path", {d: d.join(""), class: "line"}, svg);
+    const placed = [];  // the peaks named on the plot, larger first, labels kept apart
+    for (const m of (marks || [])) {
+      if (m.f < x0 || m.f > x1) continue;
+      const x = px(m.f), y = py(m.a), w = 5.2 * m.name.length + 4;
+      el("path", {d: `M${x - 3},${y - 7}L${x + 3},${y - 7}L${x},${y - 2}Z`, class: "mark"},
+         svg);
+      const cx = Math.min(Math.max(x, L + w / 2), W - R - w / 2);  // inside the axes
+      let ty = y - 9;
+      while (placed.some(([u, v, uw]) => Math.abs(u - cx) < (w + uw) / 2 &&
+                                         Math.abs(v - ty) < 11)) ty -= 11;
+      placed.push([cx, ty, w]);
+      el("text", {x: cx, y: Math.max(ty, T + 8), "text-anchor": "middle",
+                  class: "peak-name"}, svg).textContent = m.name;
+    }
   } else {
     for (const [x, y] of good) el("circle", {cx: px(x), cy: py(y), r: 1.8, class: "dot"}, svg);
   }
@@ -345,7 +370,8 @@ function select(p, rect) {
     rows.push([`amplitude of ${k.slice(10)}`, `${fmt(p[k] * f)} ${u}`]);
   }
   if (d.shaft_hz) rows.push(["X (shaft)", `${fmt(d.shaft_hz)} Hz`]);
-  if (d.vc_hz) rows.push(["VC", `${fmt(d.vc_hz)} Hz`]);
+  const vcs = d.vc || (d.vc_hz ? {"VC": d.vc_hz} : {});
+  for (const name in vcs) rows.push([name, `${fmt(vcs[name])} Hz`]);
   if (d.error) rows.push(["detail", d.error]);
   document.getElementById("numbers").innerHTML =
     rows.map(([k, v]) => `<tr><th>${k}</th><td>${v}</td></tr>`).join("");
@@ -354,8 +380,10 @@ function select(p, rect) {
   spectra.innerHTML = ""; sections.innerHTML = "";
   for (const v in (d.spectra || {})) {
     const s = d.spectra[v], [f, u] = scale(s.units);
+    const marks = (d.peaks || []).filter(k => k.var === v)
+      .map(k => ({f: k.f, a: k.a * f, name: k.name || k.label || `${fmt(k.f, 4)} Hz`}));
     plot(spectra, `spectrum of ${v}`, s.f, s.a.map(a => a === null ? null : a * f),
-         "frequency (Hz)", `amplitude (${u})`, "spectrum");
+         "frequency (Hz)", `amplitude (${u})`, "spectrum", marks);
   }
   for (const s of (d.sections || [])) {
     const [fx, ux] = scale(s.xu), [fy, uy] = scale(s.yu);
@@ -365,7 +393,7 @@ function select(p, rect) {
   document.getElementById("peaks").innerHTML = (d.peaks || []).length ?
     "<tr><th>variable</th><th>peak</th><th>frequency (Hz)</th><th>amplitude</th></tr>" +
     d.peaks.map(k => { const [f, u] = scale((d.spectra[k.var] || {}).units);
-      return `<tr><td>${k.var}</td><td>${(k.label || "?").replace("-", "−")}</td>` +
+      return `<tr><td>${k.var}</td><td>${k.name || (k.label || "?").replace("-", "−")}</td>` +
              `<td>${fmt(k.f, 5)}</td><td>${fmt(k.a * f, 3)} ${u}</td></tr>`; }).join("") : "";
 }
 
