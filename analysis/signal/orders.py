@@ -60,19 +60,20 @@ def shaft_order_base(attrs) -> float:
     return shaft
 
 
-def order_lines(attrs, max_order: float = 12.0, max_shaft_order: int = 2,
+def order_lines(attrs, max_order: float = 12.0, max_shaft_order: int = 3,
                 max_vc_order: int = 2, faults: bool = True) -> list[OrderLine]:
-    """The named lines of a run up to ``max_order``: m·X + n·VC with |m| ≤
-    ``max_shaft_order`` and n ≤ ``max_vc_order`` (names as in spectra: X, 2X, VC, VC-X,
-    VC+X, 2VC, VC[left]…), then with ``faults`` each bearing's FTF, BPFI and BSF (BPFO is
-    VC for a stationary outer race: named VC), by increasing order."""
+    """The named lines of a run up to ``max_order``: the shaft harmonics m·X (m ≤
+    ``max_shaft_order``), each VC harmonic n·VC (n ≤ ``max_vc_order``) and its sidebands
+    n·VC ± X (names as in spectra: X, 2X, 3X, VC, VC-X, VC+X, 2VC, 2VC-X, VC[left]…), then
+    with ``faults`` each bearing's FTF, BPFI and BSF (BPFO is VC for a stationary outer
+    race: named VC), by increasing order."""
     shaft = shaft_order_base(attrs)
     vcs = vc_frequencies(attrs)
     lines: dict[str, OrderLine] = {}
     vc_list = [(b, f) for b, f in vcs.items() if f > 0] or [("", 0.0)]
     for bearing, vc in vc_list:
         for n in range(max_vc_order + 1 if vc > 0 else 1):
-            for m in range(-max_shaft_order, max_shaft_order + 1):
+            for m in range(-max_shaft_order, max_shaft_order + 1) if n == 0 else (-1, 0, 1):
                 f = m * shaft + n * vc
                 if not f > 0 or f / shaft > max_order:
                     continue
