@@ -35,6 +35,9 @@ _API = {
     "amplitude_spectrum": "analysis.signal.spectrum", "find_peaks": "analysis.signal.spectrum",
     "peak_table": "analysis.signal.spectrum",
     "simulate": "analysis.integrate.simulate",
+    "SpeedProfile": "analysis.integrate.speed_profile",
+    "waterfall": "analysis.signal.waterfall", "order_spectrum": "analysis.signal.orders",
+    "angle_resample": "analysis.signal.orders",
 }
 __all__ = sorted(_API)
 

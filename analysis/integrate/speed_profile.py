@@ -106,6 +106,11 @@ class SpeedProfile:
                                  f"> 0 rpm, got {v!r}")
         return cls("table", tuple(rpm), tuple(times), source)
 
+    @classmethod
+    def read(cls, path: str | Path) -> SpeedProfile:
+        """The table of a CSV file (``read_table``)."""
+        return read_table(path)
+
     @property
     def start_rpm(self) -> float:
         return self.rpm[0]
