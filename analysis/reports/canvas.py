@@ -125,8 +125,8 @@ def fit_text(artist, width_px: float) -> None:
 
 def fit_titles(fig: Figure, margin_px: float = 8.0) -> Figure:
     """Make every title of ``fig`` fit: the suptitle within the figure's width, each axes
-    title within its axes (and the figure), broken into lines at commas where too wide.
-    Call once the axes are drawn; returns ``fig``."""
+    title within its axes (and the figure), each x label within the figure, broken into
+    lines at commas where too wide. Call once the axes are drawn; returns ``fig``."""
     fig.canvas.draw()
     width = fig.bbox.width - 2 * margin_px
     if fig._suptitle is not None and fig._suptitle.get_text():
@@ -135,6 +135,11 @@ def fit_titles(fig: Figure, margin_px: float = 8.0) -> Figure:
         for title in (ax.title, ax._left_title, ax._right_title):
             if title.get_text():
                 fit_text(title, min(max(ax.bbox.width, 0.3 * width), width))
+        label = ax.xaxis.label  # centred under its axes: as wide as the figure lets it
+        if label.get_text():
+            centre = 0.5 * (ax.bbox.x0 + ax.bbox.x1) - fig.bbox.x0
+            fit_text(label, max(2 * min(centre - margin_px,
+                                        fig.bbox.width - margin_px - centre), 0.2 * width))
     return fig
 
 
