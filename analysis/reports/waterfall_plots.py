@@ -27,12 +27,17 @@ def _f_max(wf: xr.Dataset) -> float:
 
 def plot_waterfall(ax, wf: xr.Dataset) -> None:
     """The waterfall on ``ax``: amplitude in dB (colour) over frequency (Hz) and speed
-    (rpm), each named line dashed and labelled at the top."""
+    (rpm; time (s) when the speed goes up and down, the speed on the ticks), each named
+    line dashed and labelled at the top where the speed is highest."""
     amp = wf["amplitude"].values
     ref = float(amp.max()) if amp.max() > 0 else 1.0
     db = 20 * np.log10(np.maximum(amp / ref, 10 ** (-DYNAMIC_RANGE_DB / 20)))
     f = wf["frequency"].values
     speed = wf["speed_rpm"].values
+    step = np.diff(speed)
+    monotonic = bool(np.all(step > 0) or np.all(step < 0))
+    if not monotonic:  # up and down (a table): along time, the speed on the tick labels
+        speed = wf["time"].values
     f_max = _f_max(wf)
     keep = f <= f_max
     mesh = ax.pcolormesh(f[keep], speed, db[:, keep], shading="nearest", cmap="viridis",
@@ -40,22 +45,31 @@ def plot_waterfall(ax, wf: xr.Dataset) -> None:
     cbar = ax.figure.colorbar(mesh, ax=ax, pad=0.01)
     scale, unit = unit_scale(str(wf.attrs.get("units", "")))
     cbar.set_label(f"amplitude, dB re {ref * scale:.3g} {unit}")
+    fastest = int(np.argmax(wf["speed_rpm"].values))  # labels where the lines spread most
+    labels = ax.get_xaxis_transform()  # x in Hz, y in axes fractions
     for name, kind, line in zip(wf["line"].values, wf["line_kind"].values,
                                 wf["line_hz"].values, strict=True):
-        if line[-1] > f_max and line[0] > f_max:
+        if np.min(line) > f_max:
             continue
         colour = _FAULT_COLOUR if kind == "fault" else _SHAFT_COLOUR
         ax.plot(line, speed, ls="--", lw=0.7, color=colour, alpha=0.8)
-        top = np.argmax(speed) if line[np.argmax(speed)] <= f_max else \
-            int(np.nonzero(line <= f_max)[0][-1])
-        ax.annotate(display_label(str(name)), (line[top], speed[top]), xytext=(0, 3),
-                    textcoords="offset points", rotation=90, fontsize=7, color=colour,
-                    ha="center", va="bottom", annotation_clip=False,
+        if line[fastest] > f_max:
+            continue
+        ax.annotate(display_label(str(name)), (line[fastest], 1.0), xycoords=labels,
+                    xytext=(0, 3), textcoords="offset points", rotation=90, fontsize=7,
+                    color=colour, ha="center", va="bottom", annotation_clip=False,
                     bbox={"boxstyle": "round,pad=0.1", "fc": "black", "alpha": 0.4,
                           "lw": 0})
     ax.set_xlim(0, f_max)
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("speed (rpm)")
+    if monotonic:
+        ax.set_ylabel("speed (rpm)")
+    else:
+        ticks = np.linspace(speed[0], speed[-1], 7)
+        rpm = np.interp(ticks, speed, wf["speed_rpm"].values)
+        ax.set_yticks(ticks, [f"{t:.3g} s, {n:.0f} rpm" for t, n in zip(ticks, rpm,
+                                                                          strict=True)])
+        ax.set_ylabel("time (s) and speed (rpm)")
     ax.set_title(f"waterfall of {wf.attrs.get('variable', '')}: window "
                  f"{float(wf.attrs['window_s']) * 1e3:.3g} ms, bin "
                  f"{float(wf.attrs['bin_hz']):.3g} Hz; lines: orders (white), defect "
