@@ -31,8 +31,10 @@ from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
 from analysis.frequency.torus_solve import (
+    DRIFT_LIMIT,
     prepare_torus,
     solve_torus,
+    torus_drift,
     torus_lambda1,
     truncation,
 )
@@ -156,20 +158,22 @@ def continue_torus(
     with blas_threads():
         branch, status, tried = trace_torus_branch(prob, first.coefficients, stop, options,
                                                    progress)
-    lam1 = np.full((len(branch), 2), np.nan)
+    lam1 = np.full((len(branch), 3), np.nan)
     fine = np.array([truncation(ts, pt.z0, prob.state_scale, prob.p(pt.lam)) for pt in branch])
     if stability:
         for j, pt in enumerate(branch):
-            lam1[j] = torus_lambda1(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
+            lam1[j, :2] = torus_lambda1(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
+            lam1[j, 2] = torus_drift(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
             if progress:
-                progress(f"lambda1 at {param} = {pt.lam:.6g}: {lam1[j, 0]:.4g} 1/s")
+                progress(f"lambda1 at {param} = {pt.lam:.6g}: {lam1[j, 0]:.4g} 1/s, drift "
+                         f"{lam1[j, 2]:.3g}")
     residuals = [prob.residual_norm(np.concatenate([pt.z0 / prob.s_z, [pt.lam / prob.s_lam]]))
                  for pt in branch]
-    report = stop_report(prob, branch, status, fine, lam1[:, 0], tried)
+    report = stop_report(prob, branch, status, fine, lam1[:, 0], tried, lam1[:, 2])
     values = {k: v for k, v in prob.values.items() if k != param}
     data = tori_dataset(
         ts, np.array([pt.z0 for pt in branch]), [prob.p(pt.lam) for pt in branch],
-        np.array(residuals), fine[:, 0], fine[:, 1], lam1[:, 0], lam1[:, 1],
+        np.array(residuals), fine[:, 0], fine[:, 1], lam1[:, 0], lam1[:, 1], lam1[:, 2],
         [pt.special for pt in branch], prob.state_scale,
         variables={param: ("point", np.array([pt.lam for pt in branch]),
                            {"units": model.units[param]}),
@@ -228,8 +232,9 @@ def trace_torus_branch(prob: TorusBranchProblem, coeffs: np.ndarray, stop: float
 
 
 def stop_report(prob: TorusBranchProblem, branch: list, status: str, fine: np.ndarray,
-                lambda1: np.ndarray, tried: float) -> str:
-    """Where and why the branch stopped, in one paragraph of numbers."""
+                lambda1: np.ndarray, tried: float, drift: np.ndarray | None = None) -> str:
+    """Where and why the branch stopped, in one paragraph of numbers (``drift``: of the
+    trajectories from the tori, ``torus_solve.torus_drift``)."""
     param, unit = prob.param_name, prob.model.units[prob.param_name]
     a, b = branch[0], branch[-1]
     text = (f"{status}. Last converged torus at {param} = {b.lam:.8g} {unit} "
@@ -243,6 +248,10 @@ def stop_report(prob: TorusBranchProblem, branch: list, status: str, fine: np.nd
         text += f"; lambda1 {good[0]:.4g} -> {good[-1]:.4g} 1/s"
         if good[-1] >= 0:
             text += " (no longer attracting)"
+    if drift is not None and np.isfinite(drift).any():
+        left = int(np.sum(drift > DRIFT_LIMIT))
+        text += (f"; the trajectory from the torus left it (drift > {DRIFT_LIMIT:g}) at "
+                 f"{left} of {int(np.isfinite(drift).sum())} points")
     if status.startswith(("no convergence", "refused")):
         growth = fine[-1, 0] / fine[0, 0]
         why = ("the torus outgrew its harmonics (the finer-grid residual grew "

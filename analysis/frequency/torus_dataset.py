@@ -20,7 +20,7 @@ import xarray as xr
 
 from analysis.errors import InputError
 from analysis.frequency.torus import TorusSystem, parse_frequencies
-from analysis.frequency.torus_solve import TorusResponse
+from analysis.frequency.torus_solve import TorusResponse, stability_of
 from analysis.provenance import completed_attrs, run_attrs, system_of_attrs, to_dataset
 from analysis.signal.spectrum import frequency_names
 
@@ -83,7 +83,8 @@ def harmonic_names(ts: TorusSystem) -> list[str]:
 
 def tori_dataset(ts: TorusSystem, coefficients: np.ndarray, params: list[np.ndarray],
                  residuals: np.ndarray, residual_fine: np.ndarray, tails: np.ndarray,
-                 lambda1: np.ndarray, lambda1_ci95: np.ndarray, specials: list[str],
+                 lambda1: np.ndarray, lambda1_ci95: np.ndarray, drift: np.ndarray,
+                 specials: list[str],
                  state_scale: np.ndarray, variables: dict | None = None,
                  **extra: object) -> xr.Dataset:
     """Tori of ``ts`` (coefficients point × (n M), each at its parameter vector of
@@ -102,7 +103,9 @@ def tori_dataset(ts: TorusSystem, coefficients: np.ndarray, params: list[np.ndar
     names = [line_name(int(k1), int(k2), ts, params[0]) for k1, k2 in orders]
     lam = np.asarray(lambda1, dtype=float)
     ci = np.asarray(lambda1_ci95, dtype=float)
-    stable = np.where(np.isfinite(lam), (lam + np.nan_to_num(ci) < 0).astype(int), -1)
+    drift = np.asarray(drift, dtype=float)
+    kinds = [stability_of(a, b, c) for a, b, c in zip(lam, ci, drift, strict=True)]
+    stable = np.array([{"stable": 1, "unknown": -1}.get(k, 0) for k in kinds])
     units = model.state_units
     attrs = run_attrs(model, system.structure, dict(system.parameters))
     attrs.update(method="torus harmonic balance (2-D AFT), lambda1 by Lyapunov",
@@ -119,7 +122,11 @@ def tori_dataset(ts: TorusSystem, coefficients: np.ndarray, params: list[np.ndar
                       {"long_name": "(max - min)/2 of each state over the torus grid, in the "
                                     "state's unit (coordinate state_units)"}),
         "stable": ("point", stable, {"long_name": "1: lambda1 < 0 beyond its 95 % "
-                                                  "half-width, 0: not, -1: not computed"}),
+                                                  "half-width and drift <= DRIFT_LIMIT, 0: "
+                                                  "not, -1: not computed"}),
+        "drift": ("point", drift, {"long_name": "largest |z(t) - u(w t)| / amplitude over "
+                                                "the last half of the lambda1 run from "
+                                                "u(0, 0)"}),
         "special": ("point", np.array(specials, dtype=object)),
         "residual": ("point", np.asarray(residuals, dtype=float),
                      {"long_name": "max |R_i| / (w1 s_i) on the N1 x N2 grid"}),
@@ -158,7 +165,8 @@ def torus_dataset(response: TorusResponse) -> xr.Dataset:
         response.torus, response.coefficients[None, :], [response.system.p],
         np.array([response.residual]), np.array([response.residual_fine]),
         np.array([response.tail]), np.array([response.lambda1]),
-        np.array([response.lambda1_ci95]), [""], response.scale,
+        np.array([response.lambda1_ci95]), np.array([response.drift]), [""],
+        response.scale,
         converged=int(response.converged), iterations=response.iterations,
         message=response.message)
 

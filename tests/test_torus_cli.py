@@ -1,0 +1,77 @@
+"""`bearingdyn torus`: a single torus and a short branch as JSON (the layout of `hb
+--json`), the run it samples read by `spectrum` and `poincare`, the figure, and the bad
+inputs (one line, exit 2, nothing written)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from analysis.io import open_result
+from tests.test_harmonic_balance import unforced_spec
+
+ROTOR = ["vakharia2015", "--n-balls", "10", "--set", "speed_rpm=5000"]
+
+
+def test_command_single_torus_run_and_figure(cli, tmp_path):
+    out = cli("torus", *ROTOR, "--frequencies", "shaft,vc", "--harmonics", "6,3",
+              "--lyapunov-duration", "2", "-o", str(tmp_path / "t.nc"), "--run",
+              str(tmp_path / "run.nc"), "--duration", "1", "--plot", str(tmp_path / "t.png"),
+              "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert len(data["points"]) == 1
+    point = data["points"][0]
+    assert set(point) == {"amplitude", "stable", "special", "residual"}
+    assert set(point["amplitude"]) == {"x", "y", "vx", "vy"} and point["residual"] < 1e-10
+    assert point["stable"] is True and point["special"] == ""
+    assert data["provenance"]["model"] == "vakharia2015"
+    assert data["provenance"]["frequencies"] == "shaft,vc"
+    stored = open_result(tmp_path / "t.nc")
+    assert np.allclose(np.ptp(stored.torus.values[0, 0]) / 2, point["amplitude"]["x"])
+    assert (tmp_path / "t.png").stat().st_size > 0
+    spectrum = cli("spectrum", str(tmp_path / "run.nc"), "--json")
+    assert spectrum.returncode == 0, spectrum.stderr
+    labels = [p["label"] for p in json.loads(spectrum.stdout)["peaks"] if p["direction"] == "x"]
+    assert "VC+X" in labels and "X" in labels
+    poincare = cli("poincare", str(tmp_path / "run.nc"), "--section", "shaft", "-o",
+                   str(tmp_path / "p.png"))
+    assert poincare.returncode == 0, poincare.stderr
+
+
+def test_command_branch(cli, tmp_path):
+    out = cli("torus", *ROTOR, "--harmonics", "4,2", "--param", "speed_rpm", "--from",
+              "5000", "--to", "6000", "--max-points", "3", "--lyapunov-duration", "0",
+              "-o", str(tmp_path / "b.nc"), "--json", "--quiet")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    points = data["points"]
+    assert len(points) == 3
+    assert all(set(p) == {"speed_rpm", "amplitude", "stable", "special", "residual"}
+               for p in points)
+    assert not any(p["stable"] for p in points)  # λ1 not computed: not called stable
+    assert data["stop_report"].startswith("stopped after max_points = 3")
+    stored = open_result(tmp_path / "b.nc")
+    assert np.allclose(stored.speed_rpm.values, [p["speed_rpm"] for p in points])
+
+
+@pytest.mark.parametrize("args, words", [
+    ([*ROTOR, "--harmonics", "0,4"], "--harmonics: each of H1,H2 must be a whole number"),
+    ([*ROTOR, "--harmonics", "200,200"], "GiB"),
+    ([*ROTOR, "--frequencies", "shaft,shaft"], "--frequencies: shaft and shaft are the same"),
+    ([*ROTOR, "--frequencies", "shaft,vc[left]"], "no bearing 'left'"),
+    ([*ROTOR, "--set", "outer_race_diameter=0.028107"], "are commensurate"),
+    ([*ROTOR, "--param", "speed_rpm", "--from", "5000"], "give --to"),
+    (["UNFORCED", "--frequencies", "shaft,param:linear_stiffness"], "has no forcing"),
+])
+def test_command_bad_inputs(cli, tmp_path, args, words):
+    if args[0] == "UNFORCED":
+        args = [unforced_spec(tmp_path), *args[1:]]
+    target = tmp_path / "t.nc"
+    out = cli("torus", *args, "-o", str(target), env={"BEARINGDYN_CACHE": str(tmp_path / "c")})
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], lines
+    assert not target.exists()
