@@ -7,36 +7,37 @@ by FTF for a ball pit going round with the cage) show in the envelope of the rin
 the raw spectrum, where the ringing sits at the resonance (R. B. Randall, J. Antoni,
 "Rolling element bearing diagnostics—A tutorial", MSSP 25 (2011) 485–520, Sec. 3).
 
-Steps (``scipy.signal``): the mean-free signal is filtered by a Butterworth band-pass of
-order ``ORDER`` run forwards and backwards (``butter`` in second-order sections,
-``sosfiltfilt``: zero phase, so the envelope is not delayed); the envelope is |hilbert(·)|,
-its mean removed; its amplitude spectrum is :func:`analysis.signal.spectrum.amplitude_spectrum`
-(Hann, amplitude-true). Peaks are named in the defect vocabulary
-(:func:`analysis.signal.spectrum.fault_names`).
+Steps: the mean-free signal is band-passed by a Butterworth filter of order
+``kurtogram.ORDER`` run forwards and backwards (zero phase: |H(f)|², applied to one FFT of
+the record at a fast length), the envelope is the modulus of the analytic signal, the first
+and last ``kurtogram.EDGE_BANDWIDTHS``/W seconds of a band W Hz wide are left out (the
+filter's start-up, not the signal), and the envelope's amplitude spectrum is
+:func:`analysis.signal.spectrum.amplitude_spectrum` (Hann, amplitude-true, mean removed).
+Peaks are named in the defect vocabulary (:func:`analysis.signal.spectrum.fault_names`).
 
-The band is the user's (``band = (lo, hi)`` in Hz), or chosen by a kurtogram-like search
-(J. Antoni, "Fast computation of the kurtogram for the detection of transient faults", MSSP
-21 (2007) 108–124): at levels k = 1 … ``LEVELS`` the range from 0 to the Nyquist frequency
-is cut into 2^k equal bands and, shifted by half a band, 2^k − 1 more; each band at least
-``min_width_hz`` wide (default: 2.5 times the highest of BPFO, BPFI and 2·BSF, so the band
-passes the fault's sidebands) and clear of 0 Hz is filtered as above, and the band whose
-complex envelope has the largest spectral kurtosis K = ⟨|a|⁴⟩/⟨|a|²⟩² − 2 (Antoni 2006;
-0 for a Gaussian signal, large for repeated impulses) wins. This is the kurtogram's criterion
-over a simpler set of bands (no 1/3-octave levels, Butterworth instead of the quasi-analytic
-filter bank).
+The band is the user's (``band = (lo, hi)`` in Hz), or the one of largest spectral kurtosis
+in the fast kurtogram of :mod:`analysis.signal.kurtogram` (dyadic and 1/3 levels, each band
+at least ``min_width_hz`` wide; default 2.5 × the highest of BPFO, BPFI and 2·BSF, so the
+band passes the fault's sidebands).
+
+BPFO = VC for a fixed outer race: the varying compliance alone makes a line at BPFO. The
+band's ``note`` says whether the band holds a structural resonance of the model (a sprung
+body's √(k/m)/2π, e.g. the housing of the 6205 defect models): only there does a BPFO line
+come from impacts ringing the structure; elsewhere it may be the rotor's own VC harmonics.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.signal
+import scipy.fft
 import xarray as xr
 
 from analysis.errors import InputError
 from analysis.provenance import displacement_names
+from analysis.signal import kurtogram as kg
 from analysis.signal.spectrum import (
     Peak,
     amplitude_spectrum,
@@ -45,10 +46,10 @@ from analysis.signal.spectrum import (
     time_step,
 )
 
-ORDER = 4
-"""Order of the Butterworth band-pass (each direction of sosfiltfilt)."""
-LEVELS = 7
-"""Levels of the band search: the narrowest candidate bands are Nyquist/2^LEVELS wide."""
+ORDER = kg.ORDER
+"""Order of the Butterworth band-pass (each direction of the zero-phase filter)."""
+LEVELS = kg.LEVELS
+"""Dyadic levels of the band search: the narrowest dyadic bands are Nyquist/2^LEVELS wide."""
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,12 @@ class Band:
     kurtosis: float
     chosen: str
     """``user`` (given) or ``kurtosis`` (found by the search)."""
+    edge_s: float = 0.0
+    """Time (s) left out at each end of the envelope: the filter's start-up."""
+    resonances_hz: tuple[float, ...] = ()
+    """The model's structural resonances (Hz, √(k/m)/2π of each sprung body) in the band."""
+    note: str = ""
+    """What a BPFO line in this band means (BPFO = VC for a fixed outer race)."""
 
 
 def parse_band(text: str) -> tuple[float, float]:
@@ -76,9 +83,10 @@ def parse_band(text: str) -> tuple[float, float]:
 
 def check_band(band: tuple[float, float], fs: float, n_samples: int) -> tuple[float, float]:
     """A given pass band (Hz) as it is used, or ``InputError``: it must lie between 0 and
-    the Nyquist frequency ``fs``/2 of the run (never clipped), and be at least two bins of
+    the Nyquist frequency ``fs``/2 of the run (never clipped), be at least two bins of
     the run's frequency resolution ``fs``/``n_samples`` wide (a narrower band passes
-    nothing: an empty table)."""
+    nothing: an empty table), and leave at least half of the record once the filter's edges
+    (``kurtogram.EDGE_BANDWIDTHS``/width seconds at each end) are left out."""
     low, high = float(band[0]), float(band[1])
     nyquist, resolution = fs / 2, fs / n_samples
     text = f"{band[0]:g}:{band[1]:g}"
@@ -91,27 +99,18 @@ def check_band(band: tuple[float, float], fs: float, n_samples: int) -> tuple[fl
         raise InputError(f"--band: must be at least {2 * resolution:.3g} Hz wide (two bins "
                          f"of this run's resolution 1/T = {resolution:.3g} Hz), got {text} "
                          f"({high - low:g} Hz)")
+    narrowest = 4 * kg.EDGE_BANDWIDTHS * fs / max(n_samples - 1, 1)
+    if high - low < narrowest:
+        raise InputError(f"--band: must be at least {narrowest:.3g} Hz wide for this "
+                         f"{(n_samples - 1) / fs:g} s record (the filter's edges, "
+                         f"{kg.EDGE_BANDWIDTHS:g}/width s at each end, must leave half of "
+                         f"it), got {text} ({high - low:g} Hz)")
     return low, min(high, nyquist)  # the Nyquist frequency within rounding: as given
-
-
-def _bandpass(values: np.ndarray, fs: float, low: float, high: float) -> np.ndarray:
-    nyquist = fs / 2
-    if low <= 0 and high >= nyquist:
-        return values  # the whole band: nothing to filter
-    if low <= 0:
-        sos = scipy.signal.butter(ORDER, high, btype="lowpass", fs=fs, output="sos")
-    elif high >= nyquist:
-        sos = scipy.signal.butter(ORDER, low, btype="highpass", fs=fs, output="sos")
-    else:
-        sos = scipy.signal.butter(ORDER, [low, high], btype="bandpass", fs=fs, output="sos")
-    return scipy.signal.sosfiltfilt(sos, values)
 
 
 def spectral_kurtosis(analytic: np.ndarray) -> float:
     """K = ⟨|a|⁴⟩/⟨|a|²⟩² − 2 of a complex envelope ``a`` (0 for Gaussian noise)."""
-    power = np.abs(analytic) ** 2
-    mean = power.mean()
-    return float((power**2).mean() / mean**2 - 2.0) if mean > 0 else 0.0
+    return float(kg.kurtosis_of_power(np.abs(np.asarray(analytic)) ** 2))
 
 
 def _signal(ds: xr.Dataset, var: str) -> tuple[np.ndarray, float]:
@@ -122,58 +121,112 @@ def _signal(ds: xr.Dataset, var: str) -> tuple[np.ndarray, float]:
     return values - values.mean(), 1.0 / time_step(ds)
 
 
-def _default_min_width(ds: xr.Dataset, fs: float) -> float:
+def default_min_width(ds: xr.Dataset, fs: float) -> float:
+    """2.5 × the highest of BPFO, BPFI and 2·BSF (Hz), so a band passes the sidebands."""
     faults = fault_frequencies(ds.attrs)
     top = max((max(t["BPFO"], t["BPFI"], 2 * t["BSF"]) for t in faults.values()), default=0.0)
     return 2.5 * top if top > 0 else fs / 2 ** (LEVELS + 1)
 
 
-def choose_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None) -> Band:
-    """The band (Hz) of largest envelope kurtosis (the search of the module docstring)."""
+def structural_resonances(attrs: dict) -> tuple[float, ...]:
+    """√(k/m)/2π (Hz) of each sprung body of a run: every parameter pair ``<body>_stiffness``
+    (N/m) and ``<body>_mass`` (kg) in its attrs, e.g. the housing of the 6205 defect models
+    (the body alone on its support, the bearing's coupling left out)."""
+    found = []
+    for key, value in attrs.items():
+        head, sep, tail = str(key).rpartition("_stiffness")
+        mass = attrs.get(f"{head}_mass")
+        if sep and head and not tail and mass is not None:
+            k, m = float(value), float(mass)
+            if k > 0 and m > 0:
+                found.append(math.sqrt(k / m) / (2 * math.pi))
+    return tuple(sorted(found))
+
+
+def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], str]:
+    """The structural resonances (Hz) inside the band, and what a BPFO line there means."""
+    resonances = structural_resonances(attrs)
+    inside = tuple(f for f in resonances if low <= f <= high)
+    faults = fault_frequencies(attrs)
+    if not faults:
+        return inside, ""
+    bpfo = next(iter(faults.values()))["BPFO"]
+    if inside:
+        where = ", ".join(f"{f:.0f}" for f in inside)
+        return inside, (f"the band holds the structural resonance at {where} Hz: a BPFO line "
+                        "here comes from impacts ringing it (an outer-race defect)")
+    first, last = max(1, math.ceil(low / bpfo)), math.floor(high / bpfo)
+    harmonics = (f"VC harmonics k = {first}…{last}" if last >= first else "no VC harmonic")
+    elsewhere = (f"; the model's resonance{'s' if len(resonances) > 1 else ''} "
+                 f"({', '.join(f'{f:.0f}' for f in resonances)} Hz) lie outside it: judge an "
+                 "outer-race fault in a band holding one (--band)" if resonances else
+                 "; the model has no structural resonance for impacts to ring")
+    return inside, (f"BPFO = VC = {bpfo:.2f} Hz for a fixed outer race: this band holds "
+                    f"{harmonics} and no structural resonance, so a BPFO line here does not "
+                    f"by itself show a defect{elsewhere}")
+
+
+def _with_note(band: Band, attrs: dict) -> Band:
+    inside, note = band_note(band.low_hz, band.high_hz, attrs)
+    return replace(band, resonances_hz=inside, note=note,
+                   edge_s=kg.edge_seconds(band.low_hz, band.high_hz))
+
+
+def kurtogram_of(ds: xr.Dataset, var: str | None = None,
+                 min_width_hz: float | None = None) -> kg.Kurtogram:
+    """Every band of the fast kurtogram of ``ds[var]`` (default: the run's first
+    displacement) with its envelope's spectral kurtosis."""
+    var = displacement_names(ds)[0] if var is None else var
     values, fs = _signal(ds, var)
-    nyquist = fs / 2
-    width_floor = _default_min_width(ds, fs) if min_width_hz is None else float(min_width_hz)
-    best: Band | None = None
-    for level in range(1, LEVELS + 1):
-        width = nyquist / 2**level
-        if width < width_floor:
-            break
-        starts = np.concatenate([np.arange(2**level) * width,
-                                 (np.arange(2**level - 1) + 0.5) * width])
-        for low in starts:
-            if low <= 0:
-                continue  # a band from 0 Hz holds the slow motion, not the ringing
-            high = min(low + width, nyquist)
-            k = spectral_kurtosis(scipy.signal.hilbert(_bandpass(values, fs, low, high)))
-            if best is None or k > best.kurtosis:
-                best = Band(float(low), float(high), k, "kurtosis")
-    if best is None:
-        raise InputError(f"--band: no band of at least {width_floor:g} Hz fits below the "
-                         f"Nyquist frequency {nyquist:g} Hz; give --band LO:HI")
-    return best
+    floor = default_min_width(ds, fs) if min_width_hz is None else float(min_width_hz)
+    return kg.kurtogram(values, fs, floor)
+
+
+def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None) -> Band:
+    floor = (default_min_width(ds, spectrum.fs) if min_width_hz is None
+             else float(min_width_hz))
+    found = kg.kurtogram(np.zeros(0), spectrum.fs, floor, spectrum=spectrum)
+    if len(found) == 0:
+        raise InputError(f"--band: no band of at least {floor:g} Hz fits below the "
+                         f"Nyquist frequency {spectrum.fs / 2:g} Hz of this record; give "
+                         "--band LO:HI")
+    i = found.best()
+    return _with_note(Band(float(found.low_hz[i]), float(found.high_hz[i]),
+                           float(found.kurtosis[i]), "kurtosis"), ds.attrs)
+
+
+def choose_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None) -> Band:
+    """The band (Hz) of largest envelope kurtosis in the fast kurtogram."""
+    values, fs = _signal(ds, var)
+    return _best(ds, kg.Spectrum(values, fs), min_width_hz)
 
 
 def envelope(ds: xr.Dataset, var: str | None = None, band: tuple[float, float] | None = None,
              min_width_hz: float | None = None) -> tuple[xr.Dataset, Band]:
     """The Hilbert envelope of ``ds[var]`` band-passed to ``band`` (Hz; None: chosen by
     kurtosis), as a run-like dataset with the variable ``<var>_envelope`` (the unit of
-    ``var``) on ``t`` and the run's attrs (plus ``band_hz``), and the band used."""
+    ``var``) on the part of ``t`` clear of the filter's edges (cut to a fast FFT length),
+    the run's attrs plus ``band_hz`` and ``envelope_of``, and the band used."""
     var = displacement_names(ds)[0] if var is None else var
     values, fs = _signal(ds, var)
+    spectrum = kg.Spectrum(values, fs)
     if band is None:
-        chosen = choose_band(ds, var, min_width_hz)
+        chosen = _best(ds, spectrum, min_width_hz)
     else:
         low, high = check_band(band, fs, len(values))
-        analytic = scipy.signal.hilbert(_bandpass(values, fs, low, high))
-        chosen = Band(low, high, spectral_kurtosis(analytic), "user")
-    analytic = scipy.signal.hilbert(_bandpass(values, fs, chosen.low_hz, chosen.high_hz))
+        k = float(spectrum.kurtosis([(low, high)])[0])
+        chosen = _with_note(Band(low, high, k, "user"), ds.attrs)
+    analytic = spectrum.analytic(chosen.low_hz, chosen.high_hz)
+    first = math.ceil(chosen.edge_s * fs)
+    kept = scipy.fft.prev_fast_len(len(values) - 2 * first, real=True)
+    start = first + (len(values) - 2 * first - kept) // 2
     name = f"{var}_envelope"
     units = ds[var].attrs.get("units", "")
     attrs = dict(ds.attrs)
     attrs.update(band_hz=f"{chosen.low_hz:g}:{chosen.high_hz:g}", envelope_of=var,
                  state_names=name)
-    out = xr.Dataset({name: ("t", np.abs(analytic), {"units": units})},
-                     coords={"t": ds["t"].values}, attrs=attrs)
+    out = xr.Dataset({name: ("t", np.abs(analytic[start:start + kept]), {"units": units})},
+                     coords={"t": ds["t"].values[start:start + kept]}, attrs=attrs)
     return out, chosen
 
 
@@ -195,9 +248,30 @@ def envelope_peaks(ds: xr.Dataset, var: str | None = None,
                    min_width_hz: float | None = None) -> tuple[list[Peak], Band]:
     """The largest peaks of the envelope spectrum of ``ds[var]``, named in the defect
     vocabulary (``BPFO``, ``2BSF``, ``BPFI-X``…; the run needs its defect frequencies in its
-    attrs), and the band used. Peaks' ``direction`` is ``<var>_envelope``."""
+    attrs; lines below the significance threshold of :func:`find_peaks` stay unnamed), and
+    the band used. Peaks' ``direction`` is ``<var>_envelope``."""
     env, chosen = envelope(ds, var, band, min_width_hz)
     name = str(env.attrs["state_names"])
     peaks = find_peaks(env, name, max_peaks=max_peaks,
                        min_relative_height=min_relative_height, vocabulary="fault")
     return peaks, chosen
+
+
+def reference_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None,
+                   third_levels: bool = False) -> Band:
+    """The slow search the fast kurtogram replaced, kept as its reference: every band of
+    ``kurtogram.candidate_bands`` (without the 1/3 levels: the bands searched before)
+    band-passed by ``sosfiltfilt`` and Hilbert-transformed over the whole record, the same
+    edges left out (``kurtogram.reference_kurtosis``). Minutes on a long record."""
+    values, fs = _signal(ds, var)
+    floor = default_min_width(ds, fs) if min_width_hz is None else float(min_width_hz)
+    best: Band | None = None
+    for low, high, _ in kg.candidate_bands(fs, floor, third_levels=third_levels):
+        if 2 * kg.edge_seconds(low, high) > (len(values) - 1) / fs / 2:
+            continue
+        k = kg.reference_kurtosis(values, fs, low, high)
+        if best is None or k > best.kurtosis:
+            best = Band(low, high, k, "kurtosis")
+    if best is None:
+        raise InputError(f"--band: no band of at least {floor:g} Hz fits this record")
+    return _with_note(best, ds.attrs)

@@ -21,6 +21,7 @@ BPFI, BSF of each bearing, their harmonics and their sidebands at ±X and ±FTF 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -162,38 +163,74 @@ def fault_frequencies(attrs: dict) -> dict[str, dict[str, float]]:
     return {"": table.as_dict()}
 
 
-def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]],
-                tol_hz: float, max_harmonic: int = 4,
-                max_sideband: int = 2) -> list[tuple[str, int | None]]:
-    """Every defect-vocabulary name of ``f_hz`` within ``tol_hz`` (Hz), best first.
+DEFECT_FAMILIES = {"outer": ("BPFO",), "inner": ("BPFI",), "ball": ("BSF", "FTF")}
+"""The lines each kind of defect makes: an outer-race defect BPFO, an inner-race one BPFI
+(with X sidebands), a ball defect BSF and its harmonics with FTF sidebands, and FTF."""
+SIGNIFICANCE_DB = 15.0
+"""A line of the fault vocabulary is named only when it stands this far (dB of amplitude,
+a factor 5.6) above the noise floor, the median amplitude of the ``FLOOR_BINS`` bins on
+either side of it. In a Hann spectrum of white noise a bin's amplitude is Rayleigh
+distributed and exceeds 5.6 times its median with probability 2^(−5.6²) ≈ 3e-10."""
+FLOOR_BINS = 100
+"""Bins on each side of a line over which its noise floor (the median amplitude) is taken."""
+_TIE = 1e-6
+"""Distances to a line within this fraction of the tolerance are equal (then the lower order
+names it): exact coincidences such as 9·FTF = BPFO stay with the simpler name."""
 
-    Candidates: the shaft harmonics ``X`` … ``4X``; per bearing (``faults`` as from
-    :func:`fault_frequencies`) the harmonics ``FTF``, ``2FTF``, ``3FTF`` of the cage and
-    ``nF`` (n = 1 … ``max_harmonic``) of F in BPFO, BPFI, BSF with their sidebands
-    ``nF±mX`` and ``nF±mFTF`` (m = 1 … ``max_sideband``): ``BPFO``, ``2BPFO``, ``BPFI+X``,
-    ``BPFI-X``, ``2BSF``, ``BSF+FTF``, … With several bearings each name carries its bearing:
-    ``BPFO[left]``. Ranked by order (n + m; k for kX), then by the distance to ``f_hz``.
+
+def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]],
+                tol_hz: float, max_harmonic: int = 4, max_sideband: int = 2,
+                defects: tuple[str, ...] | None = None) -> list[tuple[str, int | None]]:
+    """Every defect-vocabulary name of ``f_hz`` within ``tol_hz`` (Hz), nearest first.
+
+    Candidates: the shaft harmonics ``kX`` (k = 1 … max(4, ``max_harmonic``)); per bearing
+    (``faults`` as from :func:`fault_frequencies`) the harmonics ``nF`` (n = 1 …
+    ``max_harmonic``) of F in BPFO, BPFI, BSF with their sidebands ``nF±mX`` and ``nF±mFTF``
+    (m = 1 … ``max_sideband``) and ``FTF``, ``2FTF``, ``3FTF``: ``BPFO``, ``2BPFO``,
+    ``BPFI+X``, ``BPFI-X``, ``2BSF``, ``BSF+FTF``, … With several bearings each name carries
+    its bearing: ``BPFO[left]``. ``defects`` limits the families to the run's defects
+    (:data:`DEFECT_FAMILIES`; None: every family); with no defect (``()``) the lines that
+    exist are the varying compliance VC (= BPFO for a fixed outer race) and its combinations
+    with X, named ``VC``, ``2VC``, ``VC+X``, … and ``kX``. The nearest candidate names the
+    line (distances equal within 1e-6 of the tolerance: the lower order n + m, k for kX).
     Returns (label, shaft order k for a pure shaft harmonic else None).
     """
     found: list[tuple[tuple, str, int | None]] = []
 
     def consider(order: int, freq: float, label: str, shaft_order: int | None) -> None:
         if freq > 0 and abs(f_hz - freq) <= tol_hz:
-            found.append(((order, abs(f_hz - freq)), label, shaft_order))
+            found.append(((round(abs(f_hz - freq) / (_TIE * tol_hz)) if tol_hz > 0 else 0,
+                           order), label, shaft_order))
 
-    for k in range(1, 5):
-        consider(k, k * shaft_hz, "X" if k == 1 else f"{k}X", k)
+    def orders(base: float, reach: float) -> range:
+        """Harmonics n <= max_harmonic whose sidebands can come within tol of f_hz."""
+        if base <= 0:
+            return range(0)
+        low = max(1, math.floor((f_hz - reach - tol_hz) / base))
+        return range(low, min(max_harmonic, math.ceil((f_hz + reach + tol_hz) / base)) + 1)
+
+    if shaft_hz > 0:
+        for k in orders(shaft_hz, 0.0) if max_harmonic > 4 else range(1, 5):
+            consider(k, k * shaft_hz, "X" if k == 1 else f"{k}X", k)
+    families = {name for d in (DEFECT_FAMILIES if defects is None else defects)
+                for name in DEFECT_FAMILIES.get(d, ())}
     for bearing, table in faults.items():
         tag = f"[{bearing}]" if bearing else ""
         ftf = table["FTF"]
-        for n in range(1, 4):
-            consider(n, n * ftf, f"{'' if n == 1 else n}FTF{tag}", None)
-        for name in ("BPFO", "BPFI", "BSF"):
-            for n in range(1, max_harmonic + 1):
+        if "FTF" in families:
+            for n in range(1, 4):
+                consider(n, n * ftf, f"{'' if n == 1 else n}FTF{tag}", None)
+        named = [(name, name) for name in ("BPFO", "BPFI", "BSF") if name in families]
+        mods = [("X", shaft_hz), ("FTF", ftf)]
+        if defects is not None and not defects:  # no defect: VC and its X combinations
+            named, mods = [("BPFO", "VC")], [("X", shaft_hz)]
+        reach = max_sideband * max(shaft_hz, ftf)
+        for name, symbol in named:
+            for n in orders(table[name], reach):
                 centre = n * table[name]
-                head = f"{'' if n == 1 else n}{name}{tag}"
+                head = f"{'' if n == 1 else n}{symbol}{tag}"
                 consider(n, centre, head, None)
-                for mod_name, mod in (("X", shaft_hz), ("FTF", ftf)):
+                for mod_name, mod in mods:
                     for m in range(1, max_sideband + 1):
                         side = mod_name if m == 1 else f"{m}{mod_name}"
                         consider(n + m, centre + m * mod, f"{head}+{side}", None)
@@ -205,6 +242,43 @@ def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]
             seen.add(label)
             unique.append((label, k))
     return unique
+
+
+def run_defects(attrs: dict) -> tuple[str, ...] | None:
+    """The defects of a run's model (``outer``, ``inner``, ``ball``; ``()`` for none), from
+    the terms of its generated model: a localized defect of nonzero ``defect_depth`` and any
+    waviness term (as the terms describe themselves, ``modelgen/terms/defects.py`` and
+    ``waviness.py``). None when the model cannot be loaded (every family is then named)."""
+    from analysis.model import load_model
+
+    try:
+        module = load_model(str(attrs.get("spec_file") or attrs["model"])).module
+    except Exception:  # a moved or foreign model: no vocabulary limit
+        try:
+            module = load_model(str(attrs["model"])).module
+        except Exception:
+            return None
+    depth = max((float(v) for k, v in attrs.items() if str(k).startswith("defect_depth")),
+                default=0.0)
+    found = []
+    for text in getattr(module, "TERMS", ()):
+        for race, marks in (("outer", ("localized defect on the outer race",
+                                       "outer-race waviness")),
+                            ("inner", ("localized defect on the inner race",
+                                       "inner-race waviness")),
+                            ("ball", ("localized defect on ball", "ball waviness"))):
+            for mark in marks:
+                if str(text).startswith(mark) and (depth > 0 or "waviness" in mark):
+                    found.append(race)
+    return tuple(dict.fromkeys(found))
+
+
+def noise_floor(amplitude: np.ndarray, index: int, bins: int = FLOOR_BINS) -> float:
+    """The median of ``amplitude`` over the ``bins`` bins on either side of ``index`` (the
+    line's own three bins left out): the noise floor a line is judged against."""
+    lo, hi = max(1, index - bins), min(amplitude.size, index + bins + 1)
+    around = np.concatenate([amplitude[lo:max(lo, index - 1)], amplitude[index + 2:hi]])
+    return float(np.median(around)) if around.size else 0.0
 
 
 def name_frequency(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float],
@@ -315,8 +389,12 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     ``ds.attrs``, see :func:`label_frequencies`; tolerance 1.5 bins) and returned by
     descending amplitude. With ``vocabulary = "fault"`` they are named by the defect
     frequencies instead (:func:`fault_names`: ``BPFO``, ``2BSF``, ``BPFI+X``, …; the run needs
-    ``ftf_hz`` … in its attrs). Every other name within the tolerance is kept in ``also`` (an
-    ambiguous label: ``Peak.ambiguous``).
+    ``ftf_hz`` … in its attrs): the nearest name within the tolerance, harmonics up to the
+    highest order the record resolves (below the Nyquist frequency, or below the band's
+    width for an envelope, attr ``band_hz``), only the families of the run's defects
+    (:func:`run_defects`; VC and its X combinations without a defect), and only for a line
+    ``SIGNIFICANCE_DB`` above its noise floor (:func:`noise_floor`). Every other name
+    within the tolerance is kept in ``also`` (an ambiguous label: ``Peak.ambiguous``).
     """
     if vocabulary not in ("shaft", "fault"):
         raise InputError(f"vocabulary: must be 'shaft' or 'fault', got {vocabulary!r}")
@@ -358,11 +436,20 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     if vocabulary == "fault" and not faults:
         raise InputError("vocabulary: 'fault' needs the defect frequencies (ftf_hz, bpfo_hz, "
                          "bpfi_hz, bsf_hz) in the run's attrs; simulate the run again")
+    if vocabulary == "fault":
+        defects = run_defects(ds.attrs)
+        low, _, high = str(ds.attrs.get("band_hz", "")).partition(":")
+        reach = float(high) - float(low) if high else 0.5 / time_step(ds)
+        top_order = max(4, int(reach / min(min(t.values()) for t in faults.values())))
+        threshold = 10 ** (SIGNIFICANCE_DB / 20)
     peaks = []
     for i in order:
         f, tol = float(frequency[i]), _LABEL_TOLERANCE_BINS * df
         if vocabulary == "fault":
-            names = fault_names(f, base_hz, faults, tol)
+            floor = noise_floor(amplitude, int(k[i]))
+            names = (fault_names(f, base_hz, faults, tol, max_harmonic=top_order,
+                                 defects=defects)
+                     if refined[i] >= threshold * floor else [])
             label, m = names[0] if names else (None, None)
             n, bearing, also = None, None, tuple(name for name, _ in names[1:])
         else:
