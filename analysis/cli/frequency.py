@@ -233,6 +233,8 @@ def torus(
     ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
     lyapunov_duration: Annotated[float, typer.Option(
         help="Averaging time of λ1 from the torus, s (0: no λ1).")] = 1.0,
+    stability_every: Annotated[int, typer.Option(
+        help="On a branch, λ1 at every k-th torus and the last (>= 1).")] = 1,
     dt: Annotated[float | None, typer.Option(
         help="Largest RK4 step of the simulations (guess, λ1, figure), s (default: the "
              "spec's).")] = None,
@@ -271,6 +273,9 @@ def torus(
     if not (lyapunov_duration >= 0 and np.isfinite(lyapunov_duration)):
         raise InputError(f"--lyapunov-duration: must be a finite number >= 0 s, got "
                          f"{lyapunov_duration!r}")
+    if stability_every < 1:
+        raise InputError(f"--stability-every: must be a whole number >= 1, got "
+                         f"{stability_every}")
     if not (duration > 0 and np.isfinite(duration)):
         raise InputError(f"--duration: must be a finite number > 0 s, got {duration!r}")
     system = as_system(model, parse_n_balls(n_balls), **values)
@@ -319,8 +324,8 @@ def torus(
         data = continue_torus(system, None, param=param, start=start, stop=stop,
                               frequencies=freqs, harmonics=pair, max_points=max_points,
                               ds_max=ds_max, stability=stability,
-                              lyapunov_duration=lyapunov_duration or 1.0, progress=say,
-                              **options)
+                              lyapunov_duration=lyapunov_duration or 1.0,
+                              stability_every=stability_every, progress=say, **options)
     from analysis.io import save_dataset
 
     save_dataset(data, output)
@@ -384,8 +389,13 @@ def torus_figure(data, duration: float, dt: float | None = None):
     a, b = ts.system.state_names[:2]
     fa, ua = scale_of(ds, a)
     fb, ub = scale_of(ds, b)
-    fig = Figure(figsize=(6.5, 5.5), layout="constrained")
-    ax = fig.add_subplot()
+    param = data.attrs.get("param", "")
+    fig = Figure(figsize=(12, 5) if param else (6.5, 5.5), layout="constrained")
+    if param:
+        _branch_axes(fig.add_subplot(1, 2, 1), data)
+        ax = fig.add_subplot(1, 2, 2)
+    else:
+        ax = fig.add_subplot()
     ax.plot(sec[a].values * fa, sec[b].values * fb, ".", ms=3, color="C1",
             label=f"Poincaré section of a time run ({len(sec[a])} revolutions)")
     ax.plot(curve[:, 0] * fa, curve[:, 1] * fb, "-", color="C0", lw=1.2,
@@ -395,9 +405,39 @@ def torus_figure(data, duration: float, dt: float | None = None):
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     where = ""
-    param = data.attrs.get("param", "")
     if param:
         where = f", {param} = {float(data[param].values[-1]):.6g}"
     ax.set_title(f"{data.attrs['model']}: torus {data.attrs['frequencies']} at the shaft "
                  f"section (t = k/X){where}", fontsize=9)
     return fig
+
+
+def _branch_axes(ax, data) -> None:
+    """Amplitude of the first state along a branch of tori: λ1 stable solid, not stable
+    dashed, not computed dotted; LP points marked."""
+    from analysis.reports.plots import unit_scale
+
+    param = data.attrs["param"]
+    lam = data[param].values
+    state = str(data.state.values[0])
+    factor, unit = unit_scale(str(data.state_units.values[0]))
+    amp = data.amplitude.values[:, 0] * factor
+    known = data.stable.values >= 0
+    ax.plot(lam, amp, ":", color="C0", lw=1.0, label="torus (λ1 not computed)")
+    for value, style, label in ((1, "o", "λ1 < 0: attracting"),
+                                (0, "x", "λ1 ≥ 0 or left the torus")):
+        sel = known & (data.stable.values == value)
+        if sel.any():
+            ax.plot(lam[sel], amp[sel], style, color="C0" if value else "C3", ms=4,
+                    label=label)
+    for j, kind in enumerate(data.special.values):
+        if kind == "LP":
+            ax.plot(lam[j], amp[j], "s", color="k", ms=4)
+            ax.annotate("LP", (lam[j], amp[j]), xytext=(3, 3), textcoords="offset points",
+                        fontsize=7)
+    ax.set_xlabel(f"{param} ({data[param].attrs.get('units', '')})")
+    ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({unit})")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax.set_title(f"branch of tori, H = {data.attrs['harmonics']}: "
+                 f"{str(data.attrs['status'])[:60]}", fontsize=9)

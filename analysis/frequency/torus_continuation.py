@@ -117,6 +117,7 @@ def continue_torus(
     settle: float | None = None,
     stability: bool = True,
     lyapunov_duration: float = 1.0,
+    stability_every: int = 1,
     ds: float | None = None,
     ds_min: float | None = None,
     ds_max: float | None = None,
@@ -128,13 +129,18 @@ def continue_torus(
     **parameters: float,
 ) -> xr.Dataset:
     """Continue the torus of ``frequencies`` with ``harmonics`` in ``param`` from ``start``
-    towards ``stop`` (the parameter's unit); λ1 at every point with ``stability``
-    (``lyapunov_duration`` s each). The first torus is ``solve_torus`` at ``start``.
+    towards ``stop`` (the parameter's unit); λ1 and the drift (``torus_solve``) with
+    ``stability``, ``lyapunov_duration`` s each, at every ``stability_every``-th point and
+    the last (NaN between). The first torus is ``solve_torus`` at ``start``.
     ``options`` and its keywords as in ``continue_harmonic``. Returns the branch Dataset
     (``tori_dataset`` with the parameter along ``point``) whose attrs ``status`` and
     ``stop_report`` say where and why it stopped."""
     options = options_with(options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                            max_points=max_points, tol=tol, guards=guards)
+    if isinstance(stability_every, bool) or not isinstance(stability_every, int) or \
+            stability_every < 1:
+        raise InputError(f"stability_every: must be a whole number >= 1, got "
+                         f"{stability_every!r}")
     system = as_system(system, n_balls, **parameters)
     model = system.model
     if param not in model.parameter_names:
@@ -162,6 +168,8 @@ def continue_torus(
     fine = np.array([truncation(ts, pt.z0, prob.state_scale, prob.p(pt.lam)) for pt in branch])
     if stability:
         for j, pt in enumerate(branch):
+            if j % stability_every and j != len(branch) - 1:
+                continue
             lam1[j, :2] = torus_lambda1(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
             lam1[j, 2] = torus_drift(ts, pt.z0, lyapunov_duration, dt, prob.p(pt.lam))
             if progress:
