@@ -83,6 +83,15 @@ def completed_attrs(system: System, *, method: str, dt: float, save_every: int,
     return attrs
 
 
+def noise_attrs(snr_db: float, seed: int, variables: Sequence[str]) -> dict:
+    """What white measurement noise added to a run says about itself: the SNR (dB), the
+    seed of its generator and the variables it was added to."""
+    return {"noise_snr_db": float(snr_db), "noise_seed": int(seed),
+            "noise_variables": " ".join(variables),
+            "noise": "white Gaussian, numpy.random.default_rng(noise_seed), std = "
+                     "std(variable)*10^(-noise_snr_db/20), variables in this order"}
+
+
 def state_meaning(model: Model, name: str) -> str:
     """Words for a state variable: 'rotor displacement along the radial load', …"""
     velocity = is_velocity(name, model.state_names)

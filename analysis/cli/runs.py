@@ -104,10 +104,18 @@ def spectrum(
     faults: Annotated[bool, typer.Option(
         "--faults", help="Name the peaks by the defect frequencies (FTF, BPFO, BPFI, BSF, "
                          "harmonics, sidebands) instead of X and VC.")] = False,
+    noise: Annotated[float | None, typer.Option(
+        "--noise", metavar="SNR_DB",
+        help="Add white Gaussian noise to the analysed variables first, SNR_DB below each "
+             "one's power (0: noise std equal to the signal's); seeded, recorded in the "
+             "JSON provenance.")] = None,
+    noise_seed: Annotated[int, typer.Option(
+        "--noise-seed", help="Seed of --noise's generator (numpy default_rng).")] = 0,
 ):
     """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
     of a run's displacements or of any state variables; with --envelope the envelope
-    spectrum, named by the defect frequencies."""
+    spectrum, named by the defect frequencies; with --noise SNR_DB after adding seeded
+    white noise."""
     from analysis.provenance import (
         cage_frequencies,
         displacement_names,
@@ -123,12 +131,23 @@ def spectrum(
         if not envelope:
             raise InputError("--band: only with --envelope")
         passband = parse_band(band)
+    if noise is not None:
+        from analysis.signal.noise import add_noise, check_snr
+
+        check_snr(noise)
+        if noise_seed < 0:
+            raise InputError(f"--noise-seed: must be an integer >= 0, got {noise_seed}")
     ds = load_dataset(run_file)
     variables = tuple(var) if var else displacement_names(ds)
     for name in variables:
         if name not in ds.data_vars:
             raise InputError(f"--var: no state variable {name!r} in this run; variables: "
                              f"{', '.join(map(str, ds.data_vars))}")
+    if noise is not None:
+        ds = add_noise(ds, noise, noise_seed, variables)
+        if not as_json:
+            typer.echo(f"white noise added to {', '.join(variables)}: SNR {noise:g} dB, "
+                       f"seed {noise_seed}")
     if envelope:
         _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output)
         return
@@ -185,7 +204,8 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
             "provenance": provenance(ds),
             "envelopes": [{"var": name, "band_hz": [chosen.low_hz, chosen.high_hz],
                            "band_chosen": chosen.chosen, "kurtosis": chosen.kurtosis,
-                           "peaks": [p.as_dict() for p in peaks]}
+                           "edge_s": chosen.edge_s, "resonances_hz": list(chosen.resonances_hz),
+                           "note": chosen.note, "peaks": [p.as_dict() for p in peaks]}
                           for name, peaks, chosen in results]}, indent=2))
     else:
         from analysis.reports.fault_plots import fault_words
@@ -194,8 +214,14 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
         for name, peaks, chosen in results:
             how = "spectral kurtosis" if chosen.chosen == "kurtosis" else "given"
             typer.echo(f"envelope of {name}: band {chosen.low_hz:g}:{chosen.high_hz:g} Hz "
-                       f"({how}, kurtosis {chosen.kurtosis:.3g})")
+                       f"({how}, kurtosis {chosen.kurtosis:.3g}, {chosen.edge_s * 1e3:.3g} ms "
+                       "of filter start-up left out at each end)")
             _print_peaks(ds, variables, peaks)
+            if any("BPFO" in n for p in peaks for n in (p.label or "", *p.also)) \
+                    or "holds the structural" in chosen.note:
+                typer.echo(f"note: {chosen.note}")
+        typer.echo("lines are named only 15 dB or more above the median of the 100 bins "
+                   "on either side (the noise floor)")
     if output:
         from analysis.reports.fault_plots import envelope_figure
         from analysis.reports.plots import save_figure

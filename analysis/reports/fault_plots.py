@@ -3,10 +3,13 @@ and the labelled envelope spectrum. Functions return figures; saving is the call
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from analysis.provenance import displacement_names
 from analysis.reports.plots import display_label, plt, run_title, scale_of
 from analysis.signal.envelope import Band
 from analysis.signal.spectrum import Peak, fault_frequencies
@@ -62,26 +65,38 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
     ax.grid(True, alpha=0.3)
     how = "chosen by spectral kurtosis" if band.chosen == "kurtosis" else "given"
     note = ("; names joined by '|' fall within one bin" if shared else "")
+    noise = (f"; white noise at {float(attrs['noise_snr_db']):g} dB SNR, seed "
+             f"{int(attrs['noise_seed'])}" if "noise_seed" in attrs else "")
     ax.set_title(f"envelope spectrum, band {band.low_hz:.0f}–{band.high_hz:.0f} Hz ({how}, "
-                 f"K = {band.kurtosis:.3g}){note}\n{fault_words(attrs)}", fontsize=8)
+                 f"K = {band.kurtosis:.3g}){note}{noise}\n{fault_words(attrs)}", fontsize=8)
+    if band.note:
+        fig.text(0.01, 0.005, textwrap.fill(band.note, 150), fontsize=6.5, va="bottom",
+                 color="0.3")
+        fig.get_layout_engine().set(rect=(0, 0.06, 1, 0.94))
     fig.suptitle(run_title(xr.Dataset(attrs=attrs)), fontsize=10)
     return fig
 
 
 def impulse_figure(ds: xr.Dataset, passes: np.ndarray, window_s: float, what: str,
-                   variables: tuple[str, ...] = ("x", "vx")) -> Figure:
-    """``variables`` of the run over its first ``window_s`` seconds, and the acceleration
-    d(vx)/dt (m/s², where the impacts show as spikes), with the times ``passes`` (s) at which
-    a ball meets the defect drawn as dashed lines (labelled ``what``)."""
+                   variables: tuple[str, ...] | None = None) -> Figure:
+    """``variables`` of the run over its first ``window_s`` seconds (default: the first
+    body's x and its velocity, ``x_housing`` and ``vx_housing`` for the 6205 defect models),
+    and the acceleration d(v)/dt of the last one (m/s², where the impacts show as spikes),
+    with the times ``passes`` (s) at which a ball meets the defect drawn as dashed lines
+    (labelled ``what``)."""
+    if variables is None:
+        x = displacement_names(ds)[0]
+        variables = (x, f"v{x}")
     t = ds["t"].values
     shown = t <= t[0] + window_s
     ms = (t[shown] - t[0]) * 1e3
-    acceleration = np.gradient(ds["vx"].values, t)[shown]
+    velocity = variables[-1]
+    acceleration = np.gradient(ds[velocity].values, t)[shown]
     fig, axes = plt.subplots(len(variables) + 1, 1, figsize=(9, 2.2 * (len(variables) + 1)),
                              layout="constrained", sharex=True)
     marks = passes[(passes >= t[0]) & (passes <= t[0] + window_s)]
     rows = [(ds[v].values[shown], *scale_of(ds, v), v) for v in variables]
-    rows.append((acceleration, 1.0, "m/s²", "d(vx)/dt"))
+    rows.append((acceleration, 1.0, "m/s²", f"d({velocity})/dt"))
     for ax, (values, factor, unit, name) in zip(axes, rows, strict=True):
         ax.plot(ms, values * factor, lw=0.7, color="C0")
         for k, tp in enumerate(marks):
