@@ -306,9 +306,10 @@ def refuse_profile(attrs: Mapping, what: str) -> None:
     profile = profile_of(attrs)
     if profile is None:
         return
-    raise InputError(f"{what}: the run's speed changes ({profile.describe()}), so its lines "
-                     "move; use `bearingdyn waterfall RUN` (short-time spectra against speed) "
-                     "or `bearingdyn waterfall RUN --orders` (order tracking)")
+    raise InputError(f"{what}: the run's speed changes ({profile.describe()}), so it has no "
+                     "fixed frequency or period; use `bearingdyn waterfall RUN` (short-time "
+                     "spectra against speed) or `bearingdyn waterfall RUN --orders` (order "
+                     "tracking)")
 
 
 # --- the model side ------------------------------------------------------------------------
