@@ -1,0 +1,109 @@
+"""Benchmark: the torus of vakharia2015 at N_b = 10, 5000 rpm by torus harmonic balance,
+against the time integration that reaches the same accuracy, in the same run.
+
+For each (H1, H2) of ``--harmonics``:
+
+* **torus**: the wall time of ``solve_torus`` without λ1 (its guess's settled simulation
+  and fit included, the CasADi function built on first use included), and its accuracy
+  ``e_H``: the largest |z_torus(t) − z(t)| / amplitude over the states, z a reference run
+  on the attractor (RK4 at the spec's 1e-5 s, after a 3 s transient, 2 s long);
+* **integration**: how long a run of ``simulate`` from the spec's initial state must last
+  to be within ``e_H`` of the attractor: t* is the first time after which its distance to
+  the reference (the same integration continued: the forced attractor is unique, so the
+  run itself after 3 s is the reference; before that, the distance to a second run started
+  on the torus) stays below e_H·amplitude, and its wall time is that of ``simulate`` over
+  t* (and over t* + ``--window`` s of attractor, the series a spectrum or a section is read
+  from); the shortest of three calls, the torus's of one.
+
+Ratio = torus time / integration time (< 1: the torus is faster). The torus gives the
+whole attractor as a function of (θ1, θ2) (any t, any section); the integration gives one
+series.
+
+    python benchmarks/bench_torus.py [--harmonics 8,4 12,6 16,8] [--window 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+from analysis.frequency.torus_solve import solve_torus
+from analysis.integrate.simulate import simulate
+from analysis.model import System
+
+MODEL, N_BALLS, SPEED = "vakharia2015", 10, 5000.0
+SETTLE, REFERENCE = 3.0, 2.0
+
+
+def states(run, names) -> np.ndarray:
+    return np.column_stack([run[v].values for v in names])
+
+
+def first_within(t: np.ndarray, distance: np.ndarray, bound: float) -> float:
+    """First time after which ``distance`` stays at or below ``bound`` (inf: never)."""
+    above = np.nonzero(distance > bound)[0]
+    if above.size == 0:
+        return float(t[0])
+    return float(t[above[-1] + 1]) if above[-1] + 1 < len(t) else float("inf")
+
+
+def timed(fn, repeat: int = 1):
+    """(result, the shortest wall time of ``repeat`` calls, s)."""
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - start)
+    return out, best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--harmonics", nargs="+", default=["8,4", "12,6", "16,8"])
+    parser.add_argument("--window", type=float, default=1.0,
+                        help="Attractor time after t* in the second integration row, s.")
+    args = parser.parse_args()
+    system = System.make(MODEL, n_balls=N_BALLS, speed_rpm=SPEED)
+    names = system.state_names
+    simulate(system, duration=0.01, transient=0.0)  # load the compiled blocks once
+    long_run, _ = timed(lambda: simulate(system, duration=SETTLE + REFERENCE, transient=0.0,
+                                         save_every=5))
+    t_all = long_run.t.values
+    z_all = states(long_run, names)
+    on = t_all >= SETTLE
+    amp = np.ptp(z_all[on], axis=0) / 2
+    print(f"{MODEL}, N_b = {N_BALLS}, {SPEED:g} rpm; load average "
+          f"{os.getloadavg()[0]:.2f}; cores {os.cpu_count()}")
+    print(f"{'H1,H2':>7} {'unknowns':>8} {'torus s':>8} {'e_H':>7} {'t* s':>6} "
+          f"{'sim(t*) s':>9} {'ratio':>6} {'sim(t*+w) s':>11} {'ratio':>6}")
+    for text in args.harmonics:
+        pair = tuple(int(v) for v in text.split(","))
+        response, torus_s = timed(lambda pair=pair: solve_torus(
+            system, None, "shaft,vc", pair, stability=False))
+        if not response.converged:
+            print(f"{text:>7} no torus ({response.message})")
+            continue
+        e_h = float(np.max(np.max(np.abs(response.states(t_all[on]) - z_all[on]), axis=0)
+                           / amp))
+        start_on = response.states(np.array([0.0]))[0]
+        second = simulate(system.replace(state=start_on), duration=SETTLE, transient=0.0,
+                          save_every=5)
+        z2 = states(second, names)
+        early = t_all < SETTLE
+        distance = np.max(np.abs(z_all[early] - z2[:early.sum()]) / amp, axis=1)
+        t_star = first_within(t_all[early], distance, e_h)
+        t_star = max(t_star, 5e-3)
+        _, sim_s = timed(lambda t_star=t_star: simulate(system, duration=t_star,
+                                                        transient=0.0), 3)
+        _, sim_w = timed(lambda t_star=t_star: simulate(
+            system, duration=t_star + args.window, transient=t_star), 3)
+        print(f"{text:>7} {response.torus.size:>8} {torus_s:>8.2f} {e_h:>7.3f} "
+              f"{t_star:>6.3f} {sim_s:>9.3f} {torus_s / sim_s:>6.1f} {sim_w:>11.3f} "
+              f"{torus_s / sim_w:>6.1f}")
+
+
+if __name__ == "__main__":
+    main()
