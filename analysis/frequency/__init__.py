@@ -10,7 +10,15 @@ their continuation.
   convergence in the number of harmonics (``harmonic_convergence``);
 * ``continuation``: a branch in any runtime parameter on the pseudo-arclength corrector and
   the special-point tests of ``analysis.stability.continuation`` (``continue_harmonic``,
-  ``HarmonicBranchProblem``, ``harmonic_branch_dataset``).
+  ``HarmonicBranchProblem``, ``harmonic_branch_dataset``);
+* ``torus``: the quasi-periodic (2-torus) equations of two base frequencies by a 2-D AFT
+  (``TorusSystem``, ``TorusBasis``, ``parse_frequencies``, the checks);
+* ``torus_solve``: one torus by Newton, its truncation measures and λ1 (``solve_torus`` ->
+  ``TorusResponse``);
+* ``torus_dataset``: tori as Datasets with named spectrum lines, and runs sampled from them
+  (``torus_dataset``, ``torus_run``, ``torus_of``);
+* ``torus_continuation``: tori continued in a runtime parameter, with the report of where
+  and why the branch stops (``continue_torus``).
 
 Every public name is importable from here: ``from analysis.frequency import
 harmonic_balance, continue_harmonic``.
@@ -38,10 +46,16 @@ from analysis.frequency.solve import (
     harmonic_convergence,
     hill_of,
 )
+from analysis.frequency.torus import TorusBasis, TorusSystem, parse_frequencies
+from analysis.frequency.torus_continuation import continue_torus
+from analysis.frequency.torus_dataset import torus_dataset, torus_of, torus_run
+from analysis.frequency.torus_solve import TorusResponse, solve_torus
 
 __all__ = [
     "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "HarmonicBranchProblem",
-    "HarmonicSystem", "HillResult", "PeriodicResponse", "check_forced", "check_harmonics",
-    "continue_harmonic", "fast_samples", "harmonic_balance", "harmonic_branch_dataset",
-    "harmonic_convergence", "hill_of", "hill_stability", "trace_harmonic_branch",
+    "HarmonicSystem", "HillResult", "PeriodicResponse", "TorusBasis", "TorusResponse",
+    "TorusSystem", "check_forced", "check_harmonics", "continue_harmonic", "continue_torus",
+    "fast_samples", "harmonic_balance", "harmonic_branch_dataset", "harmonic_convergence",
+    "hill_of", "hill_stability", "parse_frequencies", "solve_torus", "torus_dataset",
+    "torus_of", "torus_run", "trace_harmonic_branch",
 ]

@@ -326,6 +326,14 @@ def _step(prob: HarmonicBranchProblem, prev: BranchPoint, ds: float, tol: float,
     return points_between(prob, prev, point, tol, direction, lp=lp), point
 
 
+def branch_step(prob, prev: BranchPoint, ds: float, tol: float, guards: StepGuards
+                ) -> tuple[list[BranchPoint], BranchPoint] | str:
+    """One predictor–corrector step of ``ds`` from ``prev`` with the ``guards``: the special
+    points found on the way and the new point, or why the step failed. Any problem with
+    ``residual``, ``amplitude``, ``n``, ``s_z`` and ``s_lam`` (the torus branch's too)."""
+    return _step(prob, prev, ds, tol, guards)
+
+
 def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoint],
                             status: str, **extra: object) -> xr.Dataset:
     """The branch as a Dataset (``solve.responses_dataset``: amplitude per state, stable,

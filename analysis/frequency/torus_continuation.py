@@ -3,7 +3,7 @@
 The branch problem ``TorusBranchProblem`` is ``continuation.HarmonicBranchProblem`` for the
 torus equations: unknowns w = (X / s_X, λ / s_λ), equations G = R(X, λ) / (ω1,0 s_i). Its
 monodromy is empty (a torus has no Floquet multipliers; its stability is λ1, computed at
-the converged points only), so the periodic branch's step (``continuation._step``: Keller's
+the converged points only), so the periodic branch's step (``continuation.branch_step``: Keller's
 bordered Newton, the same ``StepGuards`` in the same words, folds where the tangent's λ
 component flips) runs unchanged, and its PD, BP and NS tests never fire.
 
@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import _step
+from analysis.frequency.continuation import branch_step
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
@@ -213,7 +213,7 @@ def trace_torus_branch(prob: TorusBranchProblem, coeffs: np.ndarray, stop: float
     status, tried = "reached the end of the range", math.nan
     while len(branch) < options.max_points:
         prev = branch[-1]
-        result = _step(prob, prev, ds, options.tol, options.guards)
+        result = branch_step(prob, prev, ds, options.tol, options.guards)
         if isinstance(result, str):
             tried = prob.residual_norm(scaled(prob, prev) + ds * prev.tangent)
             ds /= 2
