@@ -34,7 +34,12 @@
 - **Math.** The ``$…$`` and ``$$…$$`` of the pages become MathML at build time
   (``latex2mathml``), which browsers render natively: the site needs no script and no network
   to show an equation, opened from a server or from disk. A formula latex2mathml cannot
-  convert is a build warning (an error under ``--strict``).
+  convert is a build warning (an error under ``--strict``). Browsers do not break MathML
+  across lines, so a display formula is cut where a line may break (``formula_pieces``:
+  before relations and binary operators, after commas; an aligned environment into its
+  equations) and its pieces laid out in a wrapping flex row: they stand on one line when it
+  fits and wrap when not, and no equation scrolls (material's ``overflow: auto``, which
+  draws scroll arrows, is replaced by an inline style: no stylesheet to add).
 
 The build writes nothing into the repository; ``python3 docs/hooks.py spec-reference``
 writes ``docs/spec-reference.md`` (atomically), and nothing else.
@@ -43,6 +48,7 @@ writes ``docs/spec-reference.md`` (atomically), and nothing else.
 from __future__ import annotations
 
 import functools
+import itertools
 import logging
 import re
 import sys
@@ -726,6 +732,187 @@ def tex_to_mathml(tex: str, display: bool) -> str:
                   lambda m: m.group(1).replace("\\_", "_") + "</mtext>", mathml)
 
 
+RELATIONS = {"=", "<", ">", "approx", "le", "ge", "leq", "geq", "equiv", "sim", "ne",
+             "neq", "to", "propto", "simeq", "ll", "gg", "in", "mapsto", "Rightarrow"}
+"""Relations a wide display formula may be broken before (TeX's own choice, TeXbook 14)."""
+NOT_OPERANDS = {"", "=", "<", ">", "(", "[", ",", "+", "-", "{", "&", "^", "_", "cdot",
+                "times", "pm", "mp", "left", "quad", "qquad", *RELATIONS}
+"""What a ``+`` or ``−`` may follow and still be a sign, not a binary operator."""
+SHORT_SIDE = 20
+"""TeX characters of a left side short enough to stay on the line of its relation."""
+LONG_FORMULA = 120
+"""TeX characters beyond which ``\\left(``…``\\right)`` pairs become plain parentheses, so
+that a formula the size of a model card's ball load can break inside them."""
+WRAP_STYLE = ("display:flex;flex-wrap:wrap;justify-content:center;align-items:baseline;"
+              "overflow:visible")
+"""Inline style of a display formula cut into pieces: the pieces flow on as many lines as
+the column needs (material's own ``overflow:auto``, which draws scroll arrows, replaced)."""
+PIECE_STYLE = "margin:0 !important;padding:0 !important;width:auto !important"
+
+
+def _plain_delimiters(tex: str) -> str:
+    r"""``\left(``…``\right)`` as plain ``(``…``)`` (and ``[ ] | .``): breakable inside."""
+    return re.sub(r"\\(?:left|right)\s*(\\[{}|]|[()\[\]|.])",
+                  lambda m: "" if m.group(1) == "." else m.group(1), tex)
+
+
+ARGUMENTS = {"frac": 2, "tfrac": 2, "dfrac": 2, "sqrt": 1, "text": 1, "operatorname": 1,
+             "mathrm": 1, "mathbf": 1, "mathit": 1, "mathcal": 1, "boldsymbol": 1, "dot": 1,
+             "ddot": 1, "hat": 1, "bar": 1, "vec": 1, "tilde": 1, "overline": 1}
+"""TeX commands and the number of brace groups they take (kept whole when a long formula
+is made breakable)."""
+LONG_FRACTION = 80
+"""TeX characters of numerator and denominator beyond which a long formula's fraction is
+written A/B on one line (so that it can break inside A)."""
+
+
+def _group_end(tex: str, start: int) -> int:
+    """The index of the ``}`` that closes the ``{`` at ``start``."""
+    depth = 0
+    for k in range(start, len(tex)):
+        depth += {"{": 1, "}": -1}.get(tex[k], 0)
+        if depth == 0:
+            return k
+    raise ValueError(f"unbalanced braces in {tex!r}")
+
+
+def _argument(tex: str, i: int) -> tuple[str, int]:
+    """The argument at ``i`` (spaces skipped): a brace group (with its braces), a command or
+    one character; and the index after it."""
+    while i < len(tex) and tex[i].isspace():
+        i += 1
+    if i >= len(tex):
+        return "", i
+    if tex[i] == "{":
+        end = _group_end(tex, i)
+        return tex[i:end + 1], end + 1
+    m = re.match(r"\\([A-Za-z]+|.)|.", tex[i:], re.S)
+    return m.group(0), i + len(m.group(0))
+
+
+def breakable(tex: str) -> str:
+    r"""A long formula with nothing that keeps a line from breaking inside it but what must:
+    plain brace groups removed (``\cos{(θ)}`` → ``\cos(θ)``), fractions longer than
+    ``LONG_FRACTION`` written ``(A)/(B)``; arguments of commands, superscripts and
+    subscripts kept as they are."""
+    out, i = [], 0
+    while i < len(tex):
+        c = tex[i]
+        if c == "\\":
+            m = re.match(r"\\([A-Za-z]+|.)", tex[i:])
+            name, i = m.group(1), i + len(m.group(0))
+            args = []
+            for _ in range(ARGUMENTS.get(name, 0)):
+                arg, i = _argument(tex, i)
+                args.append(arg)
+            if name in ("frac", "tfrac", "dfrac") and sum(map(len, args)) > LONG_FRACTION:
+                num, den = (a[1:-1] if a.startswith("{") else a for a in args)
+                den = den if re.fullmatch(r"[\w\\]+(_\{?\w+\}?)?", den) else f"({breakable(den)})"
+                out.append(f"({breakable(num)})/{den}")
+            else:
+                out.append(m.group(0) + "".join(args))
+            continue
+        if c in "^_":
+            arg, i = _argument(tex, i + 1)
+            out.append(c + arg)
+            continue
+        if c == "{":
+            end = _group_end(tex, i)
+            out.append(breakable(tex[i + 1:end]))
+            i = end + 1
+            continue
+        out.append(c)
+        i += 1
+    return "".join(out)
+
+
+def formula_pieces(tex: str) -> list[str]:
+    r"""A display formula cut where a line may break: before a relation (=, \approx, …)
+    or a binary + or −, after a comma or a \quad, only outside braces, environments and
+    ``\left``…``\right`` pairs (a long formula, ``LONG_FORMULA``, has plain parentheses
+    for its pairs first, and is made ``breakable``). An ``aligned`` environment gives one
+    piece per equation (its column pairs), each row ending a line (the piece ``"\\"``).
+    One piece: the formula whole."""
+    body = tex.strip()
+    env = re.fullmatch(r"\\begin\{aligned\}(.*)\\end\{aligned\}", body, re.S)
+    if env:
+        pieces: list[str] = []
+        for row in re.split(r"\\\\", env.group(1)):
+            cells = row.split("&")
+            pairs = [p for p in ("".join(cells[k:k + 2]).strip()
+                                 for k in range(0, len(cells), 2)) if p]
+            for k, pair in enumerate(pairs):  # the columns' space kept between equations
+                pieces += formula_pieces(pair + (r" \quad" if k < len(pairs) - 1 else ""))
+            pieces.append("\\\\")
+        return pieces[:-1]
+    if len(body) > LONG_FORMULA:
+        body = breakable(_plain_delimiters(body))
+    starts, braces, nested, previous, i = [0], 0, 0, "", 0
+    while i < len(body):
+        c = body[i]
+        if c == "\\":
+            m = re.match(r"\\([A-Za-z]+|.)", body[i:])
+            name = m.group(1)
+            if name in ("begin", "left"):
+                nested += 1
+            elif name in ("end", "right"):
+                nested -= 1
+            elif braces == nested == 0 and name in RELATIONS:
+                starts.append(i)
+            elif braces == nested == 0 and name in ("quad", "qquad"):
+                starts.append(i + len(m.group(0)))
+            previous = name
+            i += len(m.group(0))
+            continue
+        if c == "{":
+            braces += 1
+        elif c == "}":
+            braces -= 1
+        elif braces == nested == 0:
+            if c in "=<>" and previous not in ("=", "<", ">"):
+                starts.append(i)
+            elif c in "+-" and previous not in NOT_OPERANDS:
+                starts.append(i)
+            elif c == ",":
+                starts.append(i + 1)
+        if not c.isspace():
+            previous = c
+        i += 1
+    cuts = [*sorted(set(starts)), len(body)]
+    pieces: list[str] = []
+    for a, b in itertools.pairwise(cuts):
+        piece = body[a:b].strip()
+        relation = re.match(r"[=<>]|\\([A-Za-z]+)", piece)
+        if pieces and re.fullmatch(r"(\\(quad|qquad|[,;: ])\s*)+", piece):
+            pieces[-1] += " " + piece  # a space after a comma stays with it
+        elif (pieces and relation and (relation.group(1) in RELATIONS or not relation.group(1))
+              and len(pieces[-1]) <= SHORT_SIDE and not pieces[-1].endswith((",", "quad"))):
+            pieces[-1] += " " + piece  # a short left side stays with its relation
+        elif piece:
+            pieces.append(piece)
+    # a piece that starts with + or − keeps them binary (spaced), not a sign: {}+ …
+    return [f"{{}}{p}" if p[0] in "+-" else p for p in pieces]
+
+
+def wrapped_display(tex: str) -> str | None:
+    """The MathML of a display formula as pieces that wrap (``formula_pieces``), or None
+    when it is one piece or a piece cannot be converted (then it is shown whole)."""
+    pieces = formula_pieces(tex)
+    if len(pieces) < 2:
+        return None
+    out = []
+    for piece in pieces:
+        if piece == "\\\\":  # a row of an aligned environment ends: a new line
+            out.append('<span style="flex-basis:100%;height:0" aria-hidden="true"></span>')
+            continue
+        try:
+            mathml = tex_to_mathml(piece, display=True)
+        except Exception:  # latex2mathml raises its own types: show the formula whole
+            return None
+        out.append(mathml.replace("<math ", f'<math style="{PIECE_STYLE}" ', 1))
+    return "".join(out)
+
+
 def math_to_mathml(html: str, where: str = "") -> str:
     """Every arithmatex span and div of a page's HTML as MathML (see ``MATH``)."""
     import html as html_lib
@@ -743,7 +930,11 @@ def math_to_mathml(html: str, where: str = "") -> str:
         except Exception as exc:  # latex2mathml raises its own types for TeX it cannot read
             log.warning("%s: cannot convert the formula %r to MathML (%s)", where, tex, exc)
             return match.group(0)
-        return f'<{tag} class="arithmatex">{mathml}</{tag}>'
+        wrapped = wrapped_display(tex) if tag == "div" else None
+        if wrapped:
+            return f'<div class="arithmatex" style="{WRAP_STYLE}">{wrapped}</div>'
+        return f'<{tag} class="arithmatex" style="overflow:visible">{mathml}</{tag}>' \
+            if tag == "div" else f'<{tag} class="arithmatex">{mathml}</{tag}>'
 
     return MATH.sub(replace, html)
 

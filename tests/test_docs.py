@@ -371,3 +371,26 @@ def test_getting_started_and_the_models_page_show_todays_models(cli):
         after = text.split("bearingdyn models\n```", 1)[1]
         shown = next(body for lang, body, _ in _fences(after) if lang == "text")
         assert _models_lines(shown) == today, f"{_rel(page)}: not today's `bearingdyn models`"
+
+
+def test_wide_display_formulas_are_cut_where_a_line_may_break():
+    """``docs/hooks.py`` cuts a display formula into pieces that wrap: before relations and
+    binary + and −, after commas, never inside braces or ``\\left``…``\\right``; the pieces
+    put together are the formula; an aligned environment gives its equations, row by row."""
+    hooks = _hooks()
+    tex = (r"M_R\ddot{x} = F_x - \sum_{i=1}^{N_b} Q_i\cos\theta_i, \quad "
+           r"\delta_i = \left(x + y\right) - \frac{a - b}{2}")
+    pieces = hooks.formula_pieces(tex)
+    assert pieces == [r"M_R\ddot{x} = F_x", r"{}- \sum_{i=1}^{N_b} Q_i\cos\theta_i, \quad",
+                      r"\delta_i = \left(x + y\right)", r"{}- \frac{a - b}{2}"]
+    assert "".join(p.removeprefix("{}") for p in pieces).replace(" ", "") == \
+        tex.replace(" ", "")
+    assert hooks.formula_pieces(r"x = -1") == [r"x = -1"]  # a sign, not a break
+    aligned = hooks.formula_pieces(r"\begin{aligned} a &= b, & c &= d, \\ e &= f \end{aligned}")
+    assert aligned == [r"a = b, \quad", "c = d,", "\\\\", "e = f"]
+    # a long formula breaks inside its parentheses and its long fractions
+    long = r"Q = k \max\left(0, " + " + ".join(f"x_{{{k}}}" for k in range(40)) + r"\right)"
+    assert len(hooks.formula_pieces(long)) > 30
+    for piece in hooks.formula_pieces(long):
+        assert piece.count("{") == piece.count("}")
+        hooks.tex_to_mathml(piece, display=True)  # every piece is a formula of its own

@@ -129,3 +129,39 @@ def test_without_chromium_ci_fails_and_a_developer_skips(monkeypatch, ci, outcom
     monkeypatch.setattr(tests.browser, "Path", lambda p: Path("/nonexistent/chromedriver"))
     with pytest.raises(outcome, match="apt-get install -y --no-install-recommends chromium"):
         require_chromium()
+
+
+def _math_pages(site: Path) -> list[Path]:
+    return [p for p in sorted(site.rglob("*.html"))
+            if 'class="arithmatex"' in p.read_text(encoding="utf-8", errors="ignore")]
+
+
+OVERFLOWING = """
+    return [...document.querySelectorAll('article .arithmatex')]
+      .filter(e => e.scrollWidth > e.clientWidth + 1 ||
+                   !['visible', 'clip'].includes(getComputedStyle(e).overflowX))
+      .map(e => e.textContent.slice(0, 60));"""
+
+
+def test_no_equation_scrolls_and_wide_ones_wrap(site, browser):
+    """At a desktop width no equation on any page is wider than its column (no scroll
+    arrows: material's overflow:auto is replaced); on a phone-sized window a wide formula
+    breaks over several lines (its pieces at different heights)."""
+    pages = _math_pages(site)
+    assert len(pages) >= 10
+    browser.set_window_size(1280, 900)
+    try:
+        for page in pages:
+            _open(browser, page)
+            over = browser.execute_script(OVERFLOWING)
+            assert not over, f"{page.relative_to(site)}: equations scroll: {over}"
+        browser.set_window_size(420, 900)
+        _open(browser, site / "model.html")
+        rows = browser.execute_script("""
+            return [...document.querySelectorAll('article div.arithmatex')].map(
+              d => new Set([...d.querySelectorAll(':scope > math')]
+                           .map(m => Math.round(m.getBoundingClientRect().top))).size);""")
+        assert max(rows) >= 3, rows  # the equations of motion on three lines or more
+        assert not browser.execute_script(OVERFLOWING)
+    finally:
+        browser.set_window_size(1280, 900)
