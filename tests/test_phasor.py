@@ -96,8 +96,8 @@ def test_bode_and_polar_figures_draw_the_record(linear_sweep):
     top, bottom = fig.axes
     (amp_line,), (lag_line,) = top.lines, bottom.lines  # y stays at rest: not drawn
     assert np.allclose(lag_line.get_ydata(), np.degrees(ds.phase1x_x.values[0]))
-    assert np.allclose(amp_line.get_ydata(), ds.amplitude1x_x.values[0] * 1e6)
-    assert "µm" in top.get_ylabel() and "degrees" in bottom.get_ylabel()
+    assert np.allclose(amp_line.get_ydata(), ds.amplitude1x_x.values[0])  # 0.25 m: metres
+    assert "(m)" in top.get_ylabel() and "degrees" in bottom.get_ylabel()
     polar = polar_figure(ds)
     line = polar.axes[0].lines[0]
     assert np.allclose(line.get_xdata(), ds.phase1x_x.values[0])

@@ -44,6 +44,14 @@ def phasor_variables(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | No
     return tuple(v for v in recorded if largest[v] > 1e-9 * top)  # not a coordinate at rest
 
 
+def _amplitude_unit(ds: xr.Dataset, variables) -> tuple[float, str]:
+    """(factor, unit) of the 1X amplitudes: µm for metres below a millimetre (the rotors),
+    else the SI unit itself (a Duffing oscillator's metres)."""
+    unit = str(ds[f"amplitude1x_{variables[0]}"].attrs.get("units", "m"))
+    largest = max(float(np.nanmax(ds[f"amplitude1x_{v}"].values)) for v in variables)
+    return unit_scale(unit) if largest < 1e-3 else (1.0, unit)
+
+
 def _ordered(ds: xr.Dataset, param: str, d: int, v: str):
     """(parameter values, amplitude, lag unwrapped along the sweep in rad) of direction
     ``d``, in increasing parameter, NaN values dropped."""
@@ -68,16 +76,17 @@ def _title(ds: xr.Dataset, what: str) -> str:
 
 def bode_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = None,
                 path: str = "the result") -> Figure:
-    """Bode plot of a diagram: 1X amplitude (µm for m) and phase lag (degrees after the
-    shaft's zero angle, unwrapped along the sweep) of ``variables`` (default: every
+    """Bode plot of a diagram: 1X amplitude (µm for m below a millimetre) and phase lag
+    (degrees after the shaft's zero angle, unwrapped along the sweep) of ``variables``
+    (default: every
     recorded displacement that moves) against the swept parameter; up- and down-sweeps
     dashed apart."""
     variables = phasor_variables(ds, variables, path)
     param = ds.attrs["param"]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True,
                                       layout="constrained")
+    factor, unit = _amplitude_unit(ds, variables)
     for i, v in enumerate(variables):
-        factor, unit = unit_scale(str(ds[f"amplitude1x_{v}"].attrs.get("units", "m")))
         for d, direction in enumerate(ds.direction.values):
             values, amp, lag = _ordered(ds, param, d, v)
             style = dict(color=f"C{i}", ls="-" if d == 0 else "--", lw=1.3, marker=".",
@@ -118,7 +127,7 @@ def polar_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None =
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)  # lag grows clockwise: against a counter-clockwise shaft
         ax.set_rlabel_position(200)
-        factor, unit = unit_scale(str(ds[f"amplitude1x_{v}"].attrs.get("units", "m")))
+        factor, unit = _amplitude_unit(ds, (v,))
         for d, direction in enumerate(ds.direction.values):
             values, amp, lag = _ordered(ds, param, d, v)
             if not values.size:
@@ -126,7 +135,7 @@ def polar_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None =
             ax.plot(lag, amp * factor, ".-", lw=1.0, ms=3, color=f"C{d}",
                     label=f"sweep {direction}")
             for j in sorted({0, values.size - 1, int(np.argmax(amp))}):
-                ax.annotate(f"{values[j]:.4g}", (lag[j], amp[j] * factor), xytext=(4, 4),
+                ax.annotate(f"{values[j]:.6g}", (lag[j], amp[j] * factor), xytext=(4, 4),
                             textcoords="offset points", fontsize=7)
         ax.set_title(f"1X of {v}: radius amplitude ({unit}), angle phase lag", fontsize=9)
         ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(-0.1, -0.12))

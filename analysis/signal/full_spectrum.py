@@ -37,7 +37,7 @@ class WhirlPeak(Peak):
     """A line of a full spectrum: a ``Peak`` (``frequency_hz`` > 0, its m·X + n·VC name)
     of the forward or backward circular component (``whirl``). ``signed_frequency_hz``
     is its place on the two-sided axis (negative for backward whirl); ``name`` is
-    prefixed with "-" for backward whirl (``-X``: the backward 1X line)."""
+    prefixed with "-" for backward whirl (``-X``: the backward 1X line; ``-(VC-X)``)."""
 
     whirl: str = "forward"
 
@@ -51,7 +51,9 @@ class WhirlPeak(Peak):
         """The label (``X``, ``VC-X``) or the frequency, ``-`` before it for backward
         whirl."""
         base = Peak.name.fget(self)
-        return base if self.whirl == "forward" else f"-{base}"
+        if self.whirl == "forward":
+            return base
+        return f"-({base})" if any(sign in base for sign in "+-") else f"-{base}"
 
     def as_dict(self) -> dict:
         """``Peak.as_dict`` with ``whirl`` and ``signed_frequency_hz``."""
