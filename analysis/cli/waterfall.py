@@ -66,14 +66,15 @@ def waterfall(
     typer.echo(f"waterfall of {wf.attrs['variable']}: {len(wf['time'])} windows of "
                f"{wf.attrs['window_s'] * 1e3:.3g} ms, bin {wf.attrs['bin_hz']:.3g} Hz, "
                f"{float(wf['speed_rpm'].min()):.0f}…{float(wf['speed_rpm'].max()):.0f} rpm")
-    typer.echo(f"{'line':>8} {'order':>8} {'largest':>11}       at (rpm)")
+    width = max((len(name) for name in tracks), default=4)
+    typer.echo(f"{'line':>{width}} {'order':>8} {'largest':>11}       at (rpm)")
     for name, track in tracks.items():
         k = max(range(len(track["amplitude"])), key=track["amplitude"].__getitem__)
-        typer.echo(f"{name:>8} {track['order']:8.4f} {track['amplitude'][k]:11.3e} {unit:<4} "
+        typer.echo(f"{name:>{width}} {track['order']:8.4f} {track['amplitude'][k]:11.3e} {unit:<4} "
                    f"{track['speed_rpm'][k]:8.0f}")
     if spectrum is not None:
         typer.echo(f"order spectrum ({spectrum.attrs['samples_per_rev']} samples/rev, bin "
                    f"{spectrum.attrs['order_bin']:.3g}):")
         for p in peaks:
-            typer.echo(f"{'':>8} {p.order:8.4f} {p.amplitude:11.3e} {unit:<4} "
+            typer.echo(f"{'':>{width}} {p.order:8.4f} {p.amplitude:11.3e} {unit:<4} "
                        f"{p.name or ''}")

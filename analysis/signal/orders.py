@@ -215,8 +215,12 @@ def order_peaks(spectrum: xr.DataArray, max_peaks: int = 8,
                 min_relative_height: float = 0.02,
                 tolerance_bins: float = 1.5) -> list[OrderPeak]:
     """The ``max_peaks`` largest peaks of an ``order_spectrum`` (height >=
-    ``min_relative_height`` × the largest), each named by the nearest named order line
-    within ``tolerance_bins`` order bins (``order_lines``), by decreasing amplitude."""
+    ``min_relative_height`` × the largest; the order refined between bins by a parabola
+    through the log-amplitudes, as ``find_peaks`` refines a frequency), by decreasing
+    amplitude (that of the highest bin), each named as a
+    spectrum's peak is (``frequency_names``: m·X + n·VC, |m| ≤ 4, n ≤ 3, the lowest order
+    first) within ``tolerance_bins`` order bins, else by the nearest defect order (FTF,
+    BPFI, BSF: ``order_lines``) within them."""
     values = np.asarray(spectrum.values)
     orders = np.asarray(spectrum["order"].values)
     search = values[1:]
@@ -224,12 +228,24 @@ def order_peaks(spectrum: xr.DataArray, max_peaks: int = 8,
         return []
     found, _ = scipy.signal.find_peaks(search, height=min_relative_height * search.max())
     found = found[np.argsort(-search[found])][:max_peaks] + 1
-    lines = order_lines(spectrum.attrs, max_order=float(orders[-1]))
-    tol = tolerance_bins * float(spectrum.attrs["order_bin"])
+    shaft = shaft_order_base(spectrum.attrs)
+    vcs = vc_frequencies(spectrum.attrs)
+    faults = [line for line in order_lines(spectrum.attrs, max_order=float(orders[-1]))
+              if line.kind == "fault"]
+    step = float(spectrum.attrs["order_bin"])
+    tol = tolerance_bins * step
     out = []
     for k in found:
-        near = [line for line in lines if abs(line.order - orders[k]) <= tol]
-        near.sort(key=lambda line: abs(line.order - orders[k]))
-        out.append(OrderPeak(float(orders[k]), float(values[k]),
-                             near[0].name if near else None))
+        order = float(orders[k])
+        if 0 < k < values.size - 1 and np.all(values[k - 1:k + 2] > 0):
+            a, b, c = np.log(values[k - 1:k + 2])  # refined between bins as find_peaks does
+            shift = 0.5 * (a - c) / (a - 2 * b + c)
+            order += step * shift if abs(shift) <= 0.5 else 0.0
+        names = frequency_names(order * shaft, shaft, vcs, tol_hz=tol * shaft)
+        name = names[0][0] if names else None
+        if name is None:
+            near = sorted((line for line in faults if abs(line.order - order) <= tol),
+                          key=lambda line: abs(line.order - order))
+            name = near[0].name if near else None
+        out.append(OrderPeak(order, float(values[k]), name))
     return out
