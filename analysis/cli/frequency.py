@@ -232,7 +232,7 @@ def torus(
     max_points: Annotated[int, typer.Option(help="Points per branch.")] = 100,
     ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
     lyapunov_duration: Annotated[float, typer.Option(
-        help="Averaging time of λ1 from the torus, s (0: no λ1).")] = 1.0,
+        help="Averaging time of λ1 from the torus, s (0: no λ1).")] = 2.0,
     stability_every: Annotated[int, typer.Option(
         help="On a branch, λ1 at every k-th torus and the last (>= 1).")] = 1,
     dt: Annotated[float | None, typer.Option(
@@ -314,7 +314,7 @@ def torus(
         from analysis.frequency.torus_solve import solve_torus
 
         response = solve_torus(system, None, freqs, pair, stability=stability,
-                               lyapunov_duration=lyapunov_duration or 1.0, **options)
+                               lyapunov_duration=lyapunov_duration or 2.0, **options)
         if not response.converged:
             raise InputError(f"torus: no torus found ({response.message})")
         data = torus_dataset(response)
@@ -324,7 +324,7 @@ def torus(
         data = continue_torus(system, None, param=param, start=start, stop=stop,
                               frequencies=freqs, harmonics=pair, max_points=max_points,
                               ds_max=ds_max, stability=stability,
-                              lyapunov_duration=lyapunov_duration or 1.0,
+                              lyapunov_duration=lyapunov_duration or 2.0,
                               stability_every=stability_every, progress=say, **options)
     from analysis.io import save_dataset
 
@@ -424,8 +424,9 @@ def _branch_axes(ax, data) -> None:
     amp = data.amplitude.values[:, 0] * factor
     known = data.stable.values >= 0
     ax.plot(lam, amp, ":", color="C0", lw=1.0, label="torus (λ1 not computed)")
-    for value, style, label in ((1, "o", "λ1 < 0: attracting"),
-                                (0, "x", "λ1 ≥ 0 or left the torus")):
+    for value, style, label in ((1, "o", "λ1 < 0 beyond its 95 % half-width: attracting"),
+                                (0, "x", "not shown attracting (λ1 + half-width ≥ 0, "
+                                         "or the trajectory left the torus)")):
         sel = known & (data.stable.values == value)
         if sel.any():
             ax.plot(lam[sel], amp[sel], style, color="C0" if value else "C3", ms=4,
