@@ -160,7 +160,7 @@ class SpeedProfile:
             t = t - (self.shaft_angle(t, duration) - angle) / rate
         return t
 
-    def _coefficients(self, duration: float):
+    def _coefficients(self, duration: float) -> tuple[float, float, np.ndarray, np.ndarray]:
         times, rpm = self.knots(duration)
         slopes = np.diff(rpm) / np.diff(times)
         return float(rpm[0]), float(slopes[0]), times[1:-1], np.diff(slopes)

@@ -24,7 +24,9 @@ has at t = 0 (the run's attrs): every characteristic frequency is proportional t
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.interpolate
@@ -50,7 +52,7 @@ class OrderLine:
         return {"name": self.name, "order": self.order, "kind": self.kind}
 
 
-def shaft_order_base(attrs) -> float:
+def shaft_order_base(attrs: Mapping[str, Any]) -> float:
     """The shaft frequency X (Hz) at t = 0 of a run (``shaft_hz``), which every order is
     relative to; ``InputError`` for a run without a turning shaft."""
     shaft = float(attrs.get("shaft_hz", 0.0))
@@ -60,13 +62,13 @@ def shaft_order_base(attrs) -> float:
     return shaft
 
 
-def order_lines(attrs, max_order: float = 12.0, max_shaft_order: int = 3,
+def order_lines(attrs: Mapping[str, Any], max_order: float = 12.0, max_shaft_order: int = 3,
                 max_vc_order: int = 2, faults: bool = True) -> list[OrderLine]:
-    """The named lines of a run up to ``max_order``: the shaft harmonics m·X (m ≤
-    ``max_shaft_order``), each VC harmonic n·VC (n ≤ ``max_vc_order``) and its sidebands
-    n·VC ± X (names as in spectra: X, 2X, 3X, VC, VC-X, VC+X, 2VC, 2VC-X, VC[left]…), then
-    with ``faults`` each bearing's FTF, BPFI and BSF (BPFO is VC for a stationary outer
-    race: named VC), by increasing order."""
+    """The named lines of a run (its attrs) up to ``max_order`` (cycles/rev): the shaft
+    harmonics m·X (m ≤ ``max_shaft_order``), each VC harmonic n·VC (n ≤
+    ``max_vc_order``) and its sidebands n·VC ± X (names as in spectra: X, 2X, 3X, VC,
+    VC-X, VC+X, 2VC, 2VC-X, VC[left]…), then with ``faults`` each bearing's FTF, BPFI and
+    BSF (BPFO is VC for a stationary outer race: named VC), by increasing order."""
     shaft = shaft_order_base(attrs)
     vcs = vc_frequencies(attrs)
     lines: dict[str, OrderLine] = {}
