@@ -43,7 +43,8 @@ def plot_orbit(ax, orbit: Orbit) -> None:
     ax.set_ylabel(f"Y ({unit})")
     ax.set_title(f"{orbit.name}: {orbit.what}", fontsize=9)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="upper right", framealpha=0.85)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+              frameon=False)  # below the axes: never over the orbit
 
 
 def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> Figure:
