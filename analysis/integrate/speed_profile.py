@@ -87,7 +87,10 @@ class SpeedProfile:
         """A table of speeds ``rpm`` (> 0) at ``times`` (s, strictly increasing from 0;
         2 … ``MAX_ROWS`` rows), linear in between."""
         where = f"speed table '{source}'" if source else "speed table"
-        times, rpm = [float(t) for t in times], [float(v) for v in rpm]
+        try:
+            times, rpm = [float(t) for t in times], [float(v) for v in rpm]
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: times and speeds must be numbers") from None
         if len(times) != len(rpm):
             raise InputError(f"{where}: {len(times)} times and {len(rpm)} speeds")
         if not 2 <= len(times) <= MAX_ROWS:
