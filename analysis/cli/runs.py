@@ -34,7 +34,7 @@ def simulate(
     n_balls: NBallsOption = None,
     speed_rpm: Annotated[str | None, typer.Option(
         help="Shaft speed, rpm; a ramp A:B (A at t = 0, B at the end of the run), or a CSV "
-             "speed table t_s,speed_rpm (see docs/guide/waterfall.md).")] = None,
+             "speed table t_s,speed_rpm (docs: Run-ups).")] = None,
     sets: SetOption = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time, s.")] = None,
     transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
@@ -52,11 +52,10 @@ def simulate(
 
     from analysis.integrate.simulate import simulate as run
     from analysis.integrate.simulate import simulate_to_file
+    from analysis.integrate.speed_profile import SpeedProfile, describe_speed, parse_speed
     from analysis.io import save_dataset
     from analysis.model import balls_text
     from analysis.provenance import state_names
-
-    from analysis.integrate.speed_profile import SpeedProfile, describe_speed, parse_speed
 
     speed = None if speed_rpm is None else parse_speed(speed_rpm)
     profile = speed if isinstance(speed, SpeedProfile) else None
