@@ -74,7 +74,7 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
                  color="0.3")
         fig.get_layout_engine().set(rect=(0, 0.06, 1, 0.94))
     fig.suptitle(run_title(xr.Dataset(attrs=attrs)), fontsize=10)
-    return fig
+    return plt.finish(fig, attrs)  # titles that fit, no offsets, the run's provenance
 
 
 def impulse_figure(ds: xr.Dataset, passes: np.ndarray, window_s: float, what: str,
