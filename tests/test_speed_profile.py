@@ -255,3 +255,26 @@ def test_spectrum_and_poincare_refuse_a_ramped_run(cli, tmp_path):
         assert "the run's speed changes (ramp 2000 → 4000 rpm)" in res.stderr
         assert "bearingdyn waterfall" in res.stderr
     assert not (tmp_path / "s.png").exists() and not (tmp_path / "p.png").exists()
+
+
+@pytest.mark.parametrize("name", ["vakharia2015", "vakharia2015-consistent", "balanced-rotor",
+                                  "rotor-housing", "two-bearing-rotor", "6205-outer-defect",
+                                  "nu205-roller", "duffing"])
+def test_the_shipped_rotors_turn_with_their_shaft(name):
+    """Every shipped model with a shaft depends on the time only through angles that turn
+    with it (the Duffing oscillator is forced at the shaft speed: a profile sweeps its
+    forcing); the Mathieu equation has its own clock and no speed."""
+    from analysis.integrate.speed_profile import check_model
+
+    model = load_model(name)
+    check_model(model, model.default_structure, model.defaults)  # raises if not
+
+
+def test_a_ramp_on_two_bearings_names_each_bearings_lines():
+    from analysis.signal.orders import order_lines
+
+    ds = simulate("two-bearing-rotor", duration=0.1, transient=0.0,
+                  speed_rpm=SpeedProfile.ramp(3000, 6000))
+    names = {line.name for line in order_lines(ds.attrs)}
+    assert {"X", "VC[left]", "VC[right]", "VC[left]+X", "BPFI[right]"} <= names
+    assert np.all(np.isfinite(ds["x"].values)) and np.all(np.isfinite(ds["tx"].values))
