@@ -112,5 +112,4 @@ def waterfall_figure(wf: xr.Dataset, orders: xr.DataArray | None = None) -> Figu
     if orders is not None:
         plot_orders(axes[1][0], orders)
     fig.suptitle(run_title(wf), fontsize=10)
-    plt.stamp(fig, wf)
-    return fig
+    return plt.finish(fig, wf)
