@@ -45,7 +45,7 @@ def wavy(tmp_path, monkeypatch):
             del data["parameters"][gone]
         data["parameters"]["radial_clearance"]["value"] = -2e-6
         data["parameters"]["radial_load"]["value"] = 0.0
-        data["simulation"]["x0"] = 0.0
+        data["simulation"]["initial"] = {"x_rotor": 0.0}  # the spec's rotor, at rest
         amplitudes = [f"waviness_{k}" for k in orders]
         for a in amplitudes:
             data["parameters"][a] = {"value": AMPLITUDE, "unit": "m", "source": "test",
@@ -83,14 +83,14 @@ def test_outer_race_orders_next_to_n_balls_drive_bpfo_and_others_nothing(wavy):
     assert _resultant(N_B + 1) == pytest.approx(N_B / 2) and _resultant(N_B + 2) < 1e-12
     driven, silent = _run(wavy("outer_race_waviness", [N_B + 1])), \
         _run(wavy("outer_race_waviness", [N_B + 2]))
-    top = find_peaks(driven, "x", max_peaks=1, vocabulary="fault")[0]
+    top = find_peaks(driven, "x_rotor", max_peaks=1, vocabulary="fault")[0]
     bin_hz = 1 / 0.5
     assert "BPFO" in _names(top) and abs(top.frequency_hz - textbook()["BPFO"]) <= bin_hz
-    assert np.ptp(silent["x"].values) < 1e-5 * np.ptp(driven["x"].values)
+    assert np.ptp(silent["x_rotor"].values) < 1e-5 * np.ptp(driven["x_rotor"].values)
 
 
 def test_inner_race_order_n_plus_one_drives_bpfi_plus_x(wavy):
-    top = find_peaks(_run(wavy("inner_race_waviness", [N_B + 1])), "x", max_peaks=1,
+    top = find_peaks(_run(wavy("inner_race_waviness", [N_B + 1])), "x_rotor", max_peaks=1,
                      vocabulary="fault")[0]
     f = textbook()
     assert "BPFI+X" in _names(top)
@@ -99,7 +99,7 @@ def test_inner_race_order_n_plus_one_drives_bpfi_plus_x(wavy):
 
 def test_one_wavy_ball_of_order_two_drives_2bsf_with_ftf_sidebands(wavy):
     ds = _run(wavy("ball_waviness", [2], ball=1))
-    peaks = find_peaks(ds, "x", max_peaks=2, vocabulary="fault")
+    peaks = find_peaks(ds, "x_rotor", max_peaks=2, vocabulary="fault")
     f = textbook()
     found = {name: p.frequency_hz for p in peaks for name in _names(p)}
     for label, sign in (("2BSF+FTF", 1), ("2BSF-FTF", -1)):
@@ -111,10 +111,10 @@ def test_odd_ball_orders_do_nothing_and_zero_amplitude_is_bit_for_bit(wavy):
     path = wavy("ball_waviness", [3], ball=1)
     odd = simulate(path, duration=0.02, transient=0.0)
     flat = simulate(path, duration=0.02, transient=0.0, waviness_3=0.0)
-    assert np.array_equal(odd["x"].values, flat["x"].values)
+    assert np.array_equal(odd["x_rotor"].values, flat["x_rotor"].values)
     outer = wavy("outer_race_waviness", [N_B + 1])
     zero = simulate(outer, duration=0.02, transient=0.0, **{f"waviness_{N_B + 1}": 0.0})
-    assert np.array_equal(zero["x"].values, flat["x"].values)
+    assert np.array_equal(zero["x_rotor"].values, flat["x_rotor"].values)
 
 
 def test_waviness_spec_errors_are_one_line_each(tmp_path):
