@@ -123,3 +123,6 @@ def test_the_plot_command_draws_bode_and_polar(linear_sweep, tmp_path, cli):
         result = cli("plot", str(path), option, "-o", str(out))
         assert result.returncode == 0, result.stderr
         assert out.stat().st_size > 0
+    refused = cli("plot", str(path), "--orbit", "-o", str(tmp_path / "orbit.png"))
+    assert refused.returncode == 2 and "needs a run" in refused.stderr
+    assert refused.stderr.strip().count("\n") == 0 and not (tmp_path / "orbit.png").exists()

@@ -346,6 +346,10 @@ def _special_figure(option: str, result: Path, var: list[str] | None):
         return draw(data, var, str(result))
     from analysis.provenance import as_run
 
+    kind = data.attrs.get("kind")
+    if isinstance(kind, str) and "model" in data.attrs:
+        raise InputError(f"{option}: needs a run (from `bearingdyn simulate`), got a {kind} "
+                         f"result: '{result}'")
     ds = as_run(data, result)
     if var is not None and len(var) != 2:
         raise InputError(f"--var: {option} takes two coordinates (--var X --var Y), got "
