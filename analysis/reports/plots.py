@@ -164,16 +164,20 @@ def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
                                            shrinkA=0, shrinkB=2))
         note.peak_label = True  # found again by separate_peak_labels
     handles = []
+    # peaks named by the defect vocabulary (spectrum --faults) carry no VC order
+    faults = any(p.label and p.vc_order is None and p.shaft_order is None for p in shown)
+    names = "a defect frequency, harmonic or sideband" if faults else "m·X + n·VC"
+    none = "no defect frequency, harmonic or sideband" if faults else "no m·X + n·VC"
     if kinds & {"named", "ambiguous"}:
         handles.append(ax.plot([], [], "v", color="C3", ms=4, ls="none",
-                               label="named peak: m·X + n·VC")[0])
+                               label=f"named peak: {names}")[0])
     if "ambiguous" in kinds:
         handles.append(ax.plot([], [], ls="none", marker="$*$", color="black", ms=5,
-                               label=f"{AMBIGUOUS_MARK}: ambiguous, another m·X + n·VC "
+                               label=f"{AMBIGUOUS_MARK}: ambiguous, another name "
                                      "within 1.5 bins")[0])
     if "unnamed" in kinds:
         handles.append(ax.plot([], [], "v", color="0.45", mfc="none", ms=4, ls="none",
-                               label="unnamed peak (no m·X + n·VC within 1.5 bins): "
+                               label=f"unnamed peak ({none} within 1.5 bins): "
                                      "its frequency")[0])
     if handles:
         ax.legend(handles=handles, fontsize=6.5, loc="lower right", framealpha=0.85)
