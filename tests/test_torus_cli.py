@@ -1,6 +1,7 @@
 """`bearingdyn torus`: a single torus and a short branch as JSON (the layout of `hb
---json`), the run it samples read by `spectrum` and `poincare`, the figure, and the bad
-inputs (one line, exit 2, nothing written)."""
+--json`), the run it samples read by `spectrum`, `poincare`, `plot` and `classify` (which
+calls it quasi-periodic on its own), the figure, and the bad inputs (one line, exit 2,
+nothing written)."""
 
 from __future__ import annotations
 
@@ -39,6 +40,11 @@ def test_command_single_torus_run_and_figure(cli, tmp_path):
     poincare = cli("poincare", str(tmp_path / "run.nc"), "--section", "shaft", "-o",
                    str(tmp_path / "p.png"))
     assert poincare.returncode == 0, poincare.stderr
+    plot = cli("plot", str(tmp_path / "run.nc"), "-o", str(tmp_path / "run.png"))
+    assert plot.returncode == 0, plot.stderr
+    classify = cli("classify", str(tmp_path / "run.nc"))  # the sampled run, judged alone
+    assert classify.returncode == 0 and classify.stdout.startswith("quasi-periodic"), \
+        classify.stdout
 
 
 def test_command_branch(cli, tmp_path):
