@@ -33,15 +33,19 @@ def peak_text(peak: Peak) -> str:
 def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
                     f_max: float | None = None) -> Figure:
     """The envelope spectrum (amplitude in the unit of the enveloped variable, scaled like
-    its run: µm for m) with its labelled peaks; the band and the defect frequencies in the
-    title. Two names in one bin are drawn together ('BPFO | VC') and the figure says so."""
+    its run: µm for m) with its labelled peaks, up to ``f_max`` (Hz; default: 3.2 times the
+    highest defect frequency, or further to show every peak in ``peaks``); the band, the
+    noise and the defect frequencies in the title, the band's note below. Two names in one
+    bin are drawn together ('BPFO | VC') and the figure says so."""
     attrs = spectrum.attrs
     var = str(attrs.get("envelope_of", "x"))
     factor, unit = scale_of(xr.Dataset({var: ((), 0.0, {"units": attrs.get("units", "")})}),
                             var)
     table = fault_frequencies(attrs)
     top = max((max(t["BPFO"], t["BPFI"], 2 * t["BSF"]) for t in table.values()), default=0.0)
-    f_max = f_max or (3.2 * top if top > 0 else float(spectrum.frequency[-1]))
+    highest = max((p.frequency_hz for p in peaks), default=0.0)  # every peak listed shows
+    f_max = f_max or min(max(3.2 * top if top > 0 else 0.0, 1.05 * highest)
+                         or float(spectrum.frequency[-1]), float(spectrum.frequency[-1]))
     sel = spectrum.sel(frequency=slice(0, f_max))
     fig, ax = plt.subplots(figsize=(9, 4), layout="constrained")
     ax.plot(sel.frequency, sel * factor, lw=0.8, color="C0")
