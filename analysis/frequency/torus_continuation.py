@@ -116,7 +116,7 @@ def continue_torus(
     dt: float | None = None,
     settle: float | None = None,
     stability: bool = True,
-    lyapunov_duration: float = 1.0,
+    lyapunov_duration: float = 2.0,
     stability_every: int = 1,
     ds: float | None = None,
     ds_min: float | None = None,
