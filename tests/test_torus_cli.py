@@ -71,6 +71,8 @@ def test_command_branch(cli, tmp_path):
     ([*ROTOR, "--set", "outer_race_diameter=0.028107"], "are commensurate"),
     ([*ROTOR, "--param", "speed_rpm", "--from", "5000"], "give --to"),
     (["UNFORCED", "--frequencies", "shaft,param:linear_stiffness"], "has no forcing"),
+    (["two-bearing-rotor", "--n-balls", "left=7", "--n-balls", "right=11", "--frequencies",
+      "shaft,vc[left]", "--harmonics", "2,2", "--settle", "0.05"], "do not carry"),
 ])
 def test_command_bad_inputs(cli, tmp_path, args, words):
     if args[0] == "UNFORCED":
