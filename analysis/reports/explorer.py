@@ -38,6 +38,9 @@ SPECTRUM_BINS = 400
 """Default number of spectrum bins kept per variable (peak-preserving thinning)."""
 MAX_SECTION_POINTS = 400
 """Most Poincaré points kept per point (the first ones)."""
+PEAKS_SHOWN = 6
+"""Peaks named per variable (the largest; ``find_peaks`` refines only those that can rank
+among them)."""
 
 
 def _setting_of_chart(chart: xr.Dataset) -> Setting:
@@ -67,7 +70,7 @@ def point_detail(task: tuple) -> dict[str, Any]:
         run = record(setting, system)
         spectra, sections, peaks = {}, [], []
         for var in displacement_names(run):
-            found = find_peaks(run, var)[:6]
+            found = find_peaks(run, var, max_peaks=PEAKS_SHOWN)
             amp = amplitude_spectrum(run, var)
             f_max = f_max_of(run.attrs)
             if f_max:  # the plots' range, reaching every peak of the table
