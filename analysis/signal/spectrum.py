@@ -469,9 +469,18 @@ def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray
     values = np.asarray(ds[var].values, dtype=float)
     w = scipy.signal.get_window("hann", values.size)
     weighted = (values - values.mean()) * w
-    j = np.arange(values.size)
-    return np.array([2.0 * abs(np.dot(weighted, np.exp(-2j * np.pi * f * dt * j))) / w.sum()
-                     for f in frequency])
+    # e^{-iωj} for j = a·B + b as e^{-iωaB}·e^{-iωb}: 2√N exponentials a frequency, not N
+    block = max(1, math.isqrt(values.size))
+    rows = -(-values.size // block)
+    grid = np.zeros(rows * block)
+    grid[:values.size] = weighted
+    grid = grid.reshape(rows, block)
+    a, b = np.arange(rows) * block, np.arange(block)
+    out = []
+    for f in frequency:
+        omega = -2j * np.pi * f * dt
+        out.append(2.0 * abs(np.exp(omega * a) @ grid @ np.exp(omega * b)) / w.sum())
+    return np.array(out)
 
 
 def peak_table(ds: xr.Dataset, directions: tuple[str, ...] | None = None,
