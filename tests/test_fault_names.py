@@ -188,3 +188,44 @@ def test_the_defect_families_of_the_shipped_models():
         assert run_defects({**attrs, "defect_depth": 0.0}) == ()
     assert run_defects({"model": "no-such-model"}) is None  # unknown: every family
     assert math.isclose(textbook()["BPFO"], N_B * textbook()["FTF"])
+
+
+def test_the_housing_rings_at_the_frequency_of_its_parameters(records):
+    """The clean defect record's housing displacement peaks (Welch PSD, 2-50 kHz) at
+    √(k/m)/2π of the spec's housing_stiffness and housing_mass, within its half-power
+    bandwidth (5 % damping: ±5 %)."""
+    import scipy.signal
+
+    hit, _ = records
+    fs = 1.0 / float(hit.t[1] - hit.t[0])
+    f, psd = scipy.signal.welch(hit["x_housing"].values, fs=fs, nperseg=2**14)
+    band = (f > 2000) & (f < 50_000)
+    natural = math.sqrt(float(hit.attrs["housing_stiffness"])
+                        / float(hit.attrs["housing_mass"])) / (2 * math.pi)
+    assert natural == pytest.approx(8000.0, rel=1e-6)
+    assert f[band][np.argmax(psd[band])] == pytest.approx(natural, rel=0.05)
+
+
+def test_noise_through_the_cli(tmp_path):
+    import json
+
+    from tests.conftest import run_cli
+
+    run = tmp_path / "r.nc"
+    done = run_cli("simulate", "6205-outer-defect", "-o", str(run), "--duration", "0.2",
+                   "--transient", "0.05", "--save-every", "5")
+    assert done.returncode == 0, done.stderr
+    for bad, word in (("nan", "--noise: must be an SNR in dB in [-60, 200], got nan"),
+                      ("300", "--noise: must be an SNR in dB in [-60, 200], got 300.0")):
+        done = run_cli("spectrum", str(run), "--envelope", "--noise", bad)
+        assert done.returncode == 2 and done.stderr.strip() == f"error: {word}", done.stderr
+    done = run_cli("spectrum", str(run), "--envelope", "--noise", "0", "--noise-seed", "-1")
+    assert done.returncode == 2
+    assert done.stderr.strip() == "error: --noise-seed: must be an integer >= 0, got -1"
+    done = run_cli("spectrum", str(run), "--envelope", "--noise", "10", "--noise-seed", "4",
+                   "--json")
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["provenance"]["noise_seed"] == 4
+    assert report["provenance"]["noise_snr_db"] == 10.0
+    assert report["envelopes"][0]["note"] and report["envelopes"][0]["edge_s"] > 0
