@@ -19,6 +19,9 @@ Ratio = torus time / integration time (< 1: the torus is faster). The torus give
 whole attractor as a function of (θ1, θ2) (any t, any section); the integration gives one
 series.
 
+The last lines give the error per state, largest and rms (the table of docs/frequency.md,
+Tori: ``--harmonics 8,4 12,6 16,8 20,10 24,12``).
+
     python benchmarks/bench_torus.py [--harmonics 8,4 12,6 16,8] [--window 1]
 """
 
@@ -79,6 +82,7 @@ def main() -> None:
           f"{os.getloadavg()[0]:.2f}; cores {os.cpu_count()}")
     print(f"{'H1,H2':>7} {'unknowns':>8} {'torus s':>8} {'e_H':>7} {'t* s':>6} "
           f"{'sim(t*) s':>9} {'ratio':>6} {'sim(t*+w) s':>11} {'ratio':>6}")
+    errors = []
     for text in args.harmonics:
         pair = tuple(int(v) for v in text.split(","))
         response, torus_s = timed(lambda pair=pair: solve_torus(
@@ -86,8 +90,11 @@ def main() -> None:
         if not response.converged:
             print(f"{text:>7} no torus ({response.message})")
             continue
-        e_h = float(np.max(np.max(np.abs(response.states(t_all[on]) - z_all[on]), axis=0)
-                           / amp))
+        diff = np.abs(response.states(t_all[on]) - z_all[on])
+        per_state = np.max(diff, axis=0) / amp
+        rms = np.sqrt(np.mean(diff ** 2, axis=0)) / amp
+        e_h = float(np.max(per_state))
+        errors.append((text, per_state, rms))
         start_on = response.states(np.array([0.0]))[0]
         second = simulate(system.replace(state=start_on), duration=SETTLE, transient=0.0,
                           save_every=5)
@@ -103,6 +110,11 @@ def main() -> None:
         print(f"{text:>7} {response.torus.size:>8} {torus_s:>8.2f} {e_h:>7.3f} "
               f"{t_star:>6.3f} {sim_s:>9.3f} {torus_s / sim_s:>6.1f} {sim_w:>11.3f} "
               f"{torus_s / sim_w:>6.1f}")
+
+    print(f"\nerror / amplitude per state ({', '.join(names)}), max and rms:")
+    for text, per_state, rms in errors:
+        print(f"{text:>7}  max {', '.join(f'{v:.3g}' for v in per_state)}   rms "
+              f"{', '.join(f'{v:.2g}' for v in rms)}")
 
 
 if __name__ == "__main__":
