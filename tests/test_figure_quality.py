@@ -261,3 +261,27 @@ def test_the_explorer_keeps_poincare_points_inside_their_axes(tmp_path):
         assert names == ["X"]
     finally:
         session.close()
+
+
+def test_orbit_and_full_spectrum_figures_read_in_micrometres_and_cover_their_lines():
+    from analysis.reports.orbit_plots import full_spectrum_figure, orbit_figure
+    from analysis.signal.full_spectrum import full_spectrum_peaks
+
+    ds = _run([(X_HZ, 2e-6), (-VC_HZ, 0.5e-6), (1733.0, 1e-6)], radial_clearance=1e-5)
+    fig = orbit_figure(ds)
+    (ax,) = [a for a in fig.axes if a.get_visible()]
+    assert ax.get_xlabel() == "X (µm)" and ax.get_ylabel() == "Y (µm)"
+    radius = max(np.hypot(*line.get_data()).max() for line in ax.lines
+                 if "clearance" in line.get_label())
+    assert radius == pytest.approx(10.0)  # γ0 = 1e-5 m drawn in µm
+    _no_offsets(fig)
+    _texts_inside(fig)
+    peaks = full_spectrum_peaks(ds)
+    assert {p.name for p in peaks} >= {"X", "-VC"}
+    fig = full_spectrum_figure(ds, peaks=peaks)
+    low, high = fig.axes[0].get_xlim()
+    assert all(low <= p.signed_frequency_hz <= high for p in peaks)
+    assert high >= 1733.0  # beyond the default 2.5 (VC + X): a printed line is drawn
+    assert "µm" in fig.axes[0].get_ylabel()
+    _no_offsets(fig)
+    _texts_inside(fig)
