@@ -156,9 +156,7 @@ def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], 
         return inside, (f"the band holds the structural resonance at {where} Hz: a BPFO line "
                         "here comes from impacts ringing it (an outer-race defect)")
     first, last = max(1, math.ceil(low / bpfo)), math.floor(high / bpfo)
-    harmonics = (f"the VC harmonics k = {first}…{last} (where the rotor's own "
-                 "varying-compliance response lies)" if last >= first else
-                 "no VC harmonic")
+    harmonics = (f"VC harmonics k = {first}…{last}" if last >= first else "no VC harmonic")
     elsewhere = (f"; the model's resonance{'s' if len(resonances) > 1 else ''} "
                  f"({', '.join(f'{f:.0f}' for f in resonances)} Hz) "
                  f"{'lie' if len(resonances) > 1 else 'lies'} outside it: judge an "
@@ -166,7 +164,8 @@ def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], 
                  "; the model has no structural resonance for impacts to ring")
     return inside, (f"BPFO = VC = {bpfo:.2f} Hz for a fixed outer race: this band spans "
                     f"{harmonics} and no structural resonance, so a BPFO line here does not "
-                    f"by itself show a defect{elsewhere}")
+                    f"by itself show a defect (the varying compliance alone makes one)"
+                    f"{elsewhere}")
 
 
 def _with_note(band: Band, attrs: dict) -> Band:
