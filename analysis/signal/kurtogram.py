@@ -51,6 +51,9 @@ LEVELS = 7
 SKIRT = 1e-3
 """Bins where the forward-backward response |H|² falls below this are left out of a band's
 decimated envelope (the energy weight |H|⁴ there is below 1e-6)."""
+BATCH_ELEMENTS = 2**23
+"""Complex values (8 bytes each) of one batched inverse FFT: bands of one width are
+transformed in batches of at most this size (64 MB), whatever the record's length."""
 BRIDGE = 512
 """Fewest samples of the quintic bridge from the record's end back to its start."""
 EDGE_BANDWIDTHS = 30.0
@@ -231,7 +234,13 @@ class Spectrum:
         for i, (low, high) in enumerate(bands):
             groups.setdefault(round(high - low, 6), []).append(i)
         span = (self.n - 1) / self.fs
+        chunks = []
         for members in groups.values():
+            length = max(self._slice(*bands[i])[1].size for i in members[:1])
+            m = scipy.fft.next_fast_len(2 * length + 3)
+            rows = max(1, BATCH_ELEMENTS // m)  # memory of one batch: BATCH_ELEMENTS values
+            chunks += [members[j:j + rows] for j in range(0, len(members), rows)]
+        for members in chunks:
             slices = [self._slice(*bands[i]) for i in members]
             length = max(s.size for _, s in slices)
             m = scipy.fft.next_fast_len(2 * length + 1)
