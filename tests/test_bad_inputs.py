@@ -1195,6 +1195,43 @@ CLI_CASES += _cases(JUDGED, ("spectrum", *RUN, "--envelope"), [
      ["--band: must be LO:HI in Hz with 0 <= LO < HI, got 'nan:5000'"], _run_file()),
 ])
 
+RUN_UPS = "run-ups, waterfalls, orbits, harmonic balance and tori"
+CLI_CASES += _cases(RUN_UPS, SIM_SHORT, [
+    ("ramp-start-zero", "a ramp that starts at 0 rpm", ("--speed-rpm", "0:5000"),
+     ["--speed-rpm: the ramp's start speed must be a finite number > 0 rpm, got 0.0"]),
+    ("speed-table-out-of-order", "a speed table whose times go back",
+     ("--speed-rpm", "table.csv"),
+     ["speed table 'table.csv' line 4: t_s must increase, got 0.1 after 0.2"],
+     _spec_file("table.csv", "t_s,speed_rpm\n0,1000\n0.2,3000\n0.1,2000\n")),
+])
+CLI_CASES += _cases(RUN_UPS, (), [
+    ("waterfall-constant-speed", "a waterfall of a constant-speed run",
+     ("waterfall", *RUN, "-o", "w.png"),
+     ["waterfall: the run is at a constant speed", "simulate with --speed-rpm A:B"],
+     _run_file()),
+    ("orbit-unknown-coordinate", "an orbit of a coordinate the run lacks",
+     ("plot", *RUN, "--orbit", "--var", "x", "--var", "q", "-o", "o.png"),
+     ["var: no state variable 'q' in this run; variables: x, y, vx, vy"], _run_file()),
+    ("hb-no-harmonics", "harmonic balance with no harmonics",
+     ("hb", "vakharia2015", "--period", "vc", "--harmonics", "0", "-o", "h.nc"),
+     ["--harmonics: must be a whole number >= 1, got 0"]),
+    ("hb-speed-zero-period", "a shaft period of a model whose speed is 0 (an internal "
+     "error before)", ("hb", "mathieu", "--period", "shaft", "--harmonics", "4", "-o", "h.nc"),
+     ["period: shaft is not defined for these parameters", "is the speed zero"]),
+    ("torus-equal-frequencies", "a torus of one frequency twice",
+     ("torus", "vakharia2015", "--frequencies", "shaft,shaft", "--harmonics", "4,2",
+      "-o", "t.nc"),
+     ["--frequencies: shaft and shaft are the same frequency"]),
+    ("torus-unknown-bearing", "a torus frequency of a bearing the model lacks",
+     ("torus", "vakharia2015", "--frequencies", "shaft,vc[left]", "--harmonics", "4,2",
+      "-o", "t.nc"),
+     ["--frequencies: no bearing 'left' in model 'vakharia2015'; bearings: bearing"]),
+    ("torus-no-harmonics", "a torus with no harmonics of one frequency",
+     ("torus", "vakharia2015", "--frequencies", "shaft,vc", "--harmonics", "0,2",
+      "-o", "t.nc"),
+     ["--harmonics: each of H1,H2 must be a whole number >= 1, got '0,2'"]),
+])
+
 _GENERATED: dict[str, bytes] = {}
 
 

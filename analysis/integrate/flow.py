@@ -109,7 +109,10 @@ class Period:
 
 
 def period_seconds(model: Model, n_balls: tuple[int, ...], period: Period, values: dict) -> float:
-    value = float(period.seconds(model, n_balls, model.parameter_vector(values)))
+    try:
+        value = float(period.seconds(model, n_balls, model.parameter_vector(values)))
+    except ZeroDivisionError:  # a numeric speed of 0: no period, as T = inf below
+        value = math.inf
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"period: {period} is not defined for these parameters "
                          f"(got T = {value!r} s; is the speed zero, or are there no balls?)")
