@@ -216,8 +216,8 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
                        f"({how}, kurtosis {chosen.kurtosis:.3g}, {chosen.edge_s * 1e3:.3g} ms "
                        "of filter start-up left out at each end)")
             _print_peaks(ds, variables, peaks)
-            if any("BPFO" in n for p in peaks for n in (p.label or "", *p.also)) \
-                    or "holds the structural" in chosen.note:
+            if any(w in n for p in peaks for n in (p.label or "", *p.also)
+                   for w in ("BPFO", "VC")) or "holds the structural" in chosen.note:
                 typer.echo(f"note: {chosen.note}")
         typer.echo("lines are named only 15 dB or more above the median of the 100 bins "
                    "on either side (the noise floor)")
