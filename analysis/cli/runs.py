@@ -99,7 +99,8 @@ def spectrum(
                            "the defect frequencies (BPFO, BPFI, 2BSF, BPFI-X, …).")] = False,
     band: Annotated[str | None, typer.Option(
         "--band", help="Pass band LO:HI in Hz of --envelope (default: the band of largest "
-                       "spectral kurtosis).")] = None,
+                       "spectral kurtosis), or 'resonance': the band of largest kurtosis "
+                       "among those holding a structural resonance of the model.")] = None,
     faults: Annotated[bool, typer.Option(
         "--faults", help="Name the peaks by the defect frequencies (FTF, BPFO, BPFI, BSF, "
                          "harmonics, sidebands) instead of X and VC.")] = False,
@@ -211,7 +212,9 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
 
         typer.echo(f"X = {float(ds.attrs['shaft_hz']):.2f} Hz, {fault_words(ds.attrs)}")
         for name, peaks, chosen in results:
-            how = "spectral kurtosis" if chosen.chosen == "kurtosis" else "given"
+            how = {"kurtosis": "spectral kurtosis", "user": "given",
+                   "resonance": "spectral kurtosis, among the bands holding a structural "
+                                "resonance"}[chosen.chosen]
             typer.echo(f"envelope of {name}: band {chosen.low_hz:g}:{chosen.high_hz:g} Hz "
                        f"({how}, kurtosis {chosen.kurtosis:.3g}, {chosen.edge_s * 1e3:.3g} ms "
                        "of filter start-up left out at each end)")

@@ -67,7 +67,8 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(f"envelope amplitude of {var}" + (f" ({unit})" if unit else ""))
     ax.grid(True, alpha=0.3)
-    how = "chosen by spectral kurtosis" if band.chosen == "kurtosis" else "given"
+    how = {"kurtosis": "chosen by spectral kurtosis", "user": "given",
+           "resonance": "by kurtosis, holding a resonance"}.get(band.chosen, band.chosen)
     note = ("; names joined by '|' fall within one bin" if shared else "")
     noise = (f"; white noise at {float(attrs['noise_snr_db']):g} dB SNR, seed "
              f"{int(attrs['noise_seed'])}" if "noise_seed" in attrs else "")

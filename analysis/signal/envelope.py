@@ -60,7 +60,8 @@ class Band:
     high_hz: float
     kurtosis: float
     chosen: str
-    """``user`` (given) or ``kurtosis`` (found by the search)."""
+    """``user`` (given), ``kurtosis`` (found by the search) or ``resonance`` (found by the
+    search among the bands holding a structural resonance)."""
     edge_s: float = 0.0
     """Time (s) left out at each end of the envelope: the filter's start-up."""
     resonances_hz: tuple[float, ...] = ()
@@ -69,8 +70,16 @@ class Band:
     """What a BPFO line in this band means (BPFO = VC for a fixed outer race)."""
 
 
-def parse_band(text: str) -> tuple[float, float]:
-    """``"LO:HI"`` (Hz) as a pair of numbers; InputError naming ``--band`` otherwise."""
+RESONANCE = "resonance"
+"""The band argument that asks for the band of largest kurtosis among those holding a
+structural resonance of the model: where an outer-race fault is judged (BPFO = VC)."""
+
+
+def parse_band(text: str) -> tuple[float, float] | str:
+    """``"LO:HI"`` (Hz) as a pair of numbers, or ``"resonance"`` (:data:`RESONANCE`);
+    InputError naming ``--band`` otherwise."""
+    if text.strip().lower() == RESONANCE:
+        return RESONANCE
     lo, sep, hi = text.partition(":")
     try:
         band = (float(lo), float(hi))
@@ -184,7 +193,8 @@ def kurtogram_of(ds: xr.Dataset, var: str | None = None,
     return kg.kurtogram(values, fs, floor)
 
 
-def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None) -> Band:
+def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None,
+          resonance: bool = False) -> Band:
     floor = (default_min_width(ds, spectrum.fs) if min_width_hz is None
              else float(min_width_hz))
     found = kg.kurtogram(np.zeros(0), spectrum.fs, floor, spectrum=spectrum)
@@ -192,9 +202,22 @@ def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None) -> 
         raise InputError(f"--band: no band of at least {floor:g} Hz fits below the "
                          f"Nyquist frequency {spectrum.fs / 2:g} Hz of this record; give "
                          "--band LO:HI")
-    i = found.best()
+    k = found.kurtosis
+    if resonance:
+        resonances = structural_resonances(ds.attrs)
+        holds = np.array([any(lo <= f <= hi for f in resonances)
+                          for lo, hi in zip(found.low_hz, found.high_hz, strict=True)])
+        if not holds.any():
+            raise InputError(f"--band: {RESONANCE!r} needs a structural resonance of the "
+                             "model inside a searched band (a sprung body's <body>_stiffness "
+                             "and <body>_mass); " + ("this model has none" if not resonances
+                             else f"{', '.join(f'{f:g}' for f in resonances)} Hz lie outside "
+                             "the searched range"))
+        k = np.where(holds, k, -np.inf)
+    i = int(np.argmax(k))
     return _with_note(Band(float(found.low_hz[i]), float(found.high_hz[i]),
-                           float(found.kurtosis[i]), "kurtosis"), ds.attrs)
+                           float(found.kurtosis[i]), RESONANCE if resonance else "kurtosis"),
+                      ds.attrs)
 
 
 def choose_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None) -> Band:
@@ -203,17 +226,21 @@ def choose_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None) -> 
     return _best(ds, kg.Spectrum(values, fs), min_width_hz)
 
 
-def envelope(ds: xr.Dataset, var: str | None = None, band: tuple[float, float] | None = None,
+def envelope(ds: xr.Dataset, var: str | None = None,
+             band: tuple[float, float] | str | None = None,
              min_width_hz: float | None = None) -> tuple[xr.Dataset, Band]:
     """The Hilbert envelope of ``ds[var]`` band-passed to ``band`` (Hz; None: chosen by
-    kurtosis), as a run-like dataset with the variable ``<var>_envelope`` (the unit of
+    kurtosis; ``"resonance"``: the band of largest kurtosis among those holding a structural
+    resonance), as a run-like dataset with the variable ``<var>_envelope`` (the unit of
     ``var``) on the part of ``t`` clear of the filter's edges (cut to a fast FFT length),
     the run's attrs plus ``band_hz`` and ``envelope_of``, and the band used."""
     var = displacement_names(ds)[0] if var is None else var
     values, fs = _signal(ds, var)
     spectrum = kg.Spectrum(values, fs)
-    if band is None:
-        chosen = _best(ds, spectrum, min_width_hz)
+    if band is None or isinstance(band, str):
+        if band is not None and band != RESONANCE:
+            raise InputError(f"--band: must be LO:HI in Hz or {RESONANCE!r}, got {band!r}")
+        chosen = _best(ds, spectrum, min_width_hz, resonance=band == RESONANCE)
     else:
         low, high = check_band(band, fs, len(values))
         k = float(spectrum.kurtosis([(low, high)])[0])
@@ -233,7 +260,7 @@ def envelope(ds: xr.Dataset, var: str | None = None, band: tuple[float, float] |
 
 
 def envelope_spectrum(ds: xr.Dataset, var: str | None = None,
-                      band: tuple[float, float] | None = None,
+                      band: tuple[float, float] | str | None = None,
                       min_width_hz: float | None = None) -> xr.DataArray:
     """Amplitude spectrum (unit of ``var``; coordinate ``frequency`` in Hz) of the envelope of
     ``ds[var]`` in ``band`` (Hz; None: chosen by kurtosis). Its attrs hold ``band_hz``
@@ -245,7 +272,7 @@ def envelope_spectrum(ds: xr.Dataset, var: str | None = None,
 
 
 def envelope_peaks(ds: xr.Dataset, var: str | None = None,
-                   band: tuple[float, float] | None = None, max_peaks: int = 8,
+                   band: tuple[float, float] | str | None = None, max_peaks: int = 8,
                    min_relative_height: float = 0.02,
                    min_width_hz: float | None = None) -> tuple[list[Peak], Band]:
     """The largest peaks of the envelope spectrum of ``ds[var]``, named in the defect
