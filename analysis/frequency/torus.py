@@ -428,12 +428,18 @@ class TorusSystem:
     shear: int = 0
     """m of the harmonic set {(k1 − m k2) ω1 + k2 ω2 : |k1| ≤ H1, |k2| ≤ H2}: the basis
     frequencies are (ω1, ω2 − m ω1) (module docstring, *The harmonic set*)."""
+    dense: bool = True
+    """False: the series only (a torus from ``invariant_circle``: no dense Jacobian is built,
+    so the harmonics are not bounded by the memory of one)."""
     basis: TorusBasis = field(init=False)
 
     def __post_init__(self) -> None:
         for per in self.frequencies:
             per.check(self.system.model)
-        self.harmonics = check_torus_harmonics(self.harmonics, self.system.n_state)
+        if self.dense:
+            self.harmonics = check_torus_harmonics(self.harmonics, self.system.n_state)
+        else:
+            self.harmonics = tuple(int(h) for h in self.harmonics)
         self.samples = torus_samples(self.harmonics, self.samples)
         self.basis = TorusBasis(self.harmonics, self.samples)
 

@@ -186,7 +186,8 @@ def torus_of(data: xr.Dataset, point: int = -1) -> tuple[TorusSystem, np.ndarray
     freqs = parse_frequencies(str(data.attrs["frequencies"]), system.model)
     harmonics = tuple(int(v) for v in str(data.attrs["harmonics"]).split(","))
     samples = tuple(int(v) for v in str(data.attrs["samples"]).split(","))
-    ts = TorusSystem(system, freqs, harmonics, samples, int(data.attrs.get("shear", 0)))
+    ts = TorusSystem(system, freqs, harmonics, samples, int(data.attrs.get("shear", 0)),
+                     dense=data.attrs.get("solver", "hb") != "shooting")
     return ts, np.asarray(data.coefficients.values[point], dtype=float).reshape(-1)
 
 
