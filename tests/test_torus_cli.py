@@ -83,3 +83,62 @@ def test_command_bad_inputs(cli, tmp_path, args, words):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], lines
     assert not target.exists()
+
+
+def test_command_shooting_torus_json_run_and_figure(cli, tmp_path):
+    """--method shooting: the JSON layout of --method hb, the Dataset read by torus_run
+    (--run), the figure with the result's provenance in its PNG."""
+    from PIL import Image
+
+    out = cli("torus", *ROTOR, "--method", "shooting", "--points", "17",
+              "--lyapunov-duration", "0", "-o", str(tmp_path / "c.nc"), "--run",
+              str(tmp_path / "run.nc"), "--duration", "0.3", "--plot",
+              str(tmp_path / "c.png"), "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    point = data["points"][0]
+    assert set(point) == {"amplitude", "stable", "special", "residual"}
+    assert point["residual"] < 1e-10 and set(point["amplitude"]) == {"x", "y", "vx", "vy"}
+    assert data["provenance"]["solver"] == "shooting"
+    stored = open_result(tmp_path / "c.nc")
+    assert stored.attrs["points"] == 17 and stored.circle.shape == (4, 17)
+    assert np.allclose(np.ptp(stored.torus.values[0, 0]) / 2, point["amplitude"]["x"])
+    run = open_result(tmp_path / "run.nc")
+    assert run.attrs["method"] == "torus" and run.sizes["t"] > 1000
+    text = Image.open(tmp_path / "c.png").text
+    assert text["model"] == "vakharia2015" and text["spec_sha256"] == stored.attrs["spec_sha256"]
+    assert text["bearingdyn_version"] == stored.attrs["bearingdyn_version"]
+
+
+def test_hb_figure_carries_the_provenance(cli, tmp_path):
+    from PIL import Image
+
+    from tests.test_harmonic_balance import DUFFING_ARGS
+
+    out = cli("hb", "duffing", *DUFFING_ARGS, "--set", "speed_rpm=12", "--harmonics", "5",
+              "-o", str(tmp_path / "one.nc"), "--plot", str(tmp_path / "one.png"))
+    assert out.returncode == 0, out.stderr
+    stored = open_result(tmp_path / "one.nc")
+    text = Image.open(tmp_path / "one.png").text
+    for key in ("model", "spec_file", "spec_sha256", "bearingdyn_version"):
+        assert text[key] == str(stored.attrs[key]), key
+
+
+@pytest.mark.parametrize("args, words", [
+    ([*ROTOR, "--method", "shooting", "--points", "7"], "--points: must be a whole number >= 8"),
+    ([*ROTOR, "--method", "shooting", "--points", "100000"], "GiB"),
+    ([*ROTOR, "--method", "shooting", "--harmonics", "8,4"], "--harmonics: applies to "
+                                                             "--method hb only"),
+    ([*ROTOR, "--points", "33"], "--points: applies to --method shooting only"),
+    ([*ROTOR, "--method", "shooting", "--param", "speed_rpm", "--from", "5000", "--to",
+      "6000"], "continuation of the invariant circle is not available"),
+    ([*ROTOR, "--method", "shooting", "--frequencies", "vc,shaft"], "--method shooting needs"),
+    ([*ROTOR, "--method", "fourier"], "--method: must be hb or shooting"),
+])
+def test_command_shooting_bad_inputs(cli, tmp_path, args, words):
+    target = tmp_path / "t.nc"
+    out = cli("torus", *args, "-o", str(target))
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], lines
+    assert not target.exists()

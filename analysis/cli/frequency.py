@@ -171,11 +171,11 @@ def _print(data, output: Path) -> None:
 
 def response_figure(data):
     """The amplitude of the first state against the parameter (one point without one):
-    stable solid, unstable dashed, special points marked."""
-    from matplotlib.figure import Figure
+    stable solid, unstable dashed, special points marked; the PNG carries the result's
+    provenance (``canvas.finish``)."""
+    from analysis.reports import canvas
 
-    fig = Figure(figsize=(8, 5), layout="constrained")
-    ax = fig.add_subplot()
+    fig, ax = canvas.subplots(figsize=(8, 5), layout="constrained")
     param = data.attrs.get("param", "")
     state = str(data.state.values[0])
     unit = str(data.state_units.values[0])
@@ -201,7 +201,7 @@ def response_figure(data):
     ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({unit})")
     ax.set_title(f"{data.attrs['model']}: harmonic balance, period {data.attrs['period']}, "
                  f"H = {data.attrs['harmonics']}", fontsize=9)
-    return fig
+    return canvas.finish(fig, data)
 
 
 def _as_flag(err: InputError, flag: str, field: str) -> InputError:
@@ -219,8 +219,14 @@ def torus(
     frequencies: Annotated[str, typer.Option(
         "--frequencies", help="Two base frequencies F1,F2: shaft, vc, vc[name] or "
                               "param:NAME.")] = "shaft,vc",
-    harmonics: Annotated[str, typer.Option(
-        "--harmonics", help="Harmonics H1,H2 of F1 and F2 (each >= 1).")] = "8,4",
+    harmonics: Annotated[str | None, typer.Option(
+        "--harmonics", help="Harmonics H1,H2 of F1 and F2 (each >= 1; --method hb only; "
+                            "default 8,4).")] = None,
+    method: Annotated[str, typer.Option(
+        "--method", help="hb: 2-D harmonic balance; shooting: the invariant circle of the "
+                         "F1-period map (accurate on contact; one torus, no --param).")] = "hb",
+    points: Annotated[int | None, typer.Option(
+        "--points", help="Circle points N of --method shooting (>= 8; default 65).")] = None,
     n_balls: NBallsOption = None,
     sets: SetOption = None,
     param: Annotated[str | None, typer.Option(
@@ -278,10 +284,27 @@ def torus(
                          f"{stability_every}")
     if not (duration > 0 and np.isfinite(duration)):
         raise InputError(f"--duration: must be a finite number > 0 s, got {duration!r}")
+    if method not in ("hb", "shooting"):
+        raise InputError(f"--method: must be hb or shooting, got {method!r}")
+    if method == "shooting" and harmonics is not None:
+        raise InputError("--harmonics: applies to --method hb only; the shooting torus is "
+                         "resolved by --points")
+    if method == "hb" and points is not None:
+        raise InputError("--points: applies to --method shooting only; harmonic balance is "
+                         "resolved by --harmonics")
+    if method == "shooting" and continued:
+        raise InputError(f"{continued[0]}: continuation of the invariant circle is not "
+                         "available; use --method hb for a branch")
     system = as_system(model, parse_n_balls(n_balls), **values)
     check_forced(system)
+    if method == "shooting":
+        from analysis.frequency.invariant_circle import DEFAULT_POINTS, check_points
+
+        circle_points = check_points(DEFAULT_POINTS if points is None else points,
+                                     system.n_state, "--points")
     try:
-        pair = check_torus_harmonics(harmonics, system.n_state, "--harmonics")
+        pair = check_torus_harmonics("8,4" if harmonics is None else harmonics,
+                                     system.n_state, "--harmonics")
         freqs = parse_frequencies(frequencies, system.model)
     except InputError as err:
         raise _as_flag(err, "--frequencies", "frequencies") from None
@@ -309,7 +332,18 @@ def torus(
 
     options = given_options(dt=dt, settle=settle)
     stability = lyapunov_duration > 0
-    if param is None:
+    if method == "shooting":
+        if freqs[0].kind == "vc" or freqs[1].kind != "vc":
+            raise InputError(f"--frequencies: --method shooting needs F1 shaft or param:NAME "
+                             f"and F2 a vc, got {frequencies}")
+        from analysis.frequency.invariant_circle import circle_dataset, solve_circle
+
+        circle = solve_circle(system, None, freqs, circle_points, stability=stability,
+                              lyapunov_duration=lyapunov_duration or 2.0, **options)
+        if not circle.converged:
+            raise InputError(f"torus: no invariant circle found ({circle.message})")
+        data = circle_dataset(circle)
+    elif param is None:
         from analysis.frequency.torus_dataset import torus_dataset
         from analysis.frequency.torus_solve import solve_torus
 
@@ -352,7 +386,18 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
     lam = data.lambda1.values
     head = (f"wrote {output}: torus {data.attrs['frequencies']}, H = "
             f"{data.attrs['harmonics']}, ")
-    if not param:
+    if data.attrs.get("solver") == "shooting":
+        amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
+            data.state.values, data.amplitude.values[0], data.state_units.values,
+            strict=True))
+        typer.echo(f"wrote {output}: torus {data.attrs['frequencies']} by the invariant "
+                   f"circle of N = {data.attrs['points']} points, residual "
+                   f"{float(data.residual.values[0]):.2e}, circle tail "
+                   f"{float(data.border.values[0]):.1e}, change at N = "
+                   f"{data.attrs['circle_change_points']}: "
+                   f"{float(data.attrs['circle_change']):.1e}; lambda1 {float(lam[0]):.4g} ± "
+                   f"{float(data.lambda1_ci95.values[0]):.2g} 1/s; amplitude {amp}")
+    elif not param:
         amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
             data.state.values, data.amplitude.values[0], data.state_units.values,
             strict=True))
@@ -370,11 +415,10 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
 def torus_figure(data, duration: float, dt: float | None = None):
     """The shaft section of the (last) torus, u(0, θ2) for θ2 in [0, 2π), against the
     Poincaré section (shaft) of a time run of the same system from a state on the torus,
-    in the first two states."""
-    from matplotlib.figure import Figure
-
+    in the first two states; the PNG carries the result's provenance (``canvas.finish``)."""
     from analysis.frequency.torus_dataset import torus_of
     from analysis.integrate.simulate import simulate
+    from analysis.reports import canvas
     from analysis.reports.plots import scale_of
     from analysis.signal.poincare import poincare_section
 
@@ -390,16 +434,18 @@ def torus_figure(data, duration: float, dt: float | None = None):
     fa, ua = scale_of(ds, a)
     fb, ub = scale_of(ds, b)
     param = data.attrs.get("param", "")
-    fig = Figure(figsize=(12, 5) if param else (6.5, 5.5), layout="constrained")
     if param:
-        _branch_axes(fig.add_subplot(1, 2, 1), data)
-        ax = fig.add_subplot(1, 2, 2)
+        fig, (left, ax) = canvas.subplots(1, 2, figsize=(12, 5), layout="constrained")
+        _branch_axes(left, data)
     else:
-        ax = fig.add_subplot()
+        fig, ax = canvas.subplots(figsize=(6.5, 5.5), layout="constrained")
+    shooting = data.attrs.get("solver") == "shooting"
+    label = (f"invariant circle u(0, θ2), N = {data.attrs['points']}" if shooting else
+             f"torus section u(0, θ2), H = {data.attrs['harmonics']}")
     ax.plot(sec[a].values * fa, sec[b].values * fb, ".", ms=3, color="C1",
             label=f"Poincaré section of a time run ({len(sec[a])} revolutions)")
     ax.plot(curve[:, 0] * fa, curve[:, 1] * fb, "-", color="C0", lw=1.2,
-            label=f"torus section u(0, θ2), H = {data.attrs['harmonics']}")
+            label=label)
     ax.set_xlabel(f"{a} ({ua})")
     ax.set_ylabel(f"{b} ({ub})")
     ax.legend(fontsize=8)
@@ -409,7 +455,7 @@ def torus_figure(data, duration: float, dt: float | None = None):
         where = f", {param} = {float(data[param].values[-1]):.6g}"
     ax.set_title(f"{data.attrs['model']}: torus {data.attrs['frequencies']} at the shaft "
                  f"section (t = k/X){where}", fontsize=9)
-    return fig
+    return canvas.finish(fig, data)
 
 
 def _branch_axes(ax, data) -> None:
