@@ -22,7 +22,15 @@ series.
 The last lines give the error per state, largest and rms (the table of docs/frequency.md,
 Tori: ``--harmonics 8,4 12,6 16,8 20,10 24,12``).
 
+For each N of ``--points``, the same torus by the invariant circle of the shaft map
+(``invariant_circle.solve_circle`` without λ1 and without its 2N solve): its wall time,
+its error at the shaft sections t = k·T1 of the reference (the circle u(ω2 t)), at every
+reference time (the Dataset's series on the N1 × N grid), and at the sections outside the
+cage phases 0.5–2.5 rad (where the shaft map's local multiplier is a flip below −1; the
+table of docs/frequency.md, "Tori by the invariant circle of the shaft map").
+
     python benchmarks/bench_torus.py [--harmonics 8,4 12,6 16,8] [--window 1]
+        [--points 33 65 129]
 """
 
 from __future__ import annotations
@@ -33,6 +41,7 @@ import time
 
 import numpy as np
 
+from analysis.frequency.invariant_circle import solve_circle
 from analysis.frequency.torus_solve import solve_torus
 from analysis.integrate.simulate import simulate
 from analysis.model import System
@@ -68,6 +77,8 @@ def main() -> None:
     parser.add_argument("--harmonics", nargs="+", default=["8,4", "12,6", "16,8"])
     parser.add_argument("--window", type=float, default=1.0,
                         help="Attractor time after t* in the second integration row, s.")
+    parser.add_argument("--points", nargs="*", type=int, default=[33, 65, 129],
+                        help="Circle points N of the shooting rows.")
     args = parser.parse_args()
     system = System.make(MODEL, n_balls=N_BALLS, speed_rpm=SPEED)
     names = system.state_names
@@ -115,6 +126,28 @@ def main() -> None:
     for text, per_state, rms in errors:
         print(f"{text:>7}  max {', '.join(f'{v:.3g}' for v in per_state)}   rms "
               f"{', '.join(f'{v:.2g}' for v in rms)}")
+    if not args.points:
+        return
+    period = 60.0 / SPEED
+    sections = on & (np.abs(np.mod(t_all / period + 0.5, 1.0) - 0.5) < 1e-6)
+    print(f"\ninvariant circle of the shaft map (max error / amplitude over the states; "
+          f"{sections.sum()} sections):")
+    print(f"{'N':>5} {'circle s':>8} {'tail':>8} {'sections':>9} {'all t':>8} "
+          f"{'outside flip':>12}  per state at the sections")
+    for n in args.points:
+        circle, circle_s = timed(lambda n=n: solve_circle(
+            system, None, "shaft,vc", n, convergence=False, stability=False))
+        if not circle.converged:
+            print(f"{n:>5} no circle ({circle.message})")
+            continue
+        t_k = t_all[sections]
+        at_k = np.abs(circle.at_sections(t_k) - z_all[sections]) / amp
+        every = np.abs(circle.torus.at_times(circle.coefficients, t_all[on]) - z_all[on]) / amp
+        phase = np.mod(circle.omegas[1] * t_k, 2 * np.pi)
+        outside = (phase < 0.5) | (phase > 2.5)
+        print(f"{n:>5} {circle_s:>8.2f} {circle.tail:>8.1e} {at_k.max():>9.2e} "
+              f"{every.max():>8.2e} {at_k[outside].max():>12.2e}  "
+              f"{', '.join(f'{v:.2g}' for v in at_k.max(axis=0))}")
 
 
 if __name__ == "__main__":
