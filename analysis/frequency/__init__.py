@@ -18,7 +18,9 @@ their continuation.
 * ``torus_dataset``: tori as Datasets with named spectrum lines, and runs sampled from them
   (``torus_dataset``, ``torus_run``, ``torus_of``);
 * ``torus_continuation``: tori continued in a runtime parameter, with the report of where
-  and why the branch stops (``continue_torus``).
+  and why the branch stops (``continue_torus``);
+* ``invariant_circle``: the same torus as the invariant circle of the shaft-period map
+  (quasi-periodic shooting: ``solve_circle`` -> ``CircleResponse``, ``circle_dataset``).
 
 Every public name is importable from here: ``from analysis.frequency import
 harmonic_balance, continue_harmonic``.
@@ -40,6 +42,7 @@ from analysis.frequency.harmonic import (
     fast_samples,
 )
 from analysis.frequency.hill import SORTS, HillResult, hill_stability
+from analysis.frequency.invariant_circle import CircleResponse, circle_dataset, solve_circle
 from analysis.frequency.solve import (
     PeriodicResponse,
     harmonic_balance,
@@ -52,10 +55,11 @@ from analysis.frequency.torus_dataset import torus_dataset, torus_of, torus_run
 from analysis.frequency.torus_solve import TorusResponse, solve_torus
 
 __all__ = [
-    "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "HarmonicBranchProblem",
-    "HarmonicSystem", "HillResult", "PeriodicResponse", "TorusBasis", "TorusResponse",
-    "TorusSystem", "check_forced", "check_harmonics", "continue_harmonic", "continue_torus",
-    "fast_samples", "harmonic_balance", "harmonic_branch_dataset", "harmonic_convergence",
-    "hill_of", "hill_stability", "parse_frequencies", "solve_torus", "torus_dataset",
-    "torus_of", "torus_run", "trace_harmonic_branch",
+    "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "CircleResponse",
+    "HarmonicBranchProblem", "HarmonicSystem", "HillResult", "PeriodicResponse", "TorusBasis",
+    "TorusResponse", "TorusSystem", "check_forced", "check_harmonics", "circle_dataset",
+    "continue_harmonic", "continue_torus", "fast_samples", "harmonic_balance",
+    "harmonic_branch_dataset", "harmonic_convergence", "hill_of", "hill_stability",
+    "parse_frequencies", "solve_circle", "solve_torus", "torus_dataset", "torus_of",
+    "torus_run", "trace_harmonic_branch",
 ]
