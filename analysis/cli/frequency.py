@@ -260,7 +260,9 @@ def torus(
 ):
     """Quasi-periodic response on a 2-torus by harmonic balance with two base frequencies
     (2-D AFT, exact Jacobian by CasADi AD) and its λ1; with --param, --from and --to its
-    continuation, and where and why it stops."""
+    continuation, and where and why it stops. --method shooting: the same torus as the
+    invariant circle of the F1-period map at --points cage phases (RK4 with its AD
+    Jacobian; accurate on contact; one torus)."""
     from analysis.frequency.harmonic import check_forced
     from analysis.frequency.torus import (
         check_frequencies,
