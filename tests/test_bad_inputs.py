@@ -1232,6 +1232,16 @@ CLI_CASES += _cases(RUN_UPS, (), [
      ["--harmonics: each of H1,H2 must be a whole number >= 1, got '0,2'"]),
 ])
 
+CLI_CASES += _cases("envelopes and noise", ("spectrum", *RUN), [
+    ("noise-snr-range", "an SNR beyond its range", ("--noise", "500"),
+     ["--noise: must be an SNR in dB in [-60, 200], got 500.0"]),
+    ("noise-seed-negative", "a negative noise seed", ("--noise", "0", "--noise-seed", "-1"),
+     ["--noise-seed: must be an integer >= 0, got -1"]),
+    ("band-resonance-none", "the resonance band of a model without a structural resonance",
+     ("--envelope", "--band", "resonance"),
+     ["--band: 'resonance' needs a structural resonance of the model", "this model has none"]),
+], setup=_run_file())
+
 _GENERATED: dict[str, bytes] = {}
 
 
@@ -1417,7 +1427,8 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
           "jobs", "checked before any write", "accepted without a word (now judged)",
           "messages that name the right thing", "judged, not failed inside",
-          "half-written and damaged generated code", "numerical failures"]
+          "half-written and damaged generated code", RUN_UPS, "envelopes and noise",
+          "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:
