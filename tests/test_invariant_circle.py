@@ -186,3 +186,24 @@ def test_dataset_and_sampled_run(circle, attractor):
     t, z = attractor
     err = np.max(np.abs(circle.torus.at_times(circle.coefficients, t) - z), axis=0)
     assert np.all(err <= 2.5e-3 * np.ptp(z, axis=0) / 2), err / (np.ptp(z, axis=0) / 2)
+
+
+def test_continuation_in_speed_and_its_report():
+    """Three circles from 5000 rpm: each one the circle solve_circle finds alone at its
+    speed (from its own simulation), and the report of where the branch stopped."""
+    from analysis.frequency.circle_continuation import continue_circle
+
+    data = continue_circle(rotor(), param="speed_rpm", start=5000, stop=5400, points=33,
+                           max_points=3)
+    speeds = data.speed_rpm.values
+    assert len(speeds) == 3 and np.all(np.diff(speeds) > 0)
+    assert np.all(data.residual.values < 1e-9)
+    report = data.attrs["stop_report"]
+    assert report.startswith("stopped after max_points = 3")
+    assert f"Last converged circle at speed_rpm = {speeds[-1]:.8g} rpm" in report
+    alone = solve_circle(System.make("vakharia2015", n_balls=10, speed_rpm=float(speeds[-1])),
+                         None, "shaft,vc", 33, convergence=False, stability=False)
+    mine = data.circle.values[-1].T
+    amp = np.ptp(alone.circle, axis=0) / 2
+    assert np.all(np.abs(mine - alone.circle).max(axis=0) <= 1e-8 * amp)
+    assert data.attrs["solver"] == "shooting" and np.all(data.border.values < 1e-2)

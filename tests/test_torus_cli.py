@@ -130,8 +130,8 @@ def test_hb_figure_carries_the_provenance(cli, tmp_path):
     ([*ROTOR, "--method", "shooting", "--harmonics", "8,4"], "--harmonics: applies to "
                                                              "--method hb only"),
     ([*ROTOR, "--points", "33"], "--points: applies to --method shooting only"),
-    ([*ROTOR, "--method", "shooting", "--param", "speed_rpm", "--from", "5000", "--to",
-      "6000"], "continuation of the invariant circle is not available"),
+    ([*ROTOR, "--method", "shooting", "--param", "speed_rpm", "--from", "5000"],
+     "give --to"),
     ([*ROTOR, "--method", "shooting", "--frequencies", "vc,shaft"], "--method shooting needs"),
     ([*ROTOR, "--method", "fourier"], "--method: must be hb or shooting"),
 ])
@@ -142,3 +142,17 @@ def test_command_shooting_bad_inputs(cli, tmp_path, args, words):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], lines
     assert not target.exists()
+
+
+def test_command_shooting_branch(cli, tmp_path):
+    out = cli("torus", *ROTOR, "--method", "shooting", "--points", "33", "--param",
+              "speed_rpm", "--from", "5000", "--to", "6000", "--max-points", "2",
+              "-o", str(tmp_path / "b.nc"), "--json", "--quiet")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    points = data["points"]
+    assert len(points) == 2
+    assert all(set(p) == {"speed_rpm", "amplitude", "stable", "special", "residual"}
+               for p in points)
+    assert not any(p["stable"] for p in points)  # λ1 not computed on a circle branch
+    assert data["stop_report"].startswith("stopped after max_points = 2")

@@ -224,7 +224,8 @@ def torus(
                             "default 8,4).")] = None,
     method: Annotated[str, typer.Option(
         "--method", help="hb: 2-D harmonic balance; shooting: the invariant circle of the "
-                         "F1-period map (accurate on contact; one torus, no --param).")] = "hb",
+                         "F1-period map (accurate on contact; with --param, continued "
+                         "without λ1).")] = "hb",
     points: Annotated[int | None, typer.Option(
         "--points", help="Circle points N of --method shooting (>= 8; default 65).")] = None,
     n_balls: NBallsOption = None,
@@ -262,7 +263,7 @@ def torus(
     (2-D AFT, exact Jacobian by CasADi AD) and its λ1; with --param, --from and --to its
     continuation, and where and why it stops. --method shooting: the same torus as the
     invariant circle of the F1-period map at --points cage phases (RK4 with its AD
-    Jacobian; accurate on contact; one torus)."""
+    Jacobian; accurate on contact), continued with --param without λ1."""
     from analysis.frequency.harmonic import check_forced
     from analysis.frequency.torus import (
         check_frequencies,
@@ -294,9 +295,6 @@ def torus(
     if method == "hb" and points is not None:
         raise InputError("--points: applies to --method shooting only; harmonic balance is "
                          "resolved by --harmonics")
-    if method == "shooting" and continued:
-        raise InputError(f"{continued[0]}: continuation of the invariant circle is not "
-                         "available; use --method hb for a branch")
     system = as_system(model, parse_n_balls(n_balls), **values)
     check_forced(system)
     if method == "shooting":
@@ -338,13 +336,21 @@ def torus(
         if freqs[0].kind == "vc" or freqs[1].kind != "vc":
             raise InputError(f"--frequencies: --method shooting needs F1 shaft or param:NAME "
                              f"and F2 a vc, got {frequencies}")
-        from analysis.frequency.invariant_circle import circle_dataset, solve_circle
+        if param is not None:
+            from analysis.frequency.circle_continuation import continue_circle
 
-        circle = solve_circle(system, None, freqs, circle_points, stability=stability,
-                              lyapunov_duration=lyapunov_duration or 2.0, **options)
-        if not circle.converged:
-            raise InputError(f"torus: no invariant circle found ({circle.message})")
-        data = circle_dataset(circle)
+            data = continue_circle(system, None, param=param, start=start, stop=stop,
+                                   frequencies=freqs, points=circle_points,
+                                   max_points=max_points, ds_max=ds_max, progress=say,
+                                   **options)
+        else:
+            from analysis.frequency.invariant_circle import circle_dataset, solve_circle
+
+            circle = solve_circle(system, None, freqs, circle_points, stability=stability,
+                                  lyapunov_duration=lyapunov_duration or 2.0, **options)
+            if not circle.converged:
+                raise InputError(f"torus: no invariant circle found ({circle.message})")
+            data = circle_dataset(circle)
     elif param is None:
         from analysis.frequency.torus_dataset import torus_dataset
         from analysis.frequency.torus_solve import solve_torus
@@ -388,7 +394,12 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
     lam = data.lambda1.values
     head = (f"wrote {output}: torus {data.attrs['frequencies']}, H = "
             f"{data.attrs['harmonics']}, ")
-    if data.attrs.get("solver") == "shooting":
+    if data.attrs.get("solver") == "shooting" and param:
+        typer.echo(f"wrote {output}: torus {data.attrs['frequencies']} by the invariant "
+                   f"circle of N = {data.attrs['points']} points, {data.sizes['point']} "
+                   "circles (lambda1 not computed)")
+        typer.echo(str(data.attrs["stop_report"]))
+    elif data.attrs.get("solver") == "shooting":
         amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
             data.state.values, data.amplitude.values[0], data.state_units.values,
             strict=True))

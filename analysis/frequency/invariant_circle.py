@@ -124,6 +124,13 @@ def shift_matrix(points: int, shift: float) -> np.ndarray:
     return np.real(np.fft.ifft(np.exp(1j * k * shift)[:, None] * spectrum, axis=0))
 
 
+def shift_derivative(points: int, shift: float) -> np.ndarray:
+    """dR/d(shift) of ``shift_matrix`` (N × N, 1/rad)."""
+    k = np.fft.fftfreq(points, 1.0 / points)
+    spectrum = np.fft.fft(np.eye(points), axis=0)
+    return np.real(np.fft.ifft((1j * k * np.exp(1j * k * shift))[:, None] * spectrum, axis=0))
+
+
 def circle_modes(values: np.ndarray) -> np.ndarray:
     """|c_k| of the real series of samples on the circle (N × m): (N//2 + 1) × m, the
     amplitude of cos/sin k φ (k = 0: the mean)."""
@@ -167,11 +174,12 @@ class ShaftMap:
     phase φ, ``steps`` fixed RK4 steps of h = T1/steps of the torus forcing of
     ``frequencies`` (``torus.torus_function``), sampled every steps/``samples`` steps.
 
-    ``function(Z0, phi, p) -> (Z_T, J, S)`` for N circle points at once (``Function.map``):
-    Z0 (n × N) the starts, phi (1 × N) their cage phases (rad), Z_T (n × N) the end
-    states, J (n × n N) the blocks ∂z_T/∂z_0 side by side (exact, by forward AD through
-    the RK4), S (n × samples·N) the states at the shaft phases 2πa/samples, a = 1..samples
-    (the last is Z_T)."""
+    ``function(Z0, phi, p, e) -> (Z_T, J, S, D)`` for N circle points at once
+    (``Function.map``): Z0 (n × N) the starts, phi (1 × N) their cage phases (rad), Z_T
+    (n × N) the end states, J (n × n N) the blocks ∂z_T/∂z_0 side by side (exact: the
+    tangent of the discrete RK4 map), S (n × samples·N) the states at the shaft phases
+    2πa/samples, a = 1..samples (the last is Z_T), D (n × N) dz_T/dp·e along the parameter
+    direction e (the step's and the phases' own dependence on p included)."""
 
     system: System
     frequencies: tuple[Period, Period]
@@ -205,36 +213,65 @@ class ShaftMap:
         k4 = dz(s + h, z + h * k3)
         z_next = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         m = ca.SX.sym("m", n, n)
-        m_next = ca.mtimes(ca.jacobian(z_next, z), m)  # the tangent of the discrete map
-        carry = ca.vertcat(z, ca.vec(m), s)
-        step = ca.Function("circle_rk4", [carry, phi, p],
-                           [ca.vertcat(z_next, ca.vec(m_next), s + h)])
+        d = ca.SX.sym("d", n)
+        e = ca.SX.sym("e", n_par)
+        a = ca.jacobian(z_next, z)
+        m_next = ca.mtimes(a, m)  # the tangent of the discrete map
+        # along p: the time s of a step is k·h(p), so ds/dp·e = (s/h)·dh/dp·e
+        dh = ca.jtimes(h, p, e)
+        d_next = ca.mtimes(a, d) + ca.jtimes(z_next, p, e) + ca.jacobian(z_next, s) * s / h * dh
+        carry = ca.vertcat(z, ca.vec(m), d, s)
+        step = ca.Function("circle_rk4", [carry, phi, p, e],
+                           [ca.vertcat(z_next, ca.vec(m_next), d_next, s + h)])
         per = self.steps // self.samples
         block = step.mapaccum("circle_block", per)
-        ends = ca.Function("circle_block_end", [carry, phi, p],
-                           [block(carry, phi, p)[:, -1]])
+        ends = ca.Function("circle_block_end", [carry, phi, p, e],
+                           [block(carry, phi, p, e)[:, -1]])
         sweep = ends.mapaccum("circle_sweep", self.samples)
         z0 = ca.MX.sym("z0", n)
         ph = ca.MX.sym("phi")
         pp = ca.MX.sym("p", n_par)
-        out = sweep(ca.vertcat(z0, ca.vec(ca.DM.eye(n)), 0), ph, pp)
+        ee = ca.MX.sym("e", n_par)
+        out = sweep(ca.vertcat(z0, ca.vec(ca.DM.eye(n)), ca.DM.zeros(n), 0), ph, pp, ee)
         states = out[:n, :]
-        one = ca.Function("circle_shoot", [z0, ph, pp],
-                          [states[:, -1], ca.reshape(out[n:n + n * n, -1], n, n), states])
+        one = ca.Function("circle_shoot", [z0, ph, pp, ee],
+                          [states[:, -1], ca.reshape(out[n:n + n * n, -1], n, n), states,
+                           out[n + n * n:n + n * n + n, -1]])
         mapped = one.map(self.points, "thread", 2)
         Z0 = ca.MX.sym("Z0", n, self.points)
         PH = ca.MX.sym("PH", 1, self.points)
         P = ca.MX.sym("P", n_par)
-        out = mapped(Z0, PH, P)
-        return ca.Function("shaft_map", [Z0, PH, P], list(out), ["Z0", "phi", "p"],
-                           ["ZT", "J", "S"])
+        E = ca.MX.sym("E", n_par)
+        out = mapped(Z0, PH, P, E)
+        return ca.Function("shaft_map", [Z0, PH, P, E], list(out), ["Z0", "phi", "p", "e"],
+                           ["ZT", "J", "S", "D"])
+
+    @cached_property
+    def rotation_function(self) -> ca.Function:
+        """``rho(p, e) -> (2π ω2/ω1, its derivative along e)`` (rad, not reduced)."""
+        model, system = self.system.model, self.system
+        p = ca.SX.sym("p", len(model.parameter_names))
+        e = ca.SX.sym("e", len(model.parameter_names))
+        t1, t2 = (per.seconds(model, system.structure, p) for per in self.frequencies)
+        rho = 2 * math.pi * t1 / t2
+        return ca.Function("circle_rotation", [p, e], [rho, ca.jtimes(rho, p, e)])
+
+    def along(self, u: np.ndarray, phi: np.ndarray, p: np.ndarray, e: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(end states N × n, Jacobian blocks N × n × n, dz_T/dp·e N × n)."""
+        n = self.system.n_state
+        zt, jac, _, d = self.function(np.asarray(u, dtype=float).T,
+                                      np.asarray(phi, dtype=float)[None, :], p, e)
+        jac = np.asarray(jac).reshape(n, self.points, n).transpose(1, 0, 2)
+        return np.asarray(zt).T, jac, np.asarray(d).T
 
     def __call__(self, u: np.ndarray, phi: np.ndarray, p: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(end states N × n, Jacobian blocks N × n × n, samples N × samples × n)."""
         n = self.system.n_state
-        zt, jac, states = self.function(np.asarray(u, dtype=float).T,
-                                        np.asarray(phi, dtype=float)[None, :], p)
+        zt, jac, states, _ = self.function(np.asarray(u, dtype=float).T,
+                                           np.asarray(phi, dtype=float)[None, :], p,
+                                           np.zeros(len(p)))
         jac = np.asarray(jac).reshape(n, self.points, n).transpose(1, 0, 2)
         states = np.asarray(states).reshape(n, self.points, self.samples).transpose(1, 2, 0)
         return np.asarray(zt).T, jac, states
