@@ -58,7 +58,7 @@ def point_detail(task: tuple) -> dict[str, Any]:
     """Spectra, Poincaré points and peaks of one chart point (``task``: setting, x name,
     x value, y name, y value); ``{"error": message}`` when its run fails."""
     from analysis.provenance import vc_frequencies
-    from analysis.reports.plots import default_partner, display_label, f_max_of
+    from analysis.reports.labels import default_partner, display_label, f_max_of
     from analysis.signal.poincare import poincare_section
     from analysis.signal.spectrum import amplitude_spectrum, find_peaks
     from analysis.sweeps.chart import classified_section
@@ -70,8 +70,8 @@ def point_detail(task: tuple) -> dict[str, Any]:
         run = record(setting, system)
         spectra, sections, peaks = {}, [], []
         for var in displacement_names(run):
-            found = find_peaks(run, var, max_peaks=PEAKS_SHOWN)
             amp = amplitude_spectrum(run, var)
+            found = find_peaks(run, var, max_peaks=PEAKS_SHOWN, spectrum=amp)
             f_max = f_max_of(run.attrs)
             if f_max:  # the plots' range, reaching every peak of the table
                 top = max((p.frequency_hz for p in found), default=0.0)

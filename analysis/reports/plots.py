@@ -22,24 +22,19 @@ from analysis.provenance import (
     as_run,
     check_ours,
     displacement_names,
-    is_velocity,
     state_names,
     vc_frequencies,
 )
 from analysis.reports import canvas as plt  # pyplot's subplots and close, without pyplot
+from analysis.reports.labels import default_partner, display_label, f_max_of, series_f_max
 from analysis.signal.poincare import poincare_section, section_period
-from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks, label_frequencies
+from analysis.signal.spectrum import Peak, amplitude_spectrum, find_peaks
 from analysis.stability.classify import NATURE_COLORS, NATURE_NAMES, default_figure_section
 
 MICRO = 1e6
 AXIS_NAMES = {"x": ("x", "vx", "X direction"), "y": ("y", "vy", "Y direction")}
 _SCALES = {"m": (1e6, "µm"), "m/s": (1e3, "mm/s"), "rad": (1e6, "µrad"),
            "rad/s": (1e3, "mrad/s")}
-
-
-def display_label(label: str) -> str:
-    """A peak label for print: unicode minus (VC−X)."""
-    return label.replace("-", "\u2212")
 
 
 def unit_scale(unit: str) -> tuple[float, str]:
@@ -98,26 +93,6 @@ def run_title(ds: xr.Dataset) -> str:
     if not freqs and forcing is not None and float(ds.attrs[forcing]) > 0:
         freqs.append(f"F = 1/{forcing} = {1 / float(ds.attrs[forcing]):.4g} Hz")
     return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
-
-
-def f_max_of(attrs) -> float | None:
-    """Upper frequency of a spectrum plot from a run's attrs (Hz): 2.5 (largest VC + X), or
-    10 base frequencies without bearings (None: the whole spectrum). A series of runs
-    (N_b = 6 … 10) shares the largest of theirs (``series_f_max``)."""
-    try:
-        base, vcs, _ = label_frequencies(attrs)
-    except InputError:  # no frequencies at all: draw everything
-        return None
-    top = max(vcs.values(), default=0.0)
-    if top > 0:
-        return 2.5 * (top + base)
-    return 10.0 * base if base > 0 else None
-
-
-def series_f_max(attrs_list) -> float | None:
-    """One frequency range for a series of runs: the largest ``f_max_of`` of them."""
-    tops = [f for f in (f_max_of(a) for a in attrs_list) if f]
-    return max(tops) if tops else None
 
 
 AMBIGUOUS_MARK = "*"
@@ -238,18 +213,6 @@ def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> N
             span = math.log10(high / low)  # decades over the axes' height
             grow = span * (overflow + 4 * pad_px) / max(ax.bbox.height - overflow, 1.0)
             ax.set_ylim(low, high * 10 ** grow)
-
-
-def default_partner(ds: xr.Dataset, var: str) -> str:
-    """The variable drawn against ``var`` in a Poincaré map: its velocity (``vx`` for
-    ``x``), else the next state variable."""
-    names = state_names(ds)
-    if f"v{var}" in names:
-        return f"v{var}"
-    if is_velocity(var, names):
-        return var[1:]
-    others = [n for n in names if n != var]
-    return others[0] if others else var
 
 
 def plot_poincare(ax, ds: xr.Dataset, var: str, section: str = "shaft",

@@ -21,11 +21,13 @@ BPFI, BSF of each bearing, their harmonics and their sidebands at ±X and ±FTF 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.fft
 import scipy.signal
 import xarray as xr
 
@@ -63,6 +65,15 @@ def _units(ds: xr.Dataset, var: str) -> str:
     return str(ds[var].attrs.get("units", _DEFAULT_UNITS.get(var, "")))
 
 
+@functools.lru_cache(maxsize=8)
+def window_of(window: str, n: int) -> np.ndarray:
+    """``scipy.signal.get_window(window, n)`` (periodic form), made once per name and length
+    and shared read-only: a chart's or an explorer's records repeat their lengths."""
+    w = scipy.signal.get_window(window, n)
+    w.setflags(write=False)
+    return w
+
+
 def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> xr.DataArray:
     """Single-sided amplitude spectrum of ``ds[var]`` (unit of the variable: m or m/s).
 
@@ -79,8 +90,10 @@ def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> 
     dt = time_step(ds)
     values = np.asarray(ds[var].values, dtype=float)
     n = values.size
-    w = scipy.signal.get_window(window, n)
-    amplitude = 2.0 * np.abs(np.fft.rfft((values - values.mean()) * w)) / w.sum()
+    w = window_of(window, n)
+    # scipy.fft: the same values as numpy.fft to the bit here, faster on record lengths
+    # with large prime factors (N = k + 1 samples)
+    amplitude = 2.0 * np.abs(scipy.fft.rfft((values - values.mean()) * w)) / w.sum()
     amplitude[0] /= 2.0
     if n % 2 == 0:
         amplitude[-1] /= 2.0
@@ -373,7 +386,8 @@ def label_frequencies(attrs: dict) -> tuple[float, dict[str, float], str]:
 
 
 def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
-               min_relative_height: float = 0.02, vocabulary: str = "shaft") -> list[Peak]:
+               min_relative_height: float = 0.02, vocabulary: str = "shaft",
+               spectrum: xr.DataArray | None = None) -> list[Peak]:
     """The ``max_peaks`` largest peaks of the Hann amplitude spectrum of ``ds[var]`` (any
     state variable; default: the run's first displacement, ``x`` or ``x_rotor``).
 
@@ -395,6 +409,8 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     (:func:`run_defects`; VC and its X combinations without a defect), and only for a line
     ``SIGNIFICANCE_DB`` above its noise floor (:func:`noise_floor`). Every other name
     within the tolerance is kept in ``also`` (an ambiguous label: ``Peak.ambiguous``).
+    ``spectrum``: ``amplitude_spectrum(ds, var)`` when the caller has it already (it is not
+    computed again).
     """
     if vocabulary not in ("shaft", "fault"):
         raise InputError(f"vocabulary: must be 'shaft' or 'fault', got {vocabulary!r}")
@@ -405,7 +421,7 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     if not 0 < min_relative_height <= 1:
         raise InputError(f"min_relative_height: must be in (0, 1], got {min_relative_height!r}")
     base_hz, vcs, base = label_frequencies(ds.attrs)
-    spectrum = amplitude_spectrum(ds, var)
+    spectrum = amplitude_spectrum(ds, var) if spectrum is None else spectrum
     amplitude = spectrum.values
     df = float(spectrum["frequency"].values[1])
     search = amplitude[1:]
@@ -467,7 +483,7 @@ def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray
     ``frequency`` (Hz): 2·|Σ w_j x_j exp(-2πi f j dt)| / Σ w_j."""
     dt = time_step(ds)
     values = np.asarray(ds[var].values, dtype=float)
-    w = scipy.signal.get_window("hann", values.size)
+    w = window_of("hann", values.size)
     weighted = (values - values.mean()) * w
     # e^{-iωj} for j = a·B + b as e^{-iωaB}·e^{-iωb}: 2√N exponentials a frequency, not N
     block = max(1, math.isqrt(values.size))
@@ -476,11 +492,10 @@ def _amplitude_at(ds: xr.Dataset, var: str, frequency: np.ndarray) -> np.ndarray
     grid[:values.size] = weighted
     grid = grid.reshape(rows, block)
     a, b = np.arange(rows) * block, np.arange(block)
-    out = []
-    for f in frequency:
-        omega = -2j * np.pi * f * dt
-        out.append(2.0 * abs(np.exp(omega * a) @ grid @ np.exp(omega * b)) / w.sum())
-    return np.array(out)
+    omega = -2j * np.pi * np.asarray(frequency, dtype=float)[:, None] * dt
+    # all frequencies in one product (the real grid is made complex once, not per frequency)
+    coarse = np.exp(omega * a) @ grid
+    return 2.0 * np.abs(np.sum(coarse * np.exp(omega * b), axis=1)) / w.sum()
 
 
 def peak_table(ds: xr.Dataset, directions: tuple[str, ...] | None = None,
