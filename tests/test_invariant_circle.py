@@ -80,6 +80,11 @@ def test_shift_matrix_and_points_check():
     assert np.allclose(moved[:, 0], np.cos(3 * (phi + 0.7)) + 0.5, atol=1e-13)
     assert np.allclose(moved[:, 1], np.sin(2 * (phi + 0.7)), atol=1e-13)
     assert np.allclose(interpolate_circle(v, phi + 0.7), moved, atol=1e-13)
+    from analysis.frequency.torus import TorusBasis
+
+    basis = TorusBasis((3, 4), (8, 9))  # the FFT synthesis of large grids against E
+    c = np.random.default_rng(3).normal(size=(basis.size, 2))
+    assert np.allclose(basis.grid_values(c.reshape(-1), 2), basis.E @ c, atol=1e-13)
     with pytest.raises(InputError, match="points: must be a whole number >= 8"):
         check_points(7, 4)
     with pytest.raises(InputError, match="GiB"):

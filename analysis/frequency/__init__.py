@@ -20,12 +20,15 @@ their continuation.
 * ``torus_continuation``: tori continued in a runtime parameter, with the report of where
   and why the branch stops (``continue_torus``);
 * ``invariant_circle``: the same torus as the invariant circle of the shaft-period map
-  (quasi-periodic shooting: ``solve_circle`` -> ``CircleResponse``, ``circle_dataset``).
+  (quasi-periodic shooting: ``solve_circle`` -> ``CircleResponse``, ``circle_dataset``);
+* ``circle_continuation``: that circle continued in a runtime parameter
+  (``continue_circle``).
 
 Every public name is importable from here: ``from analysis.frequency import
 harmonic_balance, continue_harmonic``.
 """
 
+from analysis.frequency.circle_continuation import continue_circle
 from analysis.frequency.continuation import (
     HarmonicBranchProblem,
     continue_harmonic,
@@ -58,7 +61,7 @@ __all__ = [
     "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "CircleResponse",
     "HarmonicBranchProblem", "HarmonicSystem", "HillResult", "PeriodicResponse", "TorusBasis",
     "TorusResponse", "TorusSystem", "check_forced", "check_harmonics", "circle_dataset",
-    "continue_harmonic", "continue_torus", "fast_samples", "harmonic_balance",
+    "continue_circle", "continue_harmonic", "continue_torus", "fast_samples", "harmonic_balance",
     "harmonic_branch_dataset", "harmonic_convergence", "hill_of", "hill_stability",
     "parse_frequencies", "solve_circle", "solve_torus", "torus_dataset", "torus_of",
     "torus_run", "trace_harmonic_branch",

@@ -185,9 +185,8 @@ def continue_circle(
     for pt in branch:
         sys_pt = first.system.replace(**{param: float(pt.lam)})
         u = pt.z0.reshape(points, -1)
-        one = ShaftMap(sys_pt, first.frequencies, first.steps, first.samples, points)
         phi = 2 * math.pi * np.arange(points) / points
-        _, _, states = one(u, phi, sys_pt.p)
+        _, _, states = shaft(u, phi, sys_pt.p)  # the map's function takes p
         w1, w2 = (2 * math.pi / float(per.seconds(model, sys_pt.structure, sys_pt.p))
                   for per in first.frequencies)
         responses.append(CircleResponse(

@@ -263,6 +263,20 @@ class TorusBasis:
         out[2::2] = -2 * picked.imag
         return out
 
+    def grid_values(self, coeffs: np.ndarray, n_state: int) -> np.ndarray:
+        """The series (harmonic-major ``coeffs``) on the grid by inverse 2-D FFT, without
+        ``E``: N × n (equal to ``E @ coeffs`` to rounding)."""
+        n1, n2 = self.samples
+        x = np.asarray(coeffs, dtype=float).reshape(self.size, n_state)
+        spec = np.zeros((n1, n2, n_state), dtype=complex)
+        spec[0, 0] = x[0]
+        k1, k2 = self.index[:, 0], self.index[:, 1]
+        half = (x[1::2] - 1j * x[2::2]) / 2
+        np.add.at(spec, (k1 % n1, k2 % n2), half)
+        np.add.at(spec, (-k1 % n1, -k2 % n2), np.conj(half))
+        values = np.fft.ifft2(spec, axes=(0, 1)).real * (n1 * n2)
+        return values.reshape(n1 * n2, n_state)
+
     def product_matrices(self, values: np.ndarray) -> np.ndarray:
         """``P diag(a) E`` for each series a sampled in ``values`` (N × m): m × M × M, from
         the 2-D FFT of a (F_k of a·cos l·θ is (A_{k−l} + A_{k+l})/2, of a·sin l·θ
@@ -534,6 +548,8 @@ class TorusSystem:
 
     def on_grid(self, coeffs: np.ndarray) -> np.ndarray:
         """The torus on the N1 × N2 grid: N1 × N2 × n, the states' units."""
+        if not self.dense:  # large grids: no dense E
+            return self.basis.grid_values(coeffs, self.n).reshape(*self.samples, self.n)
         x = np.asarray(coeffs, dtype=float).reshape(self.basis.size, self.n)
         return (self.basis.E @ x).reshape(*self.samples, self.n)
 
