@@ -37,14 +37,14 @@ from analysis.signal.poincare import poincare_section
 N_TEST = 65
 STATES = ("x", "y", "vx", "vy")
 AGREEMENT = 1.2e-3
-"""Largest |z_sim(t_k) − u(ω2 t_k)| / amplitude at N = 64 (measured 8.7e-4, 7.4e-4, 6.4e-4,
-1.2e-4 for x, y, vx, vy over 2–12 s; docs/frequency.md). The error sits where the local
+"""Largest |z_sim(t_k) − u(ω2 t_k)| / amplitude at N = 65 over 2–6 s (measured 7.0e-4,
+6.6e-4, 5.9e-4, 1.4e-4 for x, y, vx, vy; docs/frequency.md). The error sits where the local
 multiplier of the shaft map is a flip below −1 (cage phases about 0.8–2.2 rad); there it
 does not fall with N (1.4e-3 at N = 65, 2.4e-3 at 129, 3.9e-3 at 257), elsewhere it is
 about 5e-5."""
 OUTSIDE = 4e-4
-"""The same error at cage phases outside [0.5, 2.5] rad (measured 1.3e-4, 6.0e-5, 2.3e-4,
-3.9e-5)."""
+"""The same error at cage phases outside [0.5, 2.5] rad (measured 1.6e-4, 1.0e-4, 3.0e-4,
+4.1e-5)."""
 HB_H = (12, 6)
 
 
