@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.frequency.continuation import ContinuedParameter
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.invariant_circle import (
     DEFAULT_POINTS,
@@ -48,7 +49,7 @@ circle branch keeps."""
 
 
 @dataclass
-class CircleBranchProblem:
+class CircleBranchProblem(ContinuedParameter):
     """Circles of ``shaft`` as parameter number ``param_index`` varies, the others at
     ``values``; scales ``state_scale`` (per state) and ``s_lam`` (the parameter's unit)."""
 
@@ -68,17 +69,8 @@ class CircleBranchProblem:
         return self.shaft.system.model
 
     @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    @property
     def n(self) -> int:
         return self.shaft.points * self.shaft.system.n_state
-
-    def p(self, lam: float) -> np.ndarray:
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
 
     def circle(self, w: np.ndarray) -> np.ndarray:
         return (w[:-1] * self.s_z).reshape(self.shaft.points, -1)

@@ -77,8 +77,27 @@ class HillMonodromy:
         return self._value if dtype is None else self._value.astype(dtype)
 
 
+class ContinuedParameter:
+    """What every branch problem of this package shares: the runtime parameter number
+    ``param_index`` of ``model`` varies, the others stay at ``values`` (their units)."""
+
+    model: Model
+    param_index: int
+    values: dict[str, float]
+
+    @property
+    def param_name(self) -> str:
+        return self.model.parameter_names[self.param_index]
+
+    def p(self, lam: float) -> np.ndarray:
+        """The parameter vector with the continued parameter at ``lam``."""
+        p = self.model.parameter_vector(self.values)
+        p[self.param_index] = lam
+        return p
+
+
 @dataclass
-class HarmonicBranchProblem:
+class HarmonicBranchProblem(ContinuedParameter):
     """Harmonic-balance responses of ``hs`` (system, period, H, N) as the runtime parameter
     number ``param_index`` varies, the others at ``values`` (their units); scales
     ``state_scale`` (per state, its unit), ``s_lam`` (the parameter's unit) and ω_0
@@ -101,18 +120,9 @@ class HarmonicBranchProblem:
         return self.hs.system.model
 
     @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    @property
     def n(self) -> int:
         """Number of unknowns besides λ (the Fourier coefficients)."""
         return self.hs.size
-
-    def p(self, lam: float) -> np.ndarray:
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
 
     def residual(self, w: np.ndarray):
         """G(w) (n(2H + 1)), its Jacobian (n(2H + 1) × (n(2H + 1) + 1)) and a

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import branch_step
+from analysis.frequency.continuation import ContinuedParameter, branch_step
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
@@ -50,7 +50,7 @@ Progress = Callable[[str], None] | None
 
 
 @dataclass
-class TorusBranchProblem:
+class TorusBranchProblem(ContinuedParameter):
     """Tori of ``ts`` as parameter number ``param_index`` varies, the others at ``values``;
     scales ``state_scale`` (per state), ``s_lam`` (the parameter's unit) and ``omega_ref``
     (rad/s)."""
@@ -71,17 +71,8 @@ class TorusBranchProblem:
         return self.ts.system.model
 
     @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    @property
     def n(self) -> int:
         return self.ts.size
-
-    def p(self, lam: float) -> np.ndarray:
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
 
     def residual(self, w: np.ndarray):
         """G(w), its Jacobian (n M × (n M + 1)) and an empty monodromy."""
