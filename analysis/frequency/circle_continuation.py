@@ -23,7 +23,6 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import ContinuedParameter
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.invariant_circle import (
     DEFAULT_POINTS,
@@ -40,6 +39,7 @@ from analysis.frequency.torus_continuation import stop_report, trace_torus_branc
 from analysis.frequency.torus_dataset import tori_dataset
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.stability.continuation.options import ContinuationOptions, options_with
+from analysis.stability.continuation.problem import ContinuedParameter
 
 Progress = Callable[[str], None] | None
 

@@ -49,6 +49,7 @@ from analysis.stability.continuation.options import (
 )
 from analysis.stability.continuation.problem import (
     BranchPoint,
+    ContinuedParameter,
     Newton,
     branch_point,
     newton,
@@ -75,25 +76,6 @@ class HillMonodromy:
                                   self._prob.sort, self._prob.state_scale)
             self._value = np.diag(hill.multipliers)
         return self._value if dtype is None else self._value.astype(dtype)
-
-
-class ContinuedParameter:
-    """What every branch problem of this package shares: the runtime parameter number
-    ``param_index`` of ``model`` varies, the others stay at ``values`` (their units)."""
-
-    model: Model
-    param_index: int
-    values: dict[str, float]
-
-    @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    def p(self, lam: float) -> np.ndarray:
-        """The parameter vector with the continued parameter at ``lam``."""
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
 
 
 @dataclass

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import ContinuedParameter, branch_step
+from analysis.frequency.continuation import branch_step
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
@@ -44,7 +44,7 @@ from analysis.stability.continuation.options import (
     StepGuards,
     options_with,
 )
-from analysis.stability.continuation.problem import branch_point, newton, scaled
+from analysis.stability.continuation.problem import ContinuedParameter, branch_point, newton, scaled
 
 Progress = Callable[[str], None] | None
 

@@ -54,8 +54,28 @@ class BranchPoint:
         return self.n_unstable == 0
 
 
+class ContinuedParameter:
+    """What every branch problem shares (periodic orbits here, harmonic balance, tori and
+    circles in analysis.frequency): the runtime parameter number
+    ``param_index`` of ``model`` varies, the others stay at ``values`` (their units)."""
+
+    model: Model
+    param_index: int
+    values: dict[str, float]
+
+    @property
+    def param_name(self) -> str:
+        return self.model.parameter_names[self.param_index]
+
+    def p(self, lam: float) -> np.ndarray:
+        """The parameter vector with the continued parameter at ``lam``."""
+        p = self.model.parameter_vector(self.values)
+        p[self.param_index] = lam
+        return p
+
+
 @dataclass
-class BranchProblem:
+class BranchProblem(ContinuedParameter):
     """Periodic orbits of ``model`` (with ``structure``) of period ``period`` as the runtime
     parameter number ``param_index`` varies, the others at ``values`` (their units): the
     section at ``t0`` (s), ``n_steps`` RK4 steps per period, the unknowns scaled by ``s_z``
@@ -76,15 +96,6 @@ class BranchProblem:
     def __post_init__(self):
         self.flow = flow_map(self.model, self.structure, self.period, self.n_steps)
         self.orbit = orbit_states(self.model, self.structure, self.period, self.n_steps)
-
-    @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    def p(self, lam: float) -> np.ndarray:
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
 
     @property
     def n(self) -> int:
