@@ -1,0 +1,408 @@
+"""Approximate Bayesian computation against a target table: a Sobol first round, then
+SMC-ABC rounds of shrinking tolerance (Beaumont, Cornuet, Marin & Robert 2009, "Adaptive
+approximate Bayesian computation", Biometrika 96, 983).
+
+**Discrepancy.** A member (one parameter set) is run at every target row; a row's class
+is missed or not (``targets.class_matches``), and so are its lines (every asked major
+line and present line found). The discrepancy is lexicographic, classes first, lines
+second: d = (class misses) + (line misses) / (rows + 1), so one more class matched
+always wins over any number of lines. ``matched`` counts the rows whose class matches;
+``lines_matched`` the rows whose lines match. A diverged member is the class
+``diverged`` at that row (a miss unless the row asks for it): never dropped, since
+dropping it would bias the posterior towards the region that stays bounded.
+
+**Rounds.** Round 0 is N points of a scrambled Sobol sequence (``scipy.stats.qmc``) in the
+unit cube of the priors (log priors uniform in log). Its members have the prior's
+distribution, so the share of them matching k rows is the share of the prior that does
+(``share_of_prior``). After each round the tolerance ε is the ``quantile`` of the round's
+discrepancies, and the population is the members with d <= ε. Round r > 0 draws N
+particles from the population (by weight), moves each by a Gaussian kernel (diagonal,
+twice the population's weighted variance per unit coordinate; a draw outside the cube is
+drawn again), runs them all (one ensemble call per row and block of members), and weighs
+the accepted ones by prior / proposal density, the proposal's truncation to the cube
+included (exact for a diagonal kernel). The last population, with its weights, is the
+posterior.
+
+**Why not pyabc or sbi.** pyabc schedules one simulation per particle through its own
+samplers (multicore, Redis, Dask) and stores its history in a database; a round here is
+one ensemble call per target row (thousands of members in one compiled kernel, or on the
+GPU) and must resume from the sweep store (``analysis.sweeps.store``) after an
+interruption, which pyabc's per-particle sampler cannot be made to do without rewriting
+its sampler. sbi trains neural density estimators (PyTorch) for continuous summaries; the
+discrepancy here is a count of missed rows, and a calibration must run without PyTorch.
+The sampler is ~100 lines, seeded and deterministic: a resumed round draws the same
+particles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.special import ndtr
+from scipy.stats import qmc
+
+from analysis.errors import InputError
+from analysis.inference.priors import Prior, box, check_priors
+from analysis.inference.simulate import (
+    MemberRow,
+    RunSettings,
+    check_steps,
+    evaluate_row,
+    member_steps,
+)
+from analysis.inference.targets import Target, TargetRow, class_matches, load_target
+from analysis.model import Model, load_model
+
+MAX_SAMPLES = 200_000
+"""Parameter sets per round at most."""
+MAX_ROUNDS = 30
+"""Rounds at most."""
+MAX_CORE_HOURS = 1000.0
+"""A calibration estimated to take more CPU time than this is refused before any work."""
+CPU_RATE = 5.0e6
+"""Member RK4 steps per second per core of the state lane kernel (with the host's
+classification and spectra), measured on the paper's model (docs/calibration.md): the
+basis of the up-front estimate."""
+MIN_SD = 1e-3
+"""Least kernel standard deviation per unit coordinate (a population of one point)."""
+
+
+@dataclass(frozen=True)
+class Options:
+    """A calibration's sampler options, gathered."""
+
+    samples: int = 200
+    """Parameter sets per round (N)."""
+    rounds: int = 3
+    """Rounds, the Sobol round included."""
+    seed: int = 0
+    quantile: float = 0.5
+    """Each round's tolerance: this quantile of its discrepancies."""
+    block: int = 64
+    """Members per executor task (each task: one ensemble call per row)."""
+    device: str = "cpu"
+    settings: RunSettings = field(default_factory=RunSettings)
+
+    def check(self) -> None:
+        for name, value, low, high in (("samples", self.samples, 2, MAX_SAMPLES),
+                                       ("rounds", self.rounds, 1, MAX_ROUNDS),
+                                       ("block", self.block, 1, 100_000),
+                                       ("seed", self.seed, 0, 2**32 - 1)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
+                    not low <= value <= high:
+                raise InputError(f"--{name}: must be a whole number in [{low}, {high}], "
+                                 f"got {value!r}")
+        if not 0 < self.quantile < 1:
+            raise InputError(f"quantile: must be in (0, 1), got {self.quantile!r}")
+        if self.device not in ("cpu", "gpu", "auto"):
+            raise InputError(f"--device: must be cpu, gpu or auto, got {self.device!r}")
+        self.settings.check()
+
+
+# --- scoring ------------------------------------------------------------------------------
+
+def row_marks(row: TargetRow, result: MemberRow) -> tuple[bool, bool]:
+    """(class matches, lines match) of one member at one row (lines: every asked major
+    line is the largest, every present line is among the peaks; True when none asked)."""
+    klass = class_matches(row.classes, result.nature)
+    lines = all(result.major.get(c) == name for c, name in row.major) and all(
+        name in result.lines.get(c, ()) for c, names in row.present for name in names)
+    return klass, lines
+
+
+def discrepancy(class_missed: int, lines_missed: int, rows: int) -> float:
+    """Classes first, lines second: class misses + line misses / (rows + 1)."""
+    return class_missed + lines_missed / (rows + 1)
+
+
+# --- the sampler --------------------------------------------------------------------------
+
+def sobol_round(p: int, n: int, seed: int) -> np.ndarray:
+    """N scrambled Sobol points in the unit cube (P dims), seeded."""
+    sampler = qmc.Sobol(d=p, scramble=True, seed=seed)
+    m = math.ceil(math.log2(n))
+    return sampler.random_base2(m)[:n]
+
+
+def kernel_sd(population: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """The kernel's standard deviation per unit coordinate: sqrt(2 × weighted variance)."""
+    mean = weights @ population
+    var = weights @ (population - mean) ** 2
+    return np.maximum(np.sqrt(2.0 * var), MIN_SD)
+
+
+def propose(population: np.ndarray, weights: np.ndarray, n: int,
+            rng: np.random.Generator) -> np.ndarray:
+    """N particles: drawn from the population by weight, moved by the Gaussian kernel,
+    each redrawn until inside the unit cube."""
+    sd = kernel_sd(population, weights)
+    out = np.empty((n, population.shape[1]))
+    filled = 0
+    while filled < n:
+        need = n - filled
+        pick = rng.choice(len(population), size=2 * need + 8, p=weights)
+        moved = population[pick] + rng.normal(size=(len(pick), population.shape[1])) * sd
+        inside = moved[np.all((moved >= 0) & (moved <= 1), axis=1)][:need]
+        out[filled:filled + len(inside)] = inside
+        filled += len(inside)
+    return out
+
+
+def smc_weights(particles: np.ndarray, population: np.ndarray,
+                weights: np.ndarray) -> np.ndarray:
+    """Importance weights of ``particles`` (uniform prior on the cube): 1 / the density of
+    the truncated kernel mixture the particles were drawn from, normalised."""
+    sd = kernel_sd(population, weights)
+    # truncation mass of each population point's kernel (diagonal: a product of CDFs)
+    mass = np.prod(ndtr((1 - population) / sd) - ndtr(-population / sd), axis=1)
+    z = (particles[:, None, :] - population[None, :, :]) / sd
+    dens = np.exp(-0.5 * np.sum(z * z, axis=2)) / mass[None, :]
+    q = dens @ weights
+    w = 1.0 / np.maximum(q, 1e-300)
+    return w / w.sum()
+
+
+def tolerance(d: np.ndarray, quantile: float) -> float:
+    """The round's tolerance: the ``quantile`` of its discrepancies (at least one member
+    lies at or below it)."""
+    return float(np.quantile(d, quantile, method="higher"))
+
+
+# --- a calibration -------------------------------------------------------------------------
+
+@dataclass
+class Round:
+    """One round's members: unit coordinates, parameter values, per-row results."""
+
+    index: int
+    unit: np.ndarray
+    values: np.ndarray
+    rows: list[list[MemberRow]]
+    """rows[member][row]."""
+    discrepancy: np.ndarray
+    matched: np.ndarray
+    lines_matched: np.ndarray
+    epsilon: float = math.inf
+    weights: np.ndarray | None = None
+    """Weights of the members in the population after this round (0 outside it)."""
+
+
+@dataclass
+class Calibration:
+    """A finished calibration: its target, priors, options and rounds."""
+
+    model: Model
+    target: Target
+    priors: tuple[Prior, ...]
+    options: Options
+    rounds: list[Round]
+    wall_s: float = 0.0
+    device: str = "cpu"
+
+    @property
+    def posterior(self) -> Round:
+        return self.rounds[-1]
+
+    def share_of_prior(self) -> dict[int, float]:
+        """The share of the prior (the Sobol round) whose members match k rows, per k."""
+        first = self.rounds[0].matched
+        return {k: float(np.mean(first == k)) for k in range(len(self.target.rows), -1, -1)}
+
+    def best_matched(self) -> int:
+        return int(max(r.matched.max() for r in self.rounds))
+
+    def credible_interval(self, level: float = 0.9) -> dict[str, tuple[float, float]]:
+        """Per parameter: the central ``level`` interval of the weighted posterior marginal
+        (SI units)."""
+        post = self.posterior
+        w = post.weights
+        keep = w > 0
+        out = {}
+        for j, prior in enumerate(self.priors):
+            v, ww = post.values[keep, j], w[keep]
+            order = np.argsort(v)
+            cdf = np.cumsum(ww[order]) / ww.sum()
+            lo = v[order][np.searchsorted(cdf, (1 - level) / 2)]
+            hi = v[order][min(np.searchsorted(cdf, 1 - (1 - level) / 2), len(v) - 1)]
+            out[prior.name] = (float(lo), float(hi))
+        return out
+
+
+def estimate(model: Model, target: Target, options: Options) -> dict[str, float]:
+    """The cost of a calibration before any work: member RK4 steps, core-seconds at
+    ``CPU_RATE``, and the simulations (sets × rows × rounds)."""
+    steps = member_steps(target, options.settings, model) * options.samples * options.rounds
+    sims = options.samples * options.rounds * len(target.rows)
+    return {"simulations": float(sims), "member_steps": float(steps),
+            "core_seconds": steps / CPU_RATE}
+
+
+def _evaluate_task(task: tuple) -> list[list[dict]]:
+    """An executor task: a block of parameter sets at every row (one ensemble call per
+    row); per row, per member, the ``MemberRow`` as a dict."""
+    model, rows, names, thetas, settings, coordinates, device = task
+    return [[res.as_dict() for res in evaluate_row(model, row, names, thetas, settings,
+                                                   coordinates, device)]
+            for row in rows]
+
+
+def _pack(results: list[list[dict]], coordinates: Sequence[str]) -> dict[str, np.ndarray]:
+    """A block's results (rows × members) as arrays for the store: (members, rows)."""
+    def grid(fn):
+        return np.array([[fn(results[r][i]) for r in range(len(results))]
+                         for i in range(len(results[0]))])
+    out = {"nature": grid(lambda d: d["nature"]), "lambda1": grid(lambda d: d["lambda1"]),
+           "ci95": grid(lambda d: d["ci95"]), "diverged_at": grid(lambda d: d["diverged_at"])}
+    for c in coordinates:
+        out[f"major_{c}"] = grid(lambda d, c=c: d["major"].get(c, ""))
+        out[f"lines_{c}"] = grid(lambda d, c=c: ",".join(d["lines"].get(c, [])))
+    return out
+
+
+def _unpack(data: dict[str, np.ndarray], coordinates: Sequence[str]) -> list[list[MemberRow]]:
+    """The store's arrays back as MemberRow per member and row."""
+    members, rows = data["nature"].shape
+    return [[MemberRow(str(data["nature"][i, r]), float(data["lambda1"][i, r]),
+                       float(data["ci95"][i, r]),
+                       {c: str(data[f"major_{c}"][i, r]) for c in coordinates
+                        if str(data[f"major_{c}"][i, r])},
+                       {c: [s for s in str(data[f"lines_{c}"][i, r]).split(",") if s]
+                        for c in coordinates if str(data["nature"][i, r]) != "diverged"},
+                       float(data["diverged_at"][i, r]))
+             for r in range(rows)] for i in range(members)]
+
+
+def calibrate(
+    model: str | Model,
+    target: str | Target,
+    priors: Sequence[Prior | str],
+    *,
+    samples: int = 200,
+    rounds: int = 3,
+    seed: int = 0,
+    quantile: float = 0.5,
+    settings: RunSettings | None = None,
+    device: str = "cpu",
+    block: int = 64,
+    executor=None,
+    store=None,
+    progress: Callable[[int, int], None] | None = None,
+    log: Callable[[str], None] | None = None,
+) -> Calibration:
+    """Calibrate ``priors`` (``Prior`` or ``NAME:LO:HI[:log]``, SI units) of ``model``
+    against ``target`` (a ``Target``, a built-in name such as ``paper-table2``, or a TOML
+    path): ``rounds`` rounds of ``samples`` parameter sets (a Sobol round, then SMC-ABC),
+    each set run at every target row for ``settings`` (``RunSettings``: revolutions
+    dropped and recorded, samples per revolution, the largest step). Every input is
+    checked before any work (``InputError``). ``executor``: an
+    ``analysis.sweeps.executors`` executor running blocks of ``block`` members (None: in
+    this process); ``store``: a ``PointStore`` whose stored blocks are reused (resuming)
+    and to which each finished block is saved. ``progress(done, total)`` counts members
+    × rows; ``log(line)`` reports each round."""
+    import time
+
+    from analysis.inference.priors import parse_prior
+
+    start = time.perf_counter()
+    mdl = load_model(model) if not isinstance(model, Model) else model
+    tgt = target if isinstance(target, Target) else load_target(target, mdl)
+    pri = check_priors([p if isinstance(p, Prior) else parse_prior(p) for p in priors], mdl)
+    options = Options(samples, rounds, seed, quantile, block, device,
+                      settings or RunSettings())
+    options.check()
+    cost = estimate(mdl, tgt, options)
+    if cost["core_seconds"] > MAX_CORE_HOURS * 3600:
+        raise InputError(f"--samples/--rounds: {samples} sets × {rounds} rounds × "
+                         f"{len(tgt.rows)} rows is estimated at "
+                         f"{cost['core_seconds'] / 3600:.3g} core-hours, above "
+                         f"{MAX_CORE_HOURS:g}; give fewer")
+    corners = [dict(zip([p.name for p in pri], c, strict=True))
+               for c in box(pri, np.array(np.meshgrid(*[[0.0, 1.0]] * len(pri)))
+                            .reshape(len(pri), -1).T)]
+    check_steps(mdl, tgt, corners, options.settings)
+    names = [p.name for p in pri]
+    coordinates = tgt.coordinates or ("x",)
+    model_ref = model_reference(mdl)
+    rng = np.random.default_rng(seed)
+    done_count = [0]
+    total = samples * rounds * len(tgt.rows)
+    out: list[Round] = []
+    population = weights = None
+    for r in range(rounds):
+        u = sobol_round(len(pri), samples, seed) if r == 0 else \
+            propose(population, weights, samples, rng)
+        values = box(pri, u)
+        rows = _run_round(r, values, tgt, names, options, coordinates, model_ref, executor,
+                          store, progress, done_count, total)
+        marks = [[row_marks(row, res) for row, res in zip(tgt.rows, member, strict=True)]
+                 for member in rows]
+        matched = np.array([sum(k for k, _ in m) for m in marks])
+        lines = np.array([sum(ln for _, ln in m) for m in marks])
+        d = np.array([discrepancy(len(tgt.rows) - k, len(tgt.rows) - ln, len(tgt.rows))
+                      for k, ln in zip(matched, lines, strict=True)])
+        eps = tolerance(d, quantile)
+        keep = d <= eps
+        w = np.zeros(samples)
+        if r == 0:
+            w[keep] = 1.0
+        else:
+            w[keep] = smc_weights(u[keep], population, weights)
+        w /= w.sum()
+        out.append(Round(r, u, values, rows, d, matched, lines, eps, w))
+        population, weights = u[keep], w[keep] / w[keep].sum()
+        if log:
+            log(f"round {r + 1}/{rounds}: tolerance {eps:.3g} (rows missed), "
+                f"{int(keep.sum())} of {samples} sets kept, best {int(matched.max())} of "
+                f"{len(tgt.rows)} rows")
+    return Calibration(mdl, tgt, pri, options, out, time.perf_counter() - start,
+                       device)
+
+
+def model_reference(model: Model) -> str:
+    """What a worker loads the model by: its name when that finds this very model (a
+    shipped one, or one in a ``BEARINGDYN_MODELS`` folder), else its spec's path."""
+    try:
+        if load_model(model.name).spec_sha256 == model.spec_sha256:
+            return model.name
+    except InputError:
+        pass
+    return model.spec_file
+
+
+def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
+               options: Options, coordinates: Sequence[str], model_ref: str, executor,
+               store, progress, done_count: list[int], total: int) -> list[list[MemberRow]]:
+    """Run one round's sets in blocks (resuming stored blocks); rows[member][row]."""
+    from analysis.sweeps.executors import SerialExecutor, run_with_progress
+
+    blocks = list(range(0, len(values), options.block))
+    found: dict[int, list[list[MemberRow]]] = {}
+    stored = store.done() if store is not None else set()
+    for b in blocks:
+        key = f"r{r}-b{b}"
+        if key in stored:
+            found[b] = _unpack(store.load(key), coordinates)
+            done_count[0] += len(found[b]) * len(target.rows)
+    tasks = [(b, (model_ref, target.rows, names, values[b:b + options.block],
+                  options.settings, coordinates, options.device))
+             for b in blocks if b not in found]
+
+    def on_result(item, result):
+        packed = _pack(result, coordinates)
+        if store is not None:
+            store.save(f"r{r}-b{item[0]}", packed)
+        found[item[0]] = _unpack(packed, coordinates)
+        done_count[0] += len(found[item[0]]) * len(target.rows)
+
+    if tasks:
+        run_with_progress(executor or SerialExecutor(), _block_task, tasks,
+                          lambda: done_count[0], total, progress, on_result)
+    return [member for b in blocks for member in found[b]]
+
+
+def _block_task(item: tuple) -> list[list[dict]]:
+    """A picklable executor task: (block start, evaluation task)."""
+    return _evaluate_task(item[1])

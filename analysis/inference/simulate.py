@@ -1,0 +1,289 @@
+"""One round of a calibration on the ensemble engine: every parameter set at every target
+row, each row one ensemble call, each member classified and its spectrum lines named.
+
+A member is one parameter set at one row (its balls and conditions). Its run is fixed-step
+RK4 with a step h that divides the shaft period T into ``samples_per_revolution``·j steps,
+so the samples the engine returns every j steps are a time record (for the spectrum, on
+the host) and every ``samples_per_revolution``-th sample is a shaft Poincaré point (for
+the class). The record is classified as every chart point is
+(``stability.classify.classify_section``, with λ1 and its 95 % interval from a tangent
+carried over the record), and its lines named as ``signal.spectrum.find_peaks`` names
+them. A member that blows up (``integrate.ensemble.bad_points``: not finite, or beyond the
+blow-up limit) is given the class ``diverged``: it stays in the round, never dropped.
+
+The engine: the member kernels of ``analysis.integrate.kernels`` (``run_members`` with a
+``Schedule``; CPU with OpenMP or the GPU, ``device``) when that package is present, else
+the state lane kernel of ``analysis.integrate.ensemble.run_members`` (two members per
+vector register, the same RK4 steps as ``simulate`` bit for bit) with λ1 from a shadow
+member per member (Benettin's two-trajectory method, renormalised every revolution).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.inference.targets import Target, TargetRow
+from analysis.integrate.ensemble import bad_points
+from analysis.integrate.ensemble import run_members as lane_members
+from analysis.integrate.plan import RunPlan
+from analysis.integrate.simulate import blow_up_limit
+from analysis.model import Model, System, as_system, load_model
+from analysis.provenance import completed_attrs, to_dataset
+from analysis.signal.poincare import poincare_section
+from analysis.signal.spectrum import Peak, find_peaks
+from analysis.stability.classify import classify_section, verdict_points
+from analysis.stability.lyapunov import BLOCKS, batch_ci95
+
+SHADOW_OFFSET = 1e-11
+"""Initial separation of a shadow member (m, in x): small beside the clearance (1e-5 m) and
+the orbit, large beside the rounding of the state (1e-21 m)."""
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How long each member runs and how its record is sampled."""
+
+    transient_revolutions: int = 50
+    """Shaft revolutions dropped before the record."""
+    revolutions: int = 100
+    """Shaft revolutions recorded: the Poincaré points and the spectrum's record. A
+    multiple of ``BLOCKS`` (λ1's batches) and at least ``verdict_points()``."""
+    samples_per_revolution: int = 40
+    """Record samples per revolution (the spectrum's Nyquist frequency is half that many
+    times X)."""
+    dt: float | None = None
+    """Largest RK4 step, s (None: the spec's)."""
+    max_peaks: int = 8
+    """Peaks per coordinate among which lines are looked for (``find_peaks``)."""
+
+    def check(self) -> None:
+        least = verdict_points() + 1
+        for name, value, low in (("transient_revolutions", self.transient_revolutions, 0),
+                                 ("revolutions", self.revolutions, least),
+                                 ("samples_per_revolution", self.samples_per_revolution, 8),
+                                 ("max_peaks", self.max_peaks, 1)):
+            if isinstance(value, bool) or not isinstance(value, int) or \
+                    not low <= value <= 100_000:
+                raise InputError(f"{name}: must be a whole number in [{low}, 100000], "
+                                 f"got {value!r}")
+        if self.revolutions % BLOCKS:
+            raise InputError(f"revolutions: must be a multiple of {BLOCKS} (λ1's batches), "
+                             f"got {self.revolutions}")
+        if self.dt is not None and not (math.isfinite(self.dt) and self.dt > 0):
+            raise InputError(f"dt: must be a finite number > 0 s, got {self.dt!r}")
+
+    def steps(self, system: System) -> tuple[float, int]:
+        """(h in s, RK4 steps per record sample) for ``system``: h divides the shaft period
+        into ``samples_per_revolution``·j steps, h <= ``dt``."""
+        shaft_hz = system.frequencies().shaft_hz
+        if not shaft_hz > 0:
+            raise InputError("speed_rpm: calibration samples shaft revolutions; the shaft "
+                             "must turn (speed_rpm > 0)")
+        dt = float(self.dt or system.model.simulation_defaults["dt"])
+        period = 1.0 / shaft_hz
+        every = max(1, math.ceil(period / (self.samples_per_revolution * dt) - 1e-9))
+        return period / (self.samples_per_revolution * every), every
+
+
+@dataclass(frozen=True)
+class EngineResult:
+    """What the engine returns for M members."""
+
+    samples: np.ndarray
+    """(M, K, n): the state after every sampled step of the record (SI units)."""
+    lambda1: np.ndarray
+    """(M,): λ1 over the record, 1/s (NaN for a diverged member)."""
+    ci95: np.ndarray
+    """(M,): its 95 % half-width, 1/s."""
+    device: str
+
+
+def kernels_available() -> bool:
+    """Whether the member kernels (``analysis.integrate.kernels``) are installed."""
+    import importlib.util
+
+    return importlib.util.find_spec("analysis.integrate.kernels") is not None
+
+
+def run_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
+               every: int, transient_samples: int, n_samples: int, per_revolution: int,
+               device: str = "cpu") -> EngineResult:
+    """Run M members of ``system``'s model and balls: ``states`` (M × n), ``parameters``
+    (M × n_par), step ``h`` s; ``transient_samples`` · ``every`` steps dropped, then
+    ``n_samples`` samples every ``every`` steps kept, λ1 over them (renormalised every
+    ``per_revolution`` samples)."""
+    if kernels_available():
+        from analysis.integrate.kernels import Schedule, run_members
+
+        schedule = Schedule(transient_samples * every, every, n_samples, tangent=True,
+                            lyapunov_skip=0, keep_sections=True)
+        out = run_members(system, states, parameters, h, schedule, device=device)
+        logs = np.asarray(out.logs, dtype=float)
+        per = logs.reshape(len(logs), -1, per_revolution).sum(axis=2)
+        ci = batch_ci95(per, per_revolution * every * h)
+        return EngineResult(np.asarray(out.sections), np.asarray(out.lambda1), ci,
+                            str(out.device))
+    if device == "gpu":
+        raise InputError("--device: gpu needs the member kernels (analysis.integrate."
+                         "kernels) and CuPy; use cpu")
+    return _lanes_engine(system, states, parameters, h, every, transient_samples, n_samples,
+                         per_revolution)
+
+
+def _lanes_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
+                  every: int, transient_samples: int, n_samples: int,
+                  per_revolution: int) -> EngineResult:
+    """``run_engine`` on the state lane kernel, λ1 from a shadow member per member."""
+    m, n = states.shape
+    s = np.column_stack([states, np.zeros(m)])
+    hs = np.full(2 * m, h)
+    if transient_samples:
+        lane_members(system, parameters, hs[:m], s, 1, transient_samples * every)
+    shadow = s.copy()
+    shadow[:, 0] += SHADOW_OFFSET
+    both = np.concatenate([s, shadow])
+    p2 = np.concatenate([parameters, parameters])
+    revolutions = n_samples // per_revolution
+    samples = np.empty((m, n_samples, n))
+    logs = np.empty((m, revolutions))
+    omega = 2 * np.pi / (per_revolution * every * h)
+    scale = np.array([1.0 if not name.startswith("v") else 1.0 / omega
+                      for name in system.state_names])
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        for r in range(revolutions):
+            out = lane_members(system, p2, hs, both, per_revolution, every)
+            samples[:, r * per_revolution:(r + 1) * per_revolution] = out[:m]
+            diff = (both[m:, :n] - both[:m, :n]) * scale
+            dist = np.linalg.norm(diff, axis=1)
+            logs[:, r] = np.log(dist / SHADOW_OFFSET)
+            factor = np.where(dist > 0, SHADOW_OFFSET / dist, 1.0)
+            both[m:, :n] = both[:m, :n] + (both[m:, :n] - both[:m, :n]) * factor[:, None]
+    interval = per_revolution * every * h
+    lam = logs.sum(axis=1) / (interval * revolutions)
+    with np.errstate(invalid="ignore"):
+        ci = batch_ci95(logs, interval)
+    return EngineResult(samples, lam, ci, "cpu")
+
+
+def row_system(model: Model, row: TargetRow) -> System:
+    """The System of a target row: its balls and conditions, the model's defaults else."""
+    return as_system(model, row.balls, **dict(row.parameters))
+
+
+@dataclass(frozen=True)
+class MemberRow:
+    """One member's result at one row."""
+
+    nature: str
+    lambda1: float
+    ci95: float
+    major: dict[str, str]
+    lines: dict[str, list[str]]
+    diverged_at: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def peak_names(peaks: Sequence[Peak]) -> list[str]:
+    """Every name of the peaks, largest first: each label and its ambiguous ``also``
+    names (a line at a frequency two names share counts as either)."""
+    names: list[str] = []
+    for peak in peaks:
+        for name in (peak.name, *peak.also):
+            if name not in names:
+                names.append(name)
+    return names
+
+
+def _member_row(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
+                every: int, start_step: int, settings: RunSettings,
+                coordinates: Sequence[str]) -> MemberRow:
+    """Classify one member's record and name its lines."""
+    model = system.model
+    values = dict(system.parameters)
+    limit = blow_up_limit(model, values)
+    bad = bad_points(samples, limit, model.centre_indices())
+    times = (start_step + every * np.arange(1, len(samples) + 1)) * h
+    if bad.any() or not math.isfinite(lam):
+        first = int(np.argmax(bad)) if bad.any() else len(samples) - 1
+        return MemberRow("diverged", math.nan, math.nan, {}, {}, float(times[first]))
+    duration = float(times[-1])
+    attrs = completed_attrs(system, method="rk4", dt=h, save_every=every, duration=duration,
+                            transient=float(times[0]))
+    run = to_dataset(times, samples.T, attrs, model)
+    points = poincare_section(run, "shaft")
+    ptp = {v: float(np.ptp(samples[:, i])) for i, v in enumerate(model.state_names)}
+    verdict = classify_section(points, ptp, lambda: (lam, ci))
+    major, lines = {}, {}
+    for var in coordinates:
+        names = peak_names(find_peaks(run, var, settings.max_peaks))
+        major[var] = names[0] if names else "-"
+        lines[var] = names
+    return MemberRow(verdict.nature, float(lam), float(ci), major, lines, math.nan)
+
+
+def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],
+                 thetas: np.ndarray, settings: RunSettings, coordinates: Sequence[str],
+                 device: str = "cpu") -> list[MemberRow]:
+    """Every parameter set ``thetas`` (M × P, SI units, in the order of ``names``) at one
+    target ``row``: one ensemble call, each member classified and its lines named."""
+    model = load_model(model) if not isinstance(model, Model) else model
+    base = row_system(model, row)
+    members = [base.replace(**dict(zip(names, map(float, theta), strict=True)))
+               for theta in thetas]
+    steps = [settings.steps(m) for m in members]
+    h, every = steps[0]
+    if any(abs(s[0] - h) > 1e-15 * h or s[1] != every for s in steps):
+        # a calibrated speed changes h per member: one call per distinct step
+        out: list[MemberRow] = [None] * len(members)  # type: ignore[list-item]
+        for key in dict.fromkeys(steps):
+            idx = [i for i, s in enumerate(steps) if s == key]
+            for i, res in zip(idx, evaluate_row(model, row, names, thetas[idx], settings,
+                                                coordinates, device), strict=True):
+                out[i] = res
+        return out
+    per = settings.samples_per_revolution
+    result = run_engine(base, np.array([m.state for m in members]),
+                        np.array([m.p for m in members]), h, every,
+                        settings.transient_revolutions * per, settings.revolutions * per,
+                        per, device)
+    start = settings.transient_revolutions * per * every
+    return [_member_row(m, result.samples[i], float(result.lambda1[i]),
+                        float(result.ci95[i]), h, every, start, settings, coordinates)
+            for i, m in enumerate(members)]
+
+
+def check_steps(model: Model, target: Target, corners: Sequence[dict[str, float]],
+                settings: RunSettings) -> None:
+    """Before any work: every row at every given corner of the priors has an RK4 step that
+    ``RunPlan.step`` accepts (resolving the forcing, RK4-stable), else ``InputError``
+    naming the corner."""
+    for row in target.rows:
+        base = row_system(model, row)
+        for corner in corners:
+            system = base.replace(**corner)
+            h, _ = settings.steps(system)
+            try:
+                RunPlan.step(system, h, warn=lambda message: None)
+            except InputError as exc:
+                shown = ", ".join(f"{k} = {v:g}" for k, v in corner.items())
+                raise InputError(f"--prior: at {shown} ({row.name()}): {exc}") from None
+
+
+def member_steps(target: Target, settings: RunSettings, model: Model) -> int:
+    """RK4 steps one parameter set takes over every row (shadows or tangents counted as
+    one more member over the record)."""
+    total = 0
+    for row in target.rows:
+        system = row_system(model, row)
+        _, every = settings.steps(system)
+        per = settings.samples_per_revolution * every
+        total += per * (settings.transient_revolutions + 2 * settings.revolutions)
+    return total
+
