@@ -34,3 +34,33 @@ class Interrupt:
         """Raise ``KeyboardInterrupt`` when an interruption was requested."""
         if cls.requested:
             raise KeyboardInterrupt
+
+
+def check_count(field: str, value: object, low: int = 1, high: int | None = None,
+                note: str = "", *, text: bool = False) -> int:
+    """``value`` as an ``int`` when it is a whole number in [``low``, ``high``] (no upper
+    bound without ``high``); ``InputError`` naming ``field`` otherwise: the one check of
+    every count (harmonics, points, balls, samples, workers, blocks). ``text``: a string of
+    digits (``"8"``, from a command line or a list ``"8,4"``) is read as its number; ``note``
+    is said after the range. ``bool`` is not a count, nor is 8.0.
+
+    >>> check_count("points", 33, 8)
+    33
+    >>> check_count("points", "33", 8, text=True)
+    33
+    >>> check_count("workers", 0, 1, 64)
+    Traceback (most recent call last):
+    ...
+    analysis.errors.InputError: workers: must be a whole number in [1, 64], got 0
+    """
+    number = value
+    if text and isinstance(value, str):
+        try:
+            number = int(value.strip())
+        except ValueError:
+            number = None
+    whole = not isinstance(number, bool) and hasattr(number, "__index__")
+    if not whole or number < low or (high is not None and number > high):
+        bounds = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise InputError(f"{field}: must be a whole number {bounds}{note}, got {value!r}")
+    return int(number)

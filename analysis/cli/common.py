@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from pathlib import Path
 from typing import Annotated
@@ -105,15 +106,47 @@ def parse_sets(items: list[str] | None) -> dict[str, float]:
     return values
 
 
-def parameter_values(speed_rpm: float | None, sets: list[str] | None) -> dict[str, float]:
-    """``--set`` values with ``--speed-rpm`` merged in (refused when both give the speed)."""
+def parameter_values(speed_rpm: str | float | None, sets: list[str] | None
+                     ) -> dict[str, float]:
+    """``--set`` values with ``--speed-rpm`` merged in (refused when both give the speed).
+    ``--speed-rpm`` is one speed here: a ramp or a speed table is refused in one line (only
+    ``simulate`` follows one, through ``run_speed``).
+
+    >>> parameter_values("3000", ["damping=100"])
+    {'damping': 100.0, 'speed_rpm': 3000.0}
+    """
     params = parse_sets(sets)
+    speed_rpm = _one_speed(speed_rpm)
     if speed_rpm is not None:
         if "speed_rpm" in params:
             raise InputError(f"--speed-rpm: given twice (--speed-rpm {speed_rpm:g} and --set "
                              f"speed_rpm={params['speed_rpm']:g}); give the speed once")
         params["speed_rpm"] = speed_rpm
     return params
+
+
+def _one_speed(speed_rpm: str | float | None) -> float | None:
+    if speed_rpm is None or isinstance(speed_rpm, (int, float)):
+        return speed_rpm
+    from analysis.integrate.speed_profile import SpeedProfile, parse_speed
+
+    speed = parse_speed(speed_rpm)
+    if isinstance(speed, SpeedProfile):
+        raise InputError(f"--speed-rpm: one speed in rpm here (a ramp or a speed table is "
+                         f"for simulate), got {speed_rpm!r}")
+    return speed
+
+
+def run_speed(speed_rpm: str | None, sets: list[str] | None):
+    """``(parameters, profile)`` of a run: ``--set`` values with the speed merged in, and
+    the ``SpeedProfile`` of a ramp or speed table given to ``--speed-rpm`` (None at one
+    speed; ``speed_rpm`` is then the profile's speed at t = 0)."""
+    from analysis.integrate.speed_profile import SpeedProfile, parse_speed
+
+    speed = None if speed_rpm is None else parse_speed(speed_rpm)
+    profile = speed if isinstance(speed, SpeedProfile) else None
+    params = parameter_values(profile.start_rpm if profile else speed, sets)
+    return params, profile
 
 
 SetOption = Annotated[list[str] | None, typer.Option(
@@ -125,9 +158,17 @@ MODEL_HELP = ("Model: a shipped name or a name in a BEARINGDYN_MODELS folder (se
 ModelArgument = Annotated[str, typer.Argument(help=MODEL_HELP, metavar="MODEL")]
 
 
-def parse_n_balls(items: list[str] | None) -> int | dict[str, int] | None:
+def parse_n_balls(items: list[str] | int | dict[str, int] | None
+                  ) -> int | dict[str, int] | None:
     """``["8"]`` -> 8 (a model with one bearing); ``["left=7", "right=11"]`` (or
-    ``["left=7,right=11"]``) -> {"left": 7, "right": 11}; nothing -> None (the spec's)."""
+    ``["left=7,right=11"]``) -> {"left": 7, "right": 11}; nothing -> None (the spec's).
+    Balls already parsed (an int or a dict) come back as they are.
+
+    >>> parse_n_balls(["8"]), parse_n_balls(["left=7,right=11"]), parse_n_balls(None)
+    (8, {'left': 7, 'right': 11}, None)
+    """
+    if isinstance(items, (int, dict)):
+        return items
     parts = [part.strip() for item in items or [] for part in str(item).split(",")
              if part.strip()]
     if not parts:
@@ -135,33 +176,43 @@ def parse_n_balls(items: list[str] | None) -> int | dict[str, int] | None:
     named: dict[str, int] = {}
     plain: list[int] = []
     for part in parts:
-        name, sep, text = part.partition("=")
-        try:
-            number = int(text if sep else name)
-        except ValueError:
-            raise typer.BadParameter(
-                f"expected a whole number (8) or bearing=number (left=8), got {part!r}",
-                param_hint="'--n-balls'") from None
-        if sep:
-            if not name.strip():
-                raise typer.BadParameter(f"a bearing name is missing in {part!r}",
-                                         param_hint="'--n-balls'")
-            if name.strip() in named:
-                raise typer.BadParameter(
-                    f"bearing {name.strip()!r} given twice ({named[name.strip()]} and "
-                    f"{number}); give each bearing once", param_hint="'--n-balls'")
-            named[name.strip()] = number
-        else:
+        name, number = _ball_count(part)
+        if name is None:
             plain.append(number)
+        elif name in named:
+            raise _balls_error(f"bearing {name!r} given twice ({named[name]} and {number}); "
+                               "give each bearing once")
+        else:
+            named[name] = number
     if plain and (named or len(plain) > 1):
-        raise typer.BadParameter("give one number (a model with one bearing) or "
-                                 "bearing=number for each bearing (repeatable), got "
-                                 f"{', '.join(parts)}", param_hint="'--n-balls'")
+        raise _balls_error("give one number (a model with one bearing) or bearing=number for "
+                           f"each bearing (repeatable), got {', '.join(parts)}")
     return plain[0] if plain else named
 
 
+def _balls_error(text: str) -> typer.BadParameter:
+    return typer.BadParameter(text, param_hint="'--n-balls'")
+
+
+def _ball_count(part: str) -> tuple[str | None, int]:
+    """``"8"`` -> (None, 8); ``"left=8"`` -> ("left", 8)."""
+    name, sep, text = part.partition("=")
+    try:
+        number = int(text if sep else name)
+    except ValueError:
+        raise _balls_error(f"expected a whole number (8) or bearing=number (left=8), got "
+                           f"{part!r}") from None
+    if sep and not name.strip():
+        raise _balls_error(f"a bearing name is missing in {part!r}")
+    return (name.strip() if sep else None), number
+
+
 def _check_n_balls(items: list[str] | None) -> list[str] | None:
-    parse_n_balls(items)  # a bad value is a usage error of the command line
+    """A bad value is a usage error of the command line, found while the options are read.
+    The items go on as they came: typer turns whatever the callback of a repeatable option
+    returns back into a list (``list(value)``: 8 would fail, a dict would lose its counts),
+    so the command parses them once, with ``parse_n_balls``."""
+    parse_n_balls(items)
     return items
 
 
@@ -259,7 +310,10 @@ def write_figure(fig, output: Path | None, err: bool = False) -> None:
         typer.echo(f"wrote {output}", err=err)
 
 
-SpeedOption = Annotated[float | None, typer.Option(help="Shaft speed, rpm.")]
+SpeedOption = Annotated[str | None, typer.Option(
+    "--speed-rpm", help="Shaft speed, rpm (simulate also takes a ramp A:B, A at t = 0 and B "
+                        "at the end of the run, or a CSV speed table t_s,speed_rpm; docs: "
+                        "Run-ups).")]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON.")]
 
 
@@ -290,6 +344,62 @@ WorkersOption = Annotated[int | None, typer.Option(help="Worker processes (defau
 SchedulerOption = Annotated[str | None, typer.Option(
     help="Address of a running Dask scheduler, tcp://host:port.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", help="No progress output.")]
+DtOption = Annotated[float | None, typer.Option(
+    "--dt", help="Largest RK4 step, s (default: the spec's).")]
+SettleOption = Annotated[float | None, typer.Option(
+    "--settle", help="Simulated time before the first guess, s (default: the model's own "
+                     "time scale).")]
+ParamOption = Annotated[str | None, typer.Option(
+    "--param", help="Runtime parameter to continue in (with --from and --to).")]
+FromOption = Annotated[float | None, typer.Option(
+    "--from", help="Start value (parameter unit).")]
+ToOption = Annotated[float | None, typer.Option("--to", help="End value (parameter unit).")]
+MaxPointsOption = Annotated[int, typer.Option("--max-points", help="Points per branch.")]
+DsMaxOption = Annotated[float, typer.Option(
+    "--ds-max", help="Largest scaled arclength step.")]
+
+
+def progress_lines(quiet: bool, err: bool = True):
+    """The progress callback of ``--quiet`` (None) or one line per message (stderr)."""
+    return None if quiet else (lambda text: typer.echo(text, err=err))
+
+
+@contextlib.contextmanager
+def option_names(*fields: str):
+    """Within: an ``InputError`` that names one of the API's ``fields`` (``harmonics:
+    …``, ``stability_every: …``) names the command's option instead (``--harmonics: …``,
+    ``--stability-every: …``)."""
+    try:
+        yield
+    except InputError as err:
+        text = str(err)
+        field = text.partition(":")[0]
+        if field not in fields:
+            raise
+        raise InputError("--" + field.replace("_", "-") + text[len(field):]) from None
+
+
+def continued_systems(system, param: str | None, start: float | None, stop: float | None):
+    """``(system at --from, system at --to)`` of a continuation, or ``(system, None)``
+    without one: --param, --from and --to come together, the parameter exists, both ends
+    are in its range and differ (each refused in one line naming the option)."""
+    given = [name for name, value in (("--param", param), ("--from", start), ("--to", stop))
+             if value is not None]
+    if not given:
+        return system, None
+    if len(given) < 3:
+        missing = [n for n in ("--param", "--from", "--to") if n not in given]
+        raise InputError(f"{given[0]}: continuation needs --param, --from and --to; "
+                         f"give {', '.join(missing)}")
+    model = system.model
+    if param not in model.parameter_names:
+        raise InputError(f"--param: '{param}' is not a parameter of '{model.name}'; choose "
+                         f"one of {', '.join(model.parameter_names)}")
+    model.parameters({param: start})
+    model.parameters({param: stop})
+    if start == stop:
+        raise InputError("--to: must differ from --from")
+    return system.replace(**{param: start}), system.replace(**{param: stop})
 
 
 def executor_of(kind: str, workers: int | None, scheduler: str | None):

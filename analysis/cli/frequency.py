@@ -10,21 +10,36 @@ import numpy as np
 import typer
 
 from analysis.cli.common import (
+    DsMaxOption,
+    DtOption,
+    FromOption,
     JsonOption,
+    MaxPointsOption,
     ModelArgument,
     NBallsOption,
+    ParamOption,
     PeriodOption,
+    QuietOption,
     SetOption,
+    SettleOption,
+    ToOption,
     app,
+    continued_systems,
     figure_output,
     given_options,
     netcdf_output,
+    option_names,
     parse_n_balls,
     parse_sets,
+    progress_lines,
     reports_errors,
     write_figure,
 )
 from analysis.errors import InputError
+
+API_FIELDS = ("harmonics", "points", "frequencies", "samples", "stability_every",
+              "lyapunov_duration")
+"""The API's fields that ``hb`` and ``torus`` give as options of the same name."""
 
 
 @app.command()
@@ -38,91 +53,59 @@ def hb(
     period: PeriodOption = None,
     n_balls: NBallsOption = None,
     sets: SetOption = None,
-    param: Annotated[str | None, typer.Option(
-        help="Runtime parameter to continue in (with --from and --to).")] = None,
-    start: Annotated[float | None, typer.Option(
-        "--from", help="Start value (parameter unit).")] = None,
-    stop: Annotated[float | None, typer.Option(
-        "--to", help="End value (parameter unit).")] = None,
+    param: ParamOption = None,
+    start: FromOption = None,
+    stop: ToOption = None,
     samples: Annotated[int | None, typer.Option(
         help="AFT time samples per period (>= 2H + 1; default the fast size of "
              "max(4H + 1, 64)).")] = None,
-    max_points: Annotated[int, typer.Option(help="Points per branch.")] = 200,
-    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
-    dt: Annotated[float | None, typer.Option(
-        help="Largest RK4 step of the simulation that gives the first guess, s (default: "
-             "the spec's).")] = None,
-    settle: Annotated[float | None, typer.Option(
-        help="Simulated time before the first guess, s (default: the model's own, as "
-             "floquet).")] = None,
+    max_points: MaxPointsOption = 200,
+    ds_max: DsMaxOption = 0.05,
+    dt: DtOption = None,
+    settle: SettleOption = None,
     plot: Annotated[Path | None, typer.Option(
         help="Figure: the amplitude of the first state against the parameter, stable "
              "solid, unstable dashed, special points marked.", callback=figure_output)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    quiet: QuietOption = False,
     as_json: JsonOption = False,
 ):
     """Periodic response by harmonic balance (AFT, exact Jacobian by CasADi AD) with Hill's
     stability; with --param, --from and --to its continuation (LP, PD, NS, BP points)."""
-    from analysis.frequency import check_forced, check_harmonics
-    from analysis.frequency.solve import prepare
+    from analysis.frequency.methods import PERIODIC, Request
     from analysis.model import as_system
 
-    values = parse_sets(sets)
-    continued = [name for name, value in (("--param", param), ("--from", start),
-                                          ("--to", stop)) if value is not None]
-    if continued and len(continued) < 3:
-        missing = [n for n in ("--param", "--from", "--to") if n not in continued]
-        raise InputError(f"{continued[0]}: continuation needs --param, --from and --to; "
-                         f"give {', '.join(missing)}")
-    system = as_system(model, parse_n_balls(n_balls), **values)
-    check_harmonics(harmonics, system.n_state, "--harmonics")
-    if param is not None:
-        if param not in system.model.parameter_names:
-            raise InputError(f"--param: '{param}' is not a parameter of "
-                             f"'{system.model.name}'; choose one of "
-                             f"{', '.join(system.model.parameter_names)}")
-        system.model.parameters({param: start})
-        system.model.parameters({param: stop})
-        if start == stop:
-            raise InputError("--to: must differ from --from")
-        system = system.replace(**{param: start})
-    check_forced(system)
-    prepare(system, period)  # the period exists and lasts a finite time here
-    from analysis.frequency.harmonic import fast_samples
+    system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
+                                              **parse_sets(sets)), param, start, stop)
+    with option_names(*API_FIELDS):
+        request = Request(harmonics, period=period, param=param, start=start, stop=stop,
+                          max_points=max_points, ds_max=ds_max,
+                          options=given_options(dt=dt, settle=settle, samples=samples),
+                          progress=progress_lines(quiet))
+        data = PERIODIC["hb"].run(system, request, end)
+    _finish(data, output, as_json, lambda: _print(data, output),
+            plot and (plot, lambda: response_figure(data)))
 
-    fast_samples(harmonics, samples)
 
-    def say(text: str) -> None:
-        if not quiet:
-            typer.echo(text, err=True)
-
-    options = given_options(dt=dt, settle=settle, samples=samples)
-    if param is None:
-        from analysis.frequency import harmonic_balance
-        from analysis.frequency.solve import response_dataset
-
-        response = harmonic_balance(system, None, period, harmonics, **options)
-        if not response.converged:
-            raise InputError(f"hb: no periodic response found ({response.message})")
-        data = response_dataset(response)
-    else:
-        from analysis.frequency import continue_harmonic
-
-        data = continue_harmonic(system, None, param=param, start=start, stop=stop,
-                                 period=period, harmonics=harmonics, max_points=max_points,
-                                 ds_max=ds_max, progress=say, **options)
+def _finish(data, output: Path, as_json: bool, say, figure, extra: dict | None = None,
+            also: dict | None = None) -> None:
+    """Write ``data`` to ``output`` (and each Dataset of ``also`` to its path); say so
+    (``say()``) or print the JSON of its points (with ``extra``); ``figure``: (path,
+    figure maker) or None."""
     from analysis.io import save_dataset
 
     save_dataset(data, output)
+    for path, dataset in (also or {}).items():
+        save_dataset(dataset, path)
     if not as_json:
-        _print(data, output)
-    if plot:
-        write_figure(response_figure(data), plot, err=as_json)
+        say()
+    if figure:
+        write_figure(figure[1](), figure[0], err=as_json)
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({"points": points_json(data), "file": str(output),
-                               "provenance": provenance(output)}, indent=2))
+        out = {"points": points_json(data), "file": str(output),
+               "provenance": provenance(output)}
+        typer.echo(json.dumps(out | (extra or {}), indent=2))
 
 
 def points_json(data) -> list[dict]:
@@ -204,10 +187,29 @@ def response_figure(data):
     return canvas.finish(fig, data)
 
 
-def _as_flag(err: InputError, flag: str, field: str) -> InputError:
-    """``err`` with its leading ``field:`` written as the command's ``flag:``."""
-    text = str(err)
-    return InputError(flag + text[len(field):] if text.startswith(field) else text)
+FrequenciesOption = Annotated[str, typer.Option(
+    "--frequencies", help="Two base frequencies F1,F2: shaft, vc, vc[name] or param:NAME.")]
+TorusHarmonicsOption = Annotated[str | None, typer.Option(
+    "--harmonics", help="Harmonics H1,H2 of F1 and F2 (each >= 1; --method hb only; default "
+                        "8,4).")]
+TorusMethodOption = Annotated[str, typer.Option(
+    "--method", help="hb: 2-D harmonic balance; shooting: the invariant circle of the "
+                     "F1-period map (accurate on contact; with --param, continued without "
+                     "λ1).")]
+PointsOption = Annotated[int | None, typer.Option(
+    "--points", help="Circle points N of --method shooting (>= 8; default 65).")]
+LyapunovDurationOption = Annotated[float, typer.Option(
+    help="Averaging time of λ1 from the torus, s (0: no λ1).")]
+StabilityEveryOption = Annotated[int, typer.Option(
+    help="On a branch, λ1 at every k-th torus and the last (>= 1).")]
+TorusRunOption = Annotated[Path | None, typer.Option(
+    help="Also write a run sampled from the (last) torus, readable by spectrum, poincare and "
+         "plot.", callback=netcdf_output)]
+TorusDurationOption = Annotated[float, typer.Option(
+    help="Length of the --run series and of the figure's time run, s.")]
+TorusPlotOption = Annotated[Path | None, typer.Option(
+    help="Figure: the torus's shaft section u(0, θ2) against the Poincaré section of a time "
+         "run.", callback=figure_output)]
 
 
 @app.command()
@@ -216,47 +218,25 @@ def torus(
     model: ModelArgument,
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the "
                                          "torus (or branch of tori).", callback=netcdf_output)],
-    frequencies: Annotated[str, typer.Option(
-        "--frequencies", help="Two base frequencies F1,F2: shaft, vc, vc[name] or "
-                              "param:NAME.")] = "shaft,vc",
-    harmonics: Annotated[str | None, typer.Option(
-        "--harmonics", help="Harmonics H1,H2 of F1 and F2 (each >= 1; --method hb only; "
-                            "default 8,4).")] = None,
-    method: Annotated[str, typer.Option(
-        "--method", help="hb: 2-D harmonic balance; shooting: the invariant circle of the "
-                         "F1-period map (accurate on contact; with --param, continued "
-                         "without λ1).")] = "hb",
-    points: Annotated[int | None, typer.Option(
-        "--points", help="Circle points N of --method shooting (>= 8; default 65).")] = None,
+    frequencies: FrequenciesOption = "shaft,vc",
+    harmonics: TorusHarmonicsOption = None,
+    method: TorusMethodOption = "hb",
+    points: PointsOption = None,
     n_balls: NBallsOption = None,
     sets: SetOption = None,
-    param: Annotated[str | None, typer.Option(
-        help="Runtime parameter to continue in (with --from and --to).")] = None,
-    start: Annotated[float | None, typer.Option(
-        "--from", help="Start value (parameter unit).")] = None,
-    stop: Annotated[float | None, typer.Option(
-        "--to", help="End value (parameter unit).")] = None,
-    max_points: Annotated[int, typer.Option(help="Points per branch.")] = 100,
-    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
-    lyapunov_duration: Annotated[float, typer.Option(
-        help="Averaging time of λ1 from the torus, s (0: no λ1).")] = 2.0,
-    stability_every: Annotated[int, typer.Option(
-        help="On a branch, λ1 at every k-th torus and the last (>= 1).")] = 1,
-    dt: Annotated[float | None, typer.Option(
-        help="Largest RK4 step of the simulations (guess, λ1, figure), s (default: the "
-             "spec's).")] = None,
-    settle: Annotated[float | None, typer.Option(
-        help="Simulated time before the guess's fit, s (default: the spec's transient)."
-    )] = None,
-    run: Annotated[Path | None, typer.Option(
-        help="Also write a run sampled from the (last) torus, readable by spectrum, "
-             "poincare and plot.", callback=netcdf_output)] = None,
-    duration: Annotated[float, typer.Option(
-        help="Length of the --run series and of the figure's time run, s.")] = 2.0,
-    plot: Annotated[Path | None, typer.Option(
-        help="Figure: the torus's shaft section u(0, θ2) against the Poincaré section of a "
-             "time run.", callback=figure_output)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    param: ParamOption = None,
+    start: FromOption = None,
+    stop: ToOption = None,
+    max_points: MaxPointsOption = 100,
+    ds_max: DsMaxOption = 0.05,
+    lyapunov_duration: LyapunovDurationOption = 2.0,
+    stability_every: StabilityEveryOption = 1,
+    dt: DtOption = None,
+    settle: SettleOption = None,
+    run: TorusRunOption = None,
+    duration: TorusDurationOption = 2.0,
+    plot: TorusPlotOption = None,
+    quiet: QuietOption = False,
     as_json: JsonOption = False,
 ):
     """Quasi-periodic response on a 2-torus by harmonic balance with two base frequencies
@@ -264,129 +244,44 @@ def torus(
     continuation, and where and why it stops. --method shooting: the same torus as the
     invariant circle of the F1-period map at --points cage phases (RK4 with its AD
     Jacobian; accurate on contact), continued with --param without λ1."""
-    from analysis.frequency.harmonic import check_forced
-    from analysis.frequency.torus import (
-        check_frequencies,
-        check_torus_harmonics,
-        parse_frequencies,
-    )
+    from analysis.frequency.methods import TORUS, Request, method_of
+    from analysis.integrate.checks import check_seconds
     from analysis.model import as_system
 
-    values = parse_sets(sets)
-    continued = [name for name, value in (("--param", param), ("--from", start),
-                                          ("--to", stop)) if value is not None]
-    if continued and len(continued) < 3:
-        missing = [n for n in ("--param", "--from", "--to") if n not in continued]
-        raise InputError(f"{continued[0]}: continuation needs --param, --from and --to; "
-                         f"give {', '.join(missing)}")
-    if not (lyapunov_duration >= 0 and np.isfinite(lyapunov_duration)):
-        raise InputError(f"--lyapunov-duration: must be a finite number >= 0 s, got "
-                         f"{lyapunov_duration!r}")
-    if stability_every < 1:
-        raise InputError(f"--stability-every: must be a whole number >= 1, got "
-                         f"{stability_every}")
-    if not (duration > 0 and np.isfinite(duration)):
-        raise InputError(f"--duration: must be a finite number > 0 s, got {duration!r}")
-    if method not in ("hb", "shooting"):
-        raise InputError(f"--method: must be hb or shooting, got {method!r}")
-    if method == "shooting" and harmonics is not None:
-        raise InputError("--harmonics: applies to --method hb only; the shooting torus is "
-                         "resolved by --points")
-    if method == "hb" and points is not None:
-        raise InputError("--points: applies to --method shooting only; harmonic balance is "
-                         "resolved by --harmonics")
-    system = as_system(model, parse_n_balls(n_balls), **values)
-    check_forced(system)
-    if method == "shooting":
-        from analysis.frequency.invariant_circle import DEFAULT_POINTS, check_points
-
-        circle_points = check_points(DEFAULT_POINTS if points is None else points,
-                                     system.n_state, "--points")
-    try:
-        pair = check_torus_harmonics("8,4" if harmonics is None else harmonics,
-                                     system.n_state, "--harmonics")
-        freqs = parse_frequencies(frequencies, system.model)
-    except InputError as err:
-        raise _as_flag(err, "--frequencies", "frequencies") from None
-    end = None
-    if param is not None:
-        if param not in system.model.parameter_names:
-            raise InputError(f"--param: '{param}' is not a parameter of "
-                             f"'{system.model.name}'; choose one of "
-                             f"{', '.join(system.model.parameter_names)}")
-        system.model.parameters({param: start})
-        system.model.parameters({param: stop})
-        if start == stop:
-            raise InputError("--to: must differ from --from")
-        end = system.replace(**{param: stop})
-        system = system.replace(**{param: start})
-    try:
-        for s in (system, end) if end is not None else (system,):
-            check_frequencies(s, freqs, pair)
-    except InputError as err:
-        raise _as_flag(err, "--frequencies", "frequencies") from None
-
-    def say(text: str) -> None:
-        if not quiet:
-            typer.echo(text, err=True)
-
-    options = given_options(dt=dt, settle=settle)
-    stability = lyapunov_duration > 0
-    if method == "shooting":
-        if freqs[0].kind == "vc" or freqs[1].kind != "vc":
-            raise InputError(f"--frequencies: --method shooting needs F1 shaft or param:NAME "
-                             f"and F2 a vc, got {frequencies}")
-        if param is not None:
-            from analysis.frequency.circle_continuation import continue_circle
-
-            data = continue_circle(system, None, param=param, start=start, stop=stop,
-                                   frequencies=freqs, points=circle_points,
-                                   max_points=max_points, ds_max=ds_max, progress=say,
-                                   **options)
-        else:
-            from analysis.frequency.invariant_circle import circle_dataset, solve_circle
-
-            circle = solve_circle(system, None, freqs, circle_points, stability=stability,
-                                  lyapunov_duration=lyapunov_duration or 2.0, **options)
-            if not circle.converged:
-                raise InputError(f"torus: no invariant circle found ({circle.message})")
-            data = circle_dataset(circle)
-    elif param is None:
-        from analysis.frequency.torus_dataset import torus_dataset
-        from analysis.frequency.torus_solve import solve_torus
-
-        response = solve_torus(system, None, freqs, pair, stability=stability,
-                               lyapunov_duration=lyapunov_duration or 2.0, **options)
-        if not response.converged:
-            raise InputError(f"torus: no torus found ({response.message})")
-        data = torus_dataset(response)
-    else:
-        from analysis.frequency.torus_continuation import continue_torus
-
-        data = continue_torus(system, None, param=param, start=start, stop=stop,
-                              frequencies=freqs, harmonics=pair, max_points=max_points,
-                              ds_max=ds_max, stability=stability,
-                              lyapunov_duration=lyapunov_duration or 2.0,
-                              stability_every=stability_every, progress=say, **options)
-    from analysis.io import save_dataset
-
-    save_dataset(data, output)
+    chosen = method_of(TORUS, method, "--method")
+    resolution = _resolution(chosen, harmonics=harmonics, points=points)
+    check_seconds("--duration", duration)
+    system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
+                                              **parse_sets(sets)), param, start, stop)
+    with option_names(*API_FIELDS):
+        request = Request(resolution, frequencies=frequencies, param=param, start=start,
+                          stop=stop, max_points=max_points, ds_max=ds_max,
+                          lyapunov_duration=lyapunov_duration,
+                          stability_every=stability_every,
+                          options=given_options(dt=dt, settle=settle),
+                          progress=progress_lines(quiet))
+        data = chosen.run(system, request, end)
+    also = {}
     if run:
-        from analysis.frequency.torus_dataset import torus_run
+        from analysis.frequency import torus_run
 
-        save_dataset(torus_run(data, duration, dt), run)
-    if not as_json:
-        _print_torus(data, output, run)
-    if plot:
-        write_figure(torus_figure(data, duration, dt), plot, err=as_json)
-    if as_json:
-        from analysis.provenance import provenance
+        also[run] = torus_run(data, duration, dt)
+    _finish(data, output, as_json, lambda: _print_torus(data, output, run),
+            plot and (plot, lambda: torus_figure(data, duration, dt)),
+            {"stop_report": str(data.attrs["stop_report"])}
+            if "stop_report" in data.attrs else None, also)
 
-        out = {"points": points_json(data), "file": str(output),
-               "provenance": provenance(output)}
-        if "stop_report" in data.attrs:
-            out["stop_report"] = str(data.attrs["stop_report"])
-        typer.echo(json.dumps(out, indent=2))
+
+def _resolution(chosen, **given):
+    """The resolution given for ``chosen`` (None: its default); one given for another
+    method is refused in one line."""
+    from analysis.frequency.methods import TORUS
+
+    for name, value in given.items():
+        if value is not None and name != chosen.resolution:
+            owner = next(m.name for m in TORUS.values() if m.resolution == name)
+            raise InputError(f"--{name}: applies to --method {owner} only; {chosen.resolved}")
+    return given[chosen.resolution]
 
 
 def _print_torus(data, output: Path, run: Path | None) -> None:
@@ -429,7 +324,7 @@ def torus_figure(data, duration: float, dt: float | None = None):
     """The shaft section of the (last) torus, u(0, θ2) for θ2 in [0, 2π), against the
     Poincaré section (shaft) of a time run of the same system from a state on the torus,
     in the first two states; the PNG carries the result's provenance (``canvas.finish``)."""
-    from analysis.frequency.torus_dataset import torus_of
+    from analysis.frequency import torus_of
     from analysis.integrate.simulate import simulate
     from analysis.reports import canvas
     from analysis.reports.plots import scale_of

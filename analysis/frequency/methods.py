@@ -1,0 +1,229 @@
+"""The frequency-domain methods as data: what ``bearingdyn hb`` and ``bearingdyn torus`` look
+up, so that a command only parses, looks up and prints.
+
+A ``Method`` is one way to compute a response: its name, the field that sets its resolution
+(``harmonics`` H or H1,H2; ``points`` N) and three functions of a System and a ``Request``:
+``check`` (every input, before any work: nothing is written after a refusal), ``solve`` (one
+response, as a Dataset) and ``follow`` (a branch in a runtime parameter, as a Dataset).
+
+* ``PERIODIC["hb"]``: harmonic balance of a T-periodic response with Hill's stability
+  (``harmonic_balance``, ``continue_harmonic``);
+* ``TORUS["hb"]``: the 2-torus of two base frequencies by 2-D harmonic balance and its λ1
+  (``solve_torus``, ``continue_torus``);
+* ``TORUS["shooting"]``: the same torus as the invariant circle of the F1-period map
+  (``solve_circle``, ``continue_circle``; λ1 of one circle only).
+
+Adding a method is one entry: its three functions and its resolution.
+
+>>> sorted(TORUS), TORUS["shooting"].resolution
+(['hb', 'shooting'], 'points')
+>>> method_of(TORUS, "fourier", "method")
+Traceback (most recent call last):
+...
+analysis.errors.InputError: method: must be hb or shooting, got 'fourier'
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+
+import xarray as xr
+
+from analysis.errors import InputError
+from analysis.frequency.invariant_circle import DEFAULT_POINTS
+from analysis.model import System
+
+Progress = Callable[[str], None] | None
+
+
+@dataclass(frozen=True)
+class Request:
+    """What a command asks of a method (None: the method's default).
+
+    ``resolution``: H (periodic HB), (H1, H2) or ``"H1,H2"`` (torus HB), N circle points
+    (shooting); ``period``: the forcing period of a periodic response (``forcing`` names);
+    ``frequencies``: F1,F2 of a torus; ``param``, ``start``, ``stop``: the continued runtime
+    parameter and its ends (its unit; all None for one response); ``max_points``,
+    ``ds_max``: the branch's size and largest scaled step; ``lyapunov_duration``: the
+    averaging time of a torus's λ1, s (0: none); ``stability_every``: λ1 at every k-th torus
+    of a branch; ``options``: ``dt``, ``settle`` (s) and ``samples`` given by the user;
+    ``progress``: one line per message."""
+
+    resolution: object = None
+    period: str | None = None
+    frequencies: str = "shaft,vc"
+    param: str | None = None
+    start: float | None = None
+    stop: float | None = None
+    max_points: int = 200
+    ds_max: float = 0.05
+    lyapunov_duration: float = 2.0
+    stability_every: int = 1
+    options: Mapping = field(default_factory=dict)
+    progress: Progress = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.lyapunov_duration) and self.lyapunov_duration >= 0):
+            raise InputError(f"lyapunov_duration: must be a finite number >= 0 s, got "
+                             f"{self.lyapunov_duration!r}")
+        from analysis.errors import check_count
+
+        check_count("stability_every", self.stability_every)
+
+    @property
+    def branch(self) -> dict:
+        """The keywords every ``continue_*`` takes."""
+        return dict(param=self.param, start=self.start, stop=self.stop,
+                    max_points=self.max_points, ds_max=self.ds_max, progress=self.progress,
+                    **self.options)
+
+    @property
+    def stability(self) -> dict:
+        """λ1 of a torus: whether, and over how long (s)."""
+        return dict(stability=self.lyapunov_duration > 0,
+                    lyapunov_duration=self.lyapunov_duration or 2.0)
+
+
+@dataclass(frozen=True)
+class Method:
+    """One method of a family: ``check(system, end, request)`` (``end``: the System at the
+    far end of a branch, or None), ``solve(system, request)`` and ``follow(system,
+    request)``, each a Dataset; ``resolution`` names the field that sizes it, ``default``
+    is its value when none is given, and ``resolved`` says so in words."""
+
+    name: str
+    resolution: str
+    default: object
+    resolved: str
+    check: Callable[[System, System | None, Request], None]
+    solve: Callable[[System, Request], xr.Dataset]
+    follow: Callable[[System, Request], xr.Dataset]
+
+    def run(self, system: System, request: Request, end: System | None = None
+            ) -> xr.Dataset:
+        """Check, then one response (no ``request.param``) or its branch; a request without
+        a resolution gets the method's default."""
+        if request.resolution is None:
+            request = replace(request, resolution=self.default)
+        self.check(system, end, request)
+        return (self.follow if request.param is not None else self.solve)(system, request)
+
+
+def method_of(table: Mapping[str, Method], name: str, field: str = "method") -> Method:
+    """The method called ``name`` in ``table``; ``InputError`` naming the choices."""
+    if name not in table:
+        raise InputError(f"{field}: must be {' or '.join(table)}, got {name!r}")
+    return table[name]
+
+
+def _converged(result, what: str):
+    if not result.converged:
+        raise InputError(f"{what} ({result.message})")
+    return result
+
+
+def _check_periodic(system: System, end: System | None, request: Request) -> None:
+    from analysis.frequency.harmonic import check_forced, check_harmonics, fast_samples
+    from analysis.frequency.solve import prepare
+
+    check_harmonics(request.resolution, system.n_state)
+    check_forced(system)
+    prepare(system, request.period)  # the period exists and lasts a finite time here
+    fast_samples(request.resolution, request.options.get("samples"))
+
+
+def _solve_periodic(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.solve import harmonic_balance, response_dataset
+
+    response = harmonic_balance(system, None, request.period, request.resolution,
+                                **request.options)
+    return response_dataset(_converged(response, "hb: no periodic response found"))
+
+
+def _follow_periodic(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.continuation import continue_harmonic
+
+    return continue_harmonic(system, None, period=request.period,
+                             harmonics=request.resolution, **request.branch)
+
+
+def _torus_frequencies(system: System, end: System | None, request: Request,
+                       harmonics: object = (8, 4)):
+    """F1, F2 parsed, and not commensurate within ``harmonics`` at either end."""
+    from analysis.frequency.torus import check_frequencies, parse_frequencies
+
+    freqs = parse_frequencies(request.frequencies, system.model)
+    for s in (system, end) if end is not None else (system,):
+        check_frequencies(s, freqs, harmonics)
+    return freqs
+
+
+def _check_torus(system: System, end: System | None, request: Request) -> None:
+    from analysis.frequency.harmonic import check_forced
+    from analysis.frequency.torus import check_torus_harmonics
+
+    check_forced(system)
+    pair = check_torus_harmonics(request.resolution, system.n_state)
+    _torus_frequencies(system, end, request, pair)
+
+
+def _solve_torus(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.torus_dataset import torus_dataset
+    from analysis.frequency.torus_solve import solve_torus
+
+    response = solve_torus(system, None, request.frequencies, request.resolution,
+                           **request.stability, **request.options)
+    return torus_dataset(_converged(response, "torus: no torus found"))
+
+
+def _follow_torus(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.torus_continuation import continue_torus
+
+    return continue_torus(system, None, frequencies=request.frequencies,
+                          harmonics=request.resolution, **request.stability,
+                          stability_every=request.stability_every, **request.branch)
+
+
+def _check_circle(system: System, end: System | None, request: Request) -> None:
+    from analysis.frequency.harmonic import check_forced
+    from analysis.frequency.invariant_circle import check_points
+
+    check_forced(system)
+    check_points(request.resolution, system.n_state)
+    freqs = _torus_frequencies(system, end, request)
+    if freqs[0].kind == "vc" or freqs[1].kind != "vc":
+        raise InputError(f"frequencies: --method shooting needs F1 shaft or param:NAME and "
+                         f"F2 a vc, got {request.frequencies}")
+
+
+def _solve_circle(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.invariant_circle import circle_dataset, solve_circle
+
+    circle = solve_circle(system, None, request.frequencies, request.resolution,
+                          **request.stability, **request.options)
+    return circle_dataset(_converged(circle, "torus: no invariant circle found"))
+
+
+def _follow_circle(system: System, request: Request) -> xr.Dataset:
+    from analysis.frequency.circle_continuation import continue_circle
+
+    return continue_circle(system, None, frequencies=request.frequencies,
+                           points=request.resolution, **request.branch)
+
+
+PERIODIC: dict[str, Method] = {
+    "hb": Method("hb", "harmonics", 10, "harmonic balance is resolved by --harmonics",
+                 _check_periodic, _solve_periodic, _follow_periodic),
+}
+"""The methods of a periodic response (``bearingdyn hb``)."""
+
+TORUS: dict[str, Method] = {
+    "hb": Method("hb", "harmonics", "8,4", "harmonic balance is resolved by --harmonics",
+                 _check_torus, _solve_torus, _follow_torus),
+    "shooting": Method("shooting", "points", DEFAULT_POINTS,
+                       "the shooting torus is resolved by --points",
+                       _check_circle, _solve_circle, _follow_circle),
+}
+"""The methods of a 2-torus (``bearingdyn torus --method``)."""
