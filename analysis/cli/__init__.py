@@ -14,6 +14,7 @@ from analysis.cli import explore, cite  # noqa: F401
 from analysis.cli import attractors  # noqa: F401  (global dynamics: basins, attractors)
 from analysis.cli import frequency  # noqa: F401  (harmonic balance: hb)
 from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
+from analysis.cli import calibrate  # noqa: F401  (inference: calibrate)
 # isort: on
 
 __all__ = ["app", "main"]

@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.special import ndtr
@@ -275,7 +276,33 @@ def _unpack(data: dict[str, np.ndarray], coordinates: Sequence[str]) -> list[lis
              for r in range(rows)] for i in range(members)]
 
 
-def calibrate(
+@dataclass(frozen=True)
+class Problem:
+    """A checked calibration, before any work: the model, target, priors and options."""
+
+    model: Model
+    target: Target
+    priors: tuple[Prior, ...]
+    options: Options
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.priors]
+
+    def estimate(self) -> dict[str, float]:
+        return estimate(self.model, self.target, self.options)
+
+    def definition(self) -> dict[str, Any]:
+        """What a stored (resumable) calibration must agree on."""
+        from dataclasses import asdict
+
+        return {"analysis": "calibrate", "model": self.model.name,
+                "spec_sha256": self.model.spec_sha256, "target": self.target.as_dict(),
+                "priors": [p.text() for p in self.priors],
+                "options": {**asdict(self.options), "settings": asdict(self.options.settings)}}
+
+
+def prepare(
     model: str | Model,
     target: str | Target,
     priors: Sequence[Prior | str],
@@ -287,52 +314,72 @@ def calibrate(
     settings: RunSettings | None = None,
     device: str = "cpu",
     block: int = 64,
-    executor=None,
-    store=None,
-    progress: Callable[[int, int], None] | None = None,
-    log: Callable[[str], None] | None = None,
-) -> Calibration:
-    """Calibrate ``priors`` (``Prior`` or ``NAME:LO:HI[:log]``, SI units) of ``model``
-    against ``target`` (a ``Target``, a built-in name such as ``paper-table2``, or a TOML
-    path): ``rounds`` rounds of ``samples`` parameter sets (a Sobol round, then SMC-ABC),
-    each set run at every target row for ``settings`` (``RunSettings``: revolutions
-    dropped and recorded, samples per revolution, the largest step). Every input is
-    checked before any work (``InputError``). ``executor``: an
-    ``analysis.sweeps.executors`` executor running blocks of ``block`` members (None: in
-    this process); ``store``: a ``PointStore`` whose stored blocks are reused (resuming)
-    and to which each finished block is saved. ``progress(done, total)`` counts members
-    × rows; ``log(line)`` reports each round."""
-    import time
-
+) -> Problem:
+    """Check every input of a calibration before any work (``InputError``, one line naming
+    the field): the model, the target (``Target``, a built-in name, a TOML path), the
+    priors (``Prior`` or ``NAME:LO:HI[:log]``), the options, the cost (refused above
+    ``MAX_CORE_HOURS``) and the RK4 step at every corner of the priors."""
     from analysis.inference.priors import parse_prior
 
-    start = time.perf_counter()
     mdl = load_model(model) if not isinstance(model, Model) else model
-    tgt = target if isinstance(target, Target) else load_target(target, mdl)
     pri = check_priors([p if isinstance(p, Prior) else parse_prior(p) for p in priors], mdl)
     options = Options(samples, rounds, seed, quantile, block, device,
                       settings or RunSettings())
     options.check()
+    tgt = target if isinstance(target, Target) else load_target(target, mdl)
     cost = estimate(mdl, tgt, options)
     if cost["core_seconds"] > MAX_CORE_HOURS * 3600:
-        raise InputError(f"--samples/--rounds: {samples} sets × {rounds} rounds × "
-                         f"{len(tgt.rows)} rows is estimated at "
-                         f"{cost['core_seconds'] / 3600:.3g} core-hours, above "
-                         f"{MAX_CORE_HOURS:g}; give fewer")
+        raise InputError(f"--samples: {samples} sets × {rounds} rounds × {len(tgt.rows)} "
+                         f"rows is estimated at {cost['core_seconds'] / 3600:.3g} "
+                         f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or "
+                         "rounds")
     corners = [dict(zip([p.name for p in pri], c, strict=True))
                for c in box(pri, np.array(np.meshgrid(*[[0.0, 1.0]] * len(pri)))
                             .reshape(len(pri), -1).T)]
     check_steps(mdl, tgt, corners, options.settings)
-    names = [p.name for p in pri]
+    return Problem(mdl, tgt, pri, options)
+
+
+def calibrate(model: str | Model, target: str | Target, priors: Sequence[Prior | str], *,
+              executor=None, store=None, progress: Callable[[int, int], None] | None = None,
+              log: Callable[[str], None] | None = None, **options: Any) -> Calibration:
+    """Calibrate ``priors`` (``Prior`` or ``NAME:LO:HI[:log]``, SI units) of ``model``
+    against ``target`` (a ``Target``, a built-in name such as ``paper-table2``, or a TOML
+    path): ``rounds`` rounds of ``samples`` parameter sets (a Sobol round, then SMC-ABC),
+    each set run at every target row for ``settings`` (``RunSettings``). ``options``: those
+    of ``prepare`` (samples, rounds, seed, quantile, settings, device, block), all checked
+    before any work. See ``run``.
+
+    >>> cal = calibrate("vakharia2015", "paper-table2",
+    ...                 ["damping:10:3162:log"], samples=8, rounds=1)  # doctest: +SKIP
+    """
+    return run(prepare(model, target, priors, **options), executor=executor, store=store,
+               progress=progress, log=log)
+
+
+def run(problem: Problem, *, executor=None, store=None,
+        progress: Callable[[int, int], None] | None = None,
+        log: Callable[[str], None] | None = None) -> Calibration:
+    """Run a prepared calibration. ``executor``: an ``analysis.sweeps.executors`` executor
+    running blocks of ``block`` members (None: in this process); ``store``: a
+    ``PointStore`` whose stored blocks are reused (resuming) and to which each finished
+    block is saved. ``progress(done, total)`` counts members × rows; ``log(line)`` reports
+    each round."""
+    import time
+
+    start = time.perf_counter()
+    mdl, tgt, pri, options = problem.model, problem.target, problem.priors, problem.options
+    samples, rounds = options.samples, options.rounds
+    names = problem.names
     coordinates = tgt.coordinates or ("x",)
     model_ref = model_reference(mdl)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(options.seed)
     done_count = [0]
     total = samples * rounds * len(tgt.rows)
     out: list[Round] = []
     population = weights = None
     for r in range(rounds):
-        u = sobol_round(len(pri), samples, seed) if r == 0 else \
+        u = sobol_round(len(pri), samples, options.seed) if r == 0 else \
             propose(population, weights, samples, rng)
         values = box(pri, u)
         rows = _run_round(r, values, tgt, names, options, coordinates, model_ref, executor,
@@ -343,13 +390,10 @@ def calibrate(
         lines = np.array([sum(ln for _, ln in m) for m in marks])
         d = np.array([discrepancy(len(tgt.rows) - k, len(tgt.rows) - ln, len(tgt.rows))
                       for k, ln in zip(matched, lines, strict=True)])
-        eps = tolerance(d, quantile)
+        eps = tolerance(d, options.quantile)
         keep = d <= eps
         w = np.zeros(samples)
-        if r == 0:
-            w[keep] = 1.0
-        else:
-            w[keep] = smc_weights(u[keep], population, weights)
+        w[keep] = 1.0 if r == 0 else smc_weights(u[keep], population, weights)
         w /= w.sum()
         out.append(Round(r, u, values, rows, d, matched, lines, eps, w))
         population, weights = u[keep], w[keep] / w[keep].sum()
@@ -358,7 +402,7 @@ def calibrate(
                 f"{int(keep.sum())} of {samples} sets kept, best {int(matched.max())} of "
                 f"{len(tgt.rows)} rows")
     return Calibration(mdl, tgt, pri, options, out, time.perf_counter() - start,
-                       device)
+                       options.device)
 
 
 def model_reference(model: Model) -> str:

@@ -104,10 +104,13 @@ class EngineResult:
 
 
 def kernels_available() -> bool:
-    """Whether the member kernels (``analysis.integrate.kernels``) are installed."""
-    import importlib.util
-
-    return importlib.util.find_spec("analysis.integrate.kernels") is not None
+    """Whether the member kernels (``analysis.integrate.kernels``: ``run_members`` with a
+    ``Schedule``) can be imported."""
+    try:
+        from analysis.integrate.kernels import Schedule, run_members  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def run_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,

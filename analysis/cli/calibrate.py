@@ -1,0 +1,103 @@
+"""`calibrate`: which values of unknown parameters make a model reproduce a table of
+regimes and spectrum lines (approximate Bayesian computation, ``analysis.inference``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    ExecutorOption,
+    JsonOption,
+    ModelArgument,
+    QuietOption,
+    SchedulerOption,
+    WorkersOption,
+    app,
+    executor_of,
+    figure_output,
+    netcdf_output,
+    reports_errors,
+    write_figure,
+)
+
+
+@app.command()
+@reports_errors
+def calibrate(
+    model: ModelArgument,
+    target: Annotated[str, typer.Option(
+        "--target", help="A built-in target (paper-table2) or a target TOML file "
+                         "(docs: Which parameters did the paper use?).")],
+    prior: Annotated[list[str], typer.Option(
+        "--prior", help="NAME:LO:HI or NAME:LO:HI:log, a calibrated parameter's uniform "
+                        "(log-uniform) prior in SI units; repeat for each.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                         callback=netcdf_output)],
+    samples: Annotated[int, typer.Option(help="Parameter sets per round.")] = 200,
+    rounds: Annotated[int, typer.Option(
+        help="Rounds: a Sobol round, then SMC-ABC rounds of shrinking tolerance.")] = 3,
+    seed: Annotated[int, typer.Option(help="Seed of the Sobol scramble and the rounds.")] = 0,
+    device: Annotated[str, typer.Option(
+        help="cpu, gpu or auto (the member kernels' CUDA build).")] = "cpu",
+    transient: Annotated[int, typer.Option(
+        "--transient-revolutions", help="Shaft revolutions dropped per member.")] = 50,
+    revolutions: Annotated[int, typer.Option(
+        help="Shaft revolutions recorded per member (a multiple of 10).")] = 100,
+    dt: Annotated[float | None, typer.Option(
+        "--dt", help="Largest RK4 step, s (default: the spec's).")] = None,
+    block: Annotated[int, typer.Option(help="Parameter sets per executor task.")] = 64,
+    executor: ExecutorOption = "serial",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    as_json: JsonOption = False,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Corner figure to write (PNG, PDF, SVG).",
+        callback=figure_output)] = None,
+    quiet: QuietOption = False,
+):
+    """Calibrate unknown parameters against a target table (SMC-ABC; resumable)."""
+    from analysis.inference.abc import prepare
+    from analysis.inference.results import calibrate_to_file, to_dataset, to_json
+    from analysis.inference.simulate import RunSettings
+    from analysis.reports.progress import ProgressReporter
+
+    problem = prepare(model, target, prior, samples=samples, rounds=rounds, seed=seed,
+                      device=device, block=block,
+                      settings=RunSettings(transient_revolutions=transient,
+                                           revolutions=revolutions, dt=dt))
+    cost = problem.estimate()
+    ex = executor_of(executor, workers, scheduler)
+    say = (lambda text: typer.echo(text, err=True)) if not quiet else (lambda text: None)
+    say(f"calibrate: {samples} sets × {rounds} rounds × {len(problem.target.rows)} rows = "
+        f"{int(cost['simulations'])} runs, {cost['member_steps']:.3g} RK4 steps, about "
+        f"{cost['core_seconds'] / 60:.3g} core-minutes ({ex.name})")
+    try:
+        cal = calibrate_to_file(problem, output, executor=ex,
+                                progress=ProgressReporter("calibrate", quiet or as_json,
+                                                          unit="runs"),
+                                log=say, on_damaged=_recomputing)
+    finally:
+        ex.close()
+    if as_json:
+        typer.echo(json.dumps(to_json(cal, str(output)), indent=1))
+    else:
+        ci = cal.credible_interval(0.9)
+        typer.echo(f"wrote {output}: best {cal.best_matched()} of "
+                   f"{len(problem.target.rows)} rows; share of the prior matching k rows: "
+                   + ", ".join(f"{k}: {v:.3g}" for k, v in cal.share_of_prior().items()))
+        for name, (lo, hi) in ci.items():
+            unit = cal.model.units.get(name, "")
+            typer.echo(f"  {name}: 90 % credible interval {lo:.4g} to {hi:.4g} {unit}")
+    if plot:
+        from analysis.reports.calibration_plots import corner_figure
+
+        write_figure(corner_figure(to_dataset(cal)), plot, err=as_json)
+
+
+def _recomputing(key: str) -> None:
+    typer.echo(f"warning: stored block {key} could not be read; computing it again",
+               err=True)
