@@ -36,7 +36,7 @@ from analysis.integrate.compiled import Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.lanes import LANES, state_kernel
 from analysis.integrate.plan import RunPlan, check_memory
-from analysis.integrate.simulate import blow_up_limit
+from analysis.integrate.simulate import bad_states, blow_up_limit
 from analysis.model import System
 from analysis.provenance import completed_attrs, to_dataset
 
@@ -95,18 +95,8 @@ def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_o
     return out
 
 
-def bad_points(points: np.ndarray, limit: float,
-               pairs: Sequence[tuple[int, int | None]]) -> np.ndarray:
-    """``points`` (… × n states, SI units) that have blown up, by the rule of
-    ``simulate.check_bounded``: a value not finite, or a body's centre displacement
-    (``hypot(x, y)``, ``|x|`` for a body moving along x) beyond ``limit`` (m)."""
-    bad = ~np.all(np.isfinite(points), axis=-1)
-    with np.errstate(invalid="ignore", over="ignore"):
-        for i, j in pairs:
-            shift = np.abs(points[..., i]) if j is None else \
-                np.hypot(points[..., i], points[..., j])
-            bad |= shift > limit
-    return bad
+bad_points = bad_states
+"""``simulate.bad_states``: the blow-up predicate (one function for every path)."""
 
 
 @dataclass(frozen=True)

@@ -254,12 +254,20 @@ def blow_up_limit(model: Model, values: Mapping[str, float]) -> float:
     return min(limits, default=np.inf)
 
 
-def _displacement(states: np.ndarray, pairs: list[tuple[int, int | None]]) -> np.ndarray:
-    """Largest centre displacement of any body (m) in each column of ``states``."""
-    out = np.zeros(states.shape[1])
-    for i, j in pairs:
-        out = np.maximum(out, np.abs(states[i]) if j is None else np.hypot(states[i], states[j]))
-    return out
+def bad_states(points: np.ndarray, limit: float,
+               pairs: Sequence[tuple[int, int | None]]) -> np.ndarray:
+    """The blow-up predicate, the one of every path (``check_bounded``, the ensembles, and in
+    C the member kernels, ``kernels.source.blow_up_c``): for ``points`` (… × n states, SI
+    units) whether a value is not finite or a body's centre displacement (``hypot(x, y)``,
+    ``|x|`` for a body moving along x; ``pairs`` from ``Model.centre_indices``) is beyond
+    ``limit`` (m). Returns a bool array of ``points.shape[:-1]``."""
+    bad = ~np.all(np.isfinite(points), axis=-1)
+    with np.errstate(invalid="ignore", over="ignore"):
+        for i, j in pairs:
+            shift = np.abs(points[..., i]) if j is None else \
+                np.hypot(points[..., i], points[..., j])
+            bad |= shift > limit
+    return bad
 
 
 def extremes(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -291,7 +299,7 @@ def check_bounded(states: np.ndarray, times: np.ndarray, limit: float,
     low, high = bounds if bounds is not None else extremes(states.T, len(states))
     if _bounded(low, high, limit, pairs):
         return
-    bad = ~np.all(np.isfinite(states), axis=0) | (_displacement(states, pairs) > limit)
+    bad = bad_states(states.T, limit, pairs)
     if np.any(bad):
         when = times[int(np.argmax(bad))]
         bound = f"beyond {limit:g} m" if np.isfinite(limit) else "growing without bound"

@@ -1,0 +1,22 @@
+"""Member kernels: one C text of a model's members, built for every CPU core and the GPU.
+
+``run_members(system, states, parameters, h, schedule, device=…)`` runs M members (each its
+own initial state, parameters, step and start) by one ``Schedule`` (transient, sections,
+optional tangent for λ1) and returns a ``MemberResult``. ``source`` writes the C from the
+CasADi SX Functions (the one writer of compiled member code), ``cpu`` builds it with gcc
+and OpenMP, ``cuda`` with NVRTC through CuPy (imported lazily, only there), ``devices``
+says what is visible and which device a run takes.
+"""
+
+from analysis.integrate.kernels.cuda import cuda_source
+from analysis.integrate.kernels.devices import DeviceInfo, device_info, resolve_device
+from analysis.integrate.kernels.members import (
+    MemberResult,
+    Schedule,
+    check_fits,
+    run_members,
+)
+from analysis.integrate.kernels.source import Unsupported
+
+__all__ = ["DeviceInfo", "MemberResult", "Schedule", "Unsupported", "check_fits",
+           "cuda_source", "device_info", "resolve_device", "run_members"]

@@ -1,0 +1,122 @@
+"""The CPU build of the member C: the system C compiler with OpenMP, cached and locked.
+
+The text of ``source.model_source(…, target="cpu")`` is compiled by the compiler and flags of
+``analysis.integrate.compiled`` (``compiler_command``: gcc ``-O3`` without fast-math,
+``-ffp-contract=off``) plus ``-fopenmp``, into the same cache (``compiled.cached_path``: named
+by the SHA-256 of the source and the command), built by one process at a time (an exclusive
+``flock`` on ``<library>.lock``; the others wait and load it) and renamed into place. Each
+library is self-tested against CasADi when loaded (``members.self_test``): the state
+variant bit for bit against the CasADi step it is written from, the tangent variant to
+1e-12 against its stage RK4 in CasADi.
+
+``run`` calls ``bd_members_<variant>(count, threads, …)``: one member per OpenMP iteration
+(``schedule(dynamic, 1)``), ``threads`` cores (``BEARINGDYN_THREADS``, else every core of
+``os.sched_getaffinity``).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from analysis.integrate.compiled import (
+    CompileError,
+    cached_path,
+    compile_library,
+    compiler_command,
+    library_stem,
+)
+
+OPENMP_FLAG = "-fopenmp"
+"""The compiler flag of OpenMP (gcc and clang)."""
+
+
+def cores() -> int:
+    """CPU cores this process may use: ``BEARINGDYN_THREADS`` when set (> 0), else the
+    affinity mask's size (``os.sched_getaffinity``), else ``os.cpu_count()``."""
+    given = os.environ.get("BEARINGDYN_THREADS", "").strip()
+    if given.isdigit() and int(given) > 0:
+        return int(given)
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+@contextmanager
+def compiling(path: Path) -> Iterator[None]:
+    """Holds an exclusive lock on ``<path>.lock`` (POSIX ``flock``; nothing elsewhere):
+    processes that first meet a model and balls at the same moment compile its library
+    once, the others wait and load it."""
+    try:
+        import fcntl
+    except ImportError:  # no flock: each process may compile (renamed atomically anyway)
+        yield
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path.with_suffix(".lock"), "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+@dataclass
+class CpuLibrary:
+    """A loaded CPU build: ``fn`` is ``bd_members_<variant>``."""
+
+    path: Path
+    fn: Any
+
+    def run(self, count: int, threads: int, args: list[np.ndarray],
+            schedule: tuple[int, int, int, int, int]) -> None:
+        """One call over ``count`` members (``args``: the arrays of ``source._ARGS`` in
+        order, C-contiguous: z0, k0, p, h, t0, limit, then the outputs sections, logs,
+        final, diverged, low, high; ``schedule``: transient, every, n_sec, skip, keep)."""
+        inputs, outputs = args[:6], args[6:]
+        transient, every, n_sec, skip, keep = schedule
+        ptr = [a.ctypes.data_as(ctypes.c_void_p) for a in (*inputs, *outputs)]
+        self.fn(ctypes.c_longlong(count), ctypes.c_int(threads), *ptr[:6],
+                ctypes.c_longlong(transient), ctypes.c_longlong(every),
+                ctypes.c_longlong(n_sec), ctypes.c_longlong(skip), ctypes.c_int(keep),
+                *ptr[6:])
+
+
+def build(source: str, stem: str, symbol: str) -> CpuLibrary:
+    """The library of ``source`` from the cache (built there once, by one process at a
+    time) and its function ``symbol``; ``CompileError`` when it cannot be built or
+    loaded."""
+    command = [*compiler_command(), OPENMP_FLAG]
+    path = cached_path(stem, source, command)
+    try:
+        if not path.exists():
+            with compiling(path):  # a second process waits, then loads the first's build
+                if not path.exists():
+                    compile_library(source, path, command)
+        fn = getattr(ctypes.CDLL(str(path)), symbol)
+    except (OSError, AttributeError) as exc:
+        raise CompileError(f"could not load {path.name}: {exc}") from None
+    fn.restype = None
+    return CpuLibrary(path, fn)
+
+
+@cache
+def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool) -> CpuLibrary:
+    """The CPU build of ``model``'s member C with these balls (the tangent variant with
+    ``tangent``), memoised per process; ``CompileError`` or ``source.Unsupported`` when it
+    cannot be written or built."""
+    from analysis.integrate.kernels.source import model_source
+
+    variant = "tangent" if tangent else "states"
+    source = model_source(model, structure, tangent, "cpu")
+    return build(source, library_stem(f"bd_members_{variant}", model, structure),
+                 f"bd_members_{variant}")

@@ -1,0 +1,100 @@
+"""The CUDA build of the member C: the same text through CuPy's ``RawModule`` (NVRTC).
+
+``cupy`` is imported here only, lazily (``pip install bearingdyn[gpu]``; the extra names
+``cupy-cuda12x``, CuPy's wheel for CUDA 12). The text is ``source.model_source(…,
+target="cuda")``: the member function of the CPU build and a ``__global__`` wrapper, one
+member per thread, the whole time loop inside the kernel, only the sections (or none), the
+logs, the final state, the blow-up step and the extremes copied back.
+
+NVRTC options (``NVRTC_OPTIONS``): ``-std=c++11``; ``--fmad=false`` so that a·b + c stays
+two roundings as in the CPU build (``-ffp-contract=off``): the two builds then differ only
+by the last bits of CUDA's libm (sin, cos, pow, sqrt are correctly rounded or within 1–2
+ulp), and states agree to about 1e-12 relative after thousands of steps of a non-chaotic
+member (``tests/integrate/test_kernels_gpu.py``).
+
+``cuda_source(system, tangent)`` returns the text, for ``nvcc -Xptxas -v`` (registers and
+spills) on a GPU machine: ``nvcc -arch=sm_90 -cubin -Xptxas -v --fmad=false -x cu
+member.cu``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+NVRTC_OPTIONS = ("-std=c++11", "--fmad=false")
+"""Options of the NVRTC compilation (see the module)."""
+THREADS_PER_BLOCK = 128
+"""CUDA threads per block of the member kernel (one member each)."""
+
+
+class CudaUnavailable(RuntimeError):
+    """CuPy is not installed, or no GPU is visible; the message says which."""
+
+
+def cupy_module() -> Any:
+    """The ``cupy`` module with a visible GPU, or ``CudaUnavailable`` saying what is
+    missing."""
+    try:
+        import cupy
+    except ImportError:
+        raise CudaUnavailable("cupy is not installed (pip install bearingdyn[gpu])") from None
+    try:
+        count = cupy.cuda.runtime.getDeviceCount()
+    except Exception as exc:  # no driver, no device: CuPy raises its own runtime errors
+        raise CudaUnavailable(f"no GPU visible to CuPy ({exc})") from None
+    if count < 1:
+        raise CudaUnavailable("no GPU visible to CuPy")
+    return cupy
+
+
+def cuda_source(system: Any, tangent: bool = False) -> str:
+    """The CUDA text of ``system``'s model and balls (a ``System``): the state variant, or
+    the tangent variant with ``tangent``. Compiles with ``nvcc -x cu`` or NVRTC."""
+    from analysis.integrate.kernels.source import model_source
+
+    return model_source(system.model, system.structure, tangent, "cuda")
+
+
+def free_memory() -> tuple[int, int]:
+    """(free, total) bytes of the current GPU."""
+    cupy = cupy_module()
+    return cupy.cuda.runtime.memGetInfo()
+
+
+@dataclass
+class CudaKernel:
+    """A compiled member kernel: ``fn`` is the ``RawKernel`` ``bd_members_<variant>``."""
+
+    fn: Any
+
+    def run(self, count: int, args: list[np.ndarray],
+            schedule: tuple[int, int, int, int, int]) -> None:
+        """One launch over ``count`` members (the arrays of ``cpu.CpuLibrary.run``, host
+        NumPy: inputs copied to the GPU, outputs copied back into them)."""
+        cupy = cupy_module()
+        transient, every, n_sec, skip, keep = schedule
+        device = [cupy.asarray(a) for a in args]
+        grid = ((count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK,)
+        self.fn(grid, (THREADS_PER_BLOCK,),
+                (np.int64(count), *device[:6], np.int64(transient), np.int64(every),
+                 np.int64(n_sec), np.int64(skip), np.int32(keep), *device[6:]))
+        for host, dev in zip(args[6:], device[6:], strict=True):
+            host[...] = cupy.asnumpy(dev)
+
+
+@cache
+def cuda_kernel(model: Any, structure: tuple[int, ...], tangent: bool) -> CudaKernel:
+    """The CUDA build of ``model``'s member C with these balls (NVRTC through
+    ``cupy.RawModule``), memoised per process; ``CudaUnavailable`` without CuPy or a GPU,
+    CuPy's compile error when NVRTC refuses the text."""
+    from analysis.integrate.kernels.source import model_source
+
+    cupy = cupy_module()
+    variant = "tangent" if tangent else "states"
+    module = cupy.RawModule(code=model_source(model, structure, tangent, "cuda"),
+                            options=NVRTC_OPTIONS)
+    return CudaKernel(module.get_function(f"bd_members_{variant}"))

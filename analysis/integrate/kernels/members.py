@@ -1,0 +1,323 @@
+"""``run_members``: M members of one model and balls through the member kernels.
+
+Each member has its own initial state, parameter vector, step h (s), start time t0 (s) and
+step counter k0 (step k runs from ``t0 + k·h``), and follows one ``Schedule``: a transient of
+whole RK4 steps, then K sections every ``steps_per_section`` steps, recorded (or only reduced:
+the final state, the blow-up step, the extremes, the tangent's λ1). Members run in blocks
+(``block`` members per call; memory on the device is bounded by the block), on the CPU build
+(``cpu.py``, every core) or the CUDA build (``cuda.py``), from one C text (``source.py``).
+A member whose state is not finite or whose centre displacement leaves its blow-up limit
+(``simulate.blow_up_limit``, the predicate of ``simulate.bad_states``) stops there: its
+``diverged_at`` is that step, its later sections and logs NaN; its neighbours are unaffected.
+
+The state variant on the CPU is the compiled path's RK4 (``simulate``, ``ensemble``) bit for
+bit; the CUDA build agrees with it to the last bits of CUDA's libm.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.integrate.compiled import test_state
+from analysis.integrate.kernels.cpu import cores, cpu_library
+from analysis.integrate.kernels.devices import resolve_device
+from analysis.integrate.simulate import blow_up_limit
+from analysis.model import System
+
+HOST_BUDGET = 8 * 2**30
+"""Bytes of results a call may hold in host memory (as ``plan.MEMORY_BUDGET``)."""
+CPU_BLOCK = 1 << 16
+"""Members per call of the CPU build by default (progress is reported per call)."""
+GPU_BLOCK_SHARE = 0.5
+"""Share of the GPU's free memory one block of members may take."""
+SELF_TEST_TOL = 1e-12
+"""Relative agreement of the tangent variant with its stage RK4 in CasADi (self-test)."""
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """What every member runs and records (steps are RK4 steps of the member's h)."""
+
+    transient_steps: int
+    """RK4 steps before the first recorded section interval (>= 0)."""
+    steps_per_section: int
+    """RK4 steps between recorded sections (>= 1); section j is the state after
+    ``transient_steps + (j + 1)·steps_per_section`` steps."""
+    n_sections: int
+    """K sections recorded per member (>= 1)."""
+    tangent: bool = False
+    """Also carry one tangent vector (from e1 at the end of the transient), renormalised at
+    each section."""
+    lyapunov_skip: int = 0
+    """Sections whose logs are not averaged into λ1; the extremes are taken from the end of
+    these sections on (the record)."""
+    keep_sections: bool = True
+    """False: only reduced results leave the device (no (M, K, n) sections)."""
+
+    def __post_init__(self) -> None:
+        for name, low in (("transient_steps", 0), ("steps_per_section", 1),
+                          ("n_sections", 1), ("lyapunov_skip", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < low:
+                raise InputError(f"{name}: a whole number >= {low}, got {value!r}")
+        if self.lyapunov_skip >= self.n_sections:
+            raise InputError(f"lyapunov_skip: fewer than n_sections ({self.n_sections}), got "
+                             f"{self.lyapunov_skip}")
+
+    @property
+    def total_steps(self) -> int:
+        """RK4 steps of a member that does not blow up."""
+        return self.transient_steps + self.steps_per_section * self.n_sections
+
+
+@dataclass
+class MemberResult:
+    """What ``run_members`` returns (SI units; M members, K sections, n states)."""
+
+    sections: np.ndarray | None
+    """(M, K, n) states at the K sections, NaN after a blow-up (None: ``keep_sections``
+    False)."""
+    logs: np.ndarray | None
+    """(M, K) log growth of the tangent over each section interval (None without the
+    tangent); NaN after a blow-up."""
+    lambda1: np.ndarray | None
+    """(M,) 1/s: mean of the logs after ``lyapunov_skip`` divided by the section interval
+    (``steps_per_section · h``); None without the tangent, NaN after a blow-up."""
+    diverged_at: np.ndarray
+    """(M,) int64: the step counter k of the first state beyond the blow-up bound (its time
+    is ``t0 + k·h``), -1 if never."""
+    final: np.ndarray
+    """(M, n) the last state (after the last step, or the first bad state)."""
+    low: np.ndarray
+    """(M, n) smallest value of every state from step ``transient_steps + lyapunov_skip ·
+    steps_per_section`` on (up to a blow-up)."""
+    high: np.ndarray
+    """(M, n) largest value, likewise."""
+    device: str
+    """``"cpu"`` or ``"gpu"``."""
+
+
+def _per_member(name: str, value: np.ndarray | float, m: int, positive: bool) -> np.ndarray:
+    out = np.asarray(value, dtype=float)
+    if out.ndim == 0:
+        out = np.full(m, float(out))
+    if out.shape != (m,):
+        raise InputError(f"{name}: one number or one per member ({m}), got shape {out.shape}")
+    if not np.all(np.isfinite(out)) or (positive and np.any(out <= 0)):
+        raise InputError(f"{name}: finite{' and > 0' if positive else ''} values, got "
+                         f"{out[~np.isfinite(out) | (out <= 0 if positive else False)][0]!r}")
+    return np.ascontiguousarray(out)
+
+
+def _bytes_per_member(schedule: Schedule, n: int, n_par: int) -> int:
+    """Bytes of one member's inputs and outputs in a call."""
+    k = schedule.n_sections
+    kept = k * n if schedule.keep_sections else 0
+    return 8 * (n + 1 + n_par + 3 + kept + (k if schedule.tangent else 0) + 3 * n + 1)
+
+
+def check_fits(device: str, members: int, schedule: Schedule, n: int,
+               n_par: int = 0) -> None:
+    """``InputError`` before anything is allocated when the results of ``members``
+    members do not fit the host's budget (``HOST_BUDGET``; the device streams blocks, so
+    only the kept results count), or when one member does not fit the GPU's free memory."""
+    per = _bytes_per_member(schedule, n, n_par)
+    kept = members * per
+    if kept > HOST_BUDGET:
+        raise InputError(f"members: {members} members with {schedule.n_sections} sections "
+                         f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
+                         f"{HOST_BUDGET / 2**30:g} GiB: run fewer members per call (blocks), or "
+                         "keep_sections=False")
+    if device == "gpu":
+        from analysis.integrate.kernels.cuda import free_memory
+
+        free, _ = free_memory()
+        if per > GPU_BLOCK_SHARE * free:
+            raise InputError(f"members: one member needs {per} bytes on the GPU, "
+                             f"{free} bytes free; fewer sections or keep_sections=False")
+
+
+def _block_size(device: str, members: int, per: int, block: int | None) -> int:
+    if block is not None:
+        if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
+            raise InputError(f"block: a whole number >= 1, got {block!r}")
+        return int(block)
+    if device == "cpu":
+        return min(members, CPU_BLOCK)
+    from analysis.integrate.kernels.cuda import free_memory
+
+    free, _ = free_memory()
+    return max(1, min(members, int(GPU_BLOCK_SHARE * free) // per))
+
+
+def _kernel(system: System, tangent: bool, device: str):
+    """The loaded build: a ``cpu.CpuLibrary`` or ``cuda.CudaKernel``, self-tested."""
+    if device == "gpu":
+        from analysis.integrate.kernels.cuda import cuda_kernel
+
+        return cuda_kernel(system.model, system.structure, tangent)
+    _self_test(system.model, system.structure, tangent)
+    return cpu_library(system.model, system.structure, tangent)
+
+
+def _call(kern, device: str, count: int, args: list[np.ndarray],
+          schedule: tuple[int, int, int, int, int]) -> None:
+    if device == "gpu":
+        kern.run(count, args, schedule)
+    else:
+        kern.run(count, min(cores(), max(count, 1)), args, schedule)
+
+
+def run_members(system: System, states: np.ndarray, parameters: np.ndarray | None,
+                h: np.ndarray | float, schedule: Schedule, *,
+                t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
+                device: str = "cpu", block: int | None = None,
+                progress: Callable[[int, int], None] | None = None) -> MemberResult:
+    """Run M members of ``system``'s model and balls by ``schedule``.
+
+    ``states`` (M, n): initial states (SI units); ``parameters`` (M, n_par): each member's
+    full parameter vector (``Model.parameter_vector``; speed in rpm), or None for
+    ``system.p`` for all; ``h`` (s; one or per member): the RK4 step; ``t0`` (s) and ``k0``
+    (step counters, whole numbers; one or per member): step k runs from ``t0 + k·h``, the
+    first from k0. ``device``: ``cpu``, ``gpu`` or ``auto`` (``devices.resolve_device``);
+    ``block``: members per call (default: ``CPU_BLOCK`` on the CPU, half the GPU's free
+    memory on the GPU); ``progress(done, total)`` after each block (members).
+
+    Each member's blow-up limit is ``simulate.blow_up_limit`` of its parameters. Bad input
+    raises ``InputError`` before anything runs; a model whose kernel cannot be written or
+    built raises ``source.Unsupported`` or ``compiled.CompileError``."""
+    model = system.model
+    n, n_par = model.n_state, len(model.parameter_names)
+    z0 = np.asarray(states, dtype=float)
+    if z0.ndim != 2 or z0.shape[1] != n or len(z0) < 1:
+        raise InputError(f"states: an array of shape (members, {n}), got shape {z0.shape}")
+    if not np.all(np.isfinite(z0)):
+        raise InputError("states: finite values (SI units)")
+    m = len(z0)
+    if parameters is None:
+        p = np.repeat(system.p[None, :], m, axis=0)
+    else:
+        p = np.asarray(parameters, dtype=float)
+        if p.shape != (m, n_par):
+            raise InputError(f"parameters: an array of shape ({m}, {n_par}) (full parameter "
+                             f"vectors), got shape {p.shape}")
+    hs = _per_member("h", h, m, positive=True)
+    t0s = _per_member("t0", t0, m, positive=False)
+    k0s = _per_member("k0", k0, m, positive=False)
+    if np.any(k0s != np.round(k0s)):
+        raise InputError("k0: whole numbers")
+    device = resolve_device(device, m, schedule.total_steps)
+    check_fits(device, m, schedule, n, n_par)
+    limits = _limits(system, p, parameters is None)
+    kern = _kernel(system, schedule.tangent, device)
+    k = schedule.n_sections
+    sections = np.full((m, k, n), np.nan) if schedule.keep_sections else None
+    logs = np.full((m, k), np.nan) if schedule.tangent else None
+    final, low, high = np.empty((m, n)), np.empty((m, n)), np.empty((m, n))
+    diverged = np.empty(m, dtype=np.int64)
+    size = _block_size(device, m, _bytes_per_member(schedule, n, n_par), block)
+    plan = (schedule.transient_steps, schedule.steps_per_section, k, schedule.lyapunov_skip,
+            int(schedule.keep_sections))
+    z0, p = np.ascontiguousarray(z0), np.ascontiguousarray(p)
+    for start in range(0, m, size):
+        part = slice(start, min(m, start + size))
+        count = part.stop - start
+        out_sec = np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n))
+        out_logs = np.empty((count, k)) if logs is not None else np.empty((1, 1))
+        outs = [out_sec, out_logs, np.empty((count, n)), np.empty(count, dtype=np.int64),
+                np.empty((count, n)), np.empty((count, n))]
+        ins = [np.ascontiguousarray(a[part]) for a in (z0, k0s, p, hs, t0s, limits)]
+        _call(kern, device, count, ins + outs, plan)
+        if sections is not None:
+            sections[part] = out_sec
+        if logs is not None:
+            logs[part] = out_logs
+        final[part], diverged[part], low[part], high[part] = outs[2:]
+        if progress is not None:
+            progress(part.stop, m)
+    lambda1 = None
+    if logs is not None:
+        with np.errstate(invalid="ignore"):
+            lambda1 = logs[:, schedule.lyapunov_skip:].mean(axis=1) \
+                / (schedule.steps_per_section * hs)
+    return MemberResult(sections, logs, lambda1, diverged, final, low, high, device)
+
+
+def _limits(system: System, p: np.ndarray, shared: bool) -> np.ndarray:
+    """Each member's blow-up limit (m), ``simulate.blow_up_limit`` of its parameters."""
+    model = system.model
+    if shared:
+        return np.full(len(p), blow_up_limit(model, dict(system.parameters)))
+    names = model.parameter_names
+    unique, inverse = np.unique(p, axis=0, return_inverse=True)
+    values = [blow_up_limit(model, dict(zip(names, row.tolist(), strict=True)))
+              for row in unique]
+    return np.ascontiguousarray(np.asarray(values, dtype=float)[np.ravel(inverse)])
+
+
+@cache
+def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
+    """Check the CPU build against CasADi on a few steps of two members (different states,
+    counters, parameters, steps and start times): the state variant bit for bit against
+    the step it is written from, the tangent variant to ``SELF_TEST_TOL`` against its
+    stage RK4 evaluated by CasADi. ``CompileError`` when it disagrees. Once per process."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels.source import stage_functions, state_functions
+
+    step, constants = state_functions(model, structure)
+    n = model.n_state
+    p0 = model.parameter_vector(model.defaults)
+    h0 = float(model.simulation_defaults["dt"])
+    z0 = np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)])
+    p = np.stack([p0 * (1 + 0.01 * j) for j in range(2)])
+    hs, t0s, k0s = h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.array([3.0, 4.0])
+    sched = (1, 2, 2, 0, 1)
+    outs = [np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, n)),
+            np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
+    lib = cpu_library(model, structure, tangent)
+    lib.run(2, 1, [z0, k0s, p, hs, t0s, np.full(2, np.inf), *outs], sched)
+    stage = stage_functions(model, structure) if tangent else None
+    for j in range(2):
+        c = constants(p[j], hs[j], t0s[j])
+        s = np.append(z0[j], k0s[j])
+        s = np.asarray(step(s, p[j], hs[j], t0s[j], c)).ravel()  # the transient step
+        want, logs = [], []
+        if not tangent:
+            for _ in range(4):
+                s = np.asarray(step(s, p[j], hs[j], t0s[j], c)).ravel()
+                want.append(s[:n])
+            ok = np.array_equal(np.array(want[1::2]), outs[0][j])
+        else:
+            fn, dfn = stage
+            d = dfn(p[j])
+            z, k, v = s[:n], s[n], np.eye(n)[0]
+            h, half = hs[j], hs[j] / 2
+            for i in range(4):
+                t = t0s[j] + k * h
+                a = [np.asarray(x).ravel() for x in fn(t, z, p[j], v, d)]
+                b = [np.asarray(x).ravel() for x in fn(t + half, z + half * a[0], p[j],
+                                                       v + half * a[1], d)]
+                c3 = [np.asarray(x).ravel() for x in fn(t + half, z + half * b[0], p[j],
+                                                        v + half * b[1], d)]
+                e = [np.asarray(x).ravel() for x in fn(t + h, z + h * c3[0], p[j],
+                                                       v + h * c3[1], d)]
+                z = z + h / 6 * (a[0] + 2 * b[0] + 2 * c3[0] + e[0])
+                v = v + h / 6 * (a[1] + 2 * b[1] + 2 * c3[1] + e[1])
+                k += 1
+                if i % 2 == 1:
+                    norm = np.linalg.norm(v)
+                    logs.append(np.log(norm))
+                    v = v / norm
+                    want.append(z)
+            scale = np.abs(np.array(want)).max(axis=0) + 1e-300
+            ok = np.all(np.abs(np.array(want) - outs[0][j]) <= SELF_TEST_TOL * scale) \
+                and np.allclose(logs, outs[1][j], rtol=SELF_TEST_TOL, atol=1e-14)
+        if not ok:
+            raise CompileError(f"the member kernel of {model.name} does not reproduce "
+                               "CasADi (check BEARINGDYN_CFLAGS: no fast-math)")

@@ -1,0 +1,333 @@
+"""The one writer of member C: CasADi SX Functions as device-neutral scalar C, and the
+member loops (states; states and one tangent vector) built on them.
+
+Every function is written instruction by instruction from the SX Function's algorithm, in
+CasADi's order, one C statement each, with the IEEE operations CasADi's own C uses
+(``casadi_sq`` is ``x*x``, ``casadi_sign``, libm for sin, cos, pow …): the CPU build of the
+text (``cpu.py``, gcc without fast-math, ``-ffp-contract=off``) computes what the compiled
+blocks of ``analysis.integrate.compiled`` compute, bit for bit. Functions are declared with
+``BD_FN`` (``static inline`` for a C compiler; ``__device__ __forceinline__`` for NVRTC, see
+``cuda.py``) and their pointers with ``BD_RESTRICT``; the member loop ``bd_member_*`` runs
+one member from its index ``m``, so the OpenMP loop (``cpu.py``) and the CUDA kernel
+(``cuda.py``, one member per thread) only wrap it.
+
+Two variants:
+
+- **states** (``state_source``): the RK4 step of the compiled blocks
+  (``tangent.tangent_step(rk4_step, Carry(constants=True))``: ``rk4_steps1(s, p, h, t0, c)``
+  with ``s = [z; k]``, step k from ``t0 + k·h``) and its parameter-only constants;
+- **tangent** (``tangent_source``): the same steps over the transient, then RK4 of the state
+  and of the variational equation stage by stage: ``stage(t, z, p, v, c) -> (f(t, z),
+  J(t, z)·v)`` (the model's ``rhs`` and its Jacobian–vector product, ``casadi.jtimes``), so
+  v' is the exact derivative of the discrete RK4 map the member follows
+  (v' = v + h/6 (V1 + 2 V2 + 2 V3 + V4), V_i = J(t_i, z_i)(v + a_i h V_{i−1})): a working
+  set of one rhs and one product, not of the forward AD of a fused step (register-light on
+  a GPU). After the transient the member's states are those of that stage RK4, equal to the
+  state variant's to rounding (the runtime's fused step reaches the cage angle of its later
+  stages by rotation). The tangent is renormalised at every section and the log of its
+  growth kept.
+
+The blow-up predicate is written from ``simulate.BLOW_UP`` (``blow_up_c``): a state not
+finite, or a body's centre displacement (``hypot(x, y)``, ``|x|``) beyond the member's
+limit (m), the rule of ``simulate.bad_states``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import casadi as ca
+
+_OP = {getattr(ca, name): name[3:] for name in dir(ca) if name.startswith("OP_")}
+UNARY = {
+    "NEG": "(-{0})", "TWICE": "(2.0 * {0})", "SQ": "({0} * {0})", "INV": "(1.0 / {0})",
+    "NOT": "((double)({0} == 0.0))", "SIGN": "bd_sign({0})",
+    **{name: f"{name.lower()}({{0}})"
+       for name in ("SQRT", "FABS", "SIN", "COS", "TAN", "EXP", "LOG", "TANH", "ASIN",
+                    "ACOS", "ATAN", "SINH", "COSH", "FLOOR", "CEIL", "ERF", "LOG1P",
+                    "EXPM1")},
+}
+"""C of the one-argument operations (CasADi's C: ``casadi_sq``, ``casadi_sign``, libm)."""
+BINARY = {
+    "ADD": "({0} + {1})", "SUB": "({0} - {1})", "MUL": "({0} * {1})", "DIV": "({0} / {1})",
+    "LT": "((double)({0} < {1}))", "LE": "((double)({0} <= {1}))",
+    "EQ": "((double)({0} == {1}))", "NE": "((double)({0} != {1}))",
+    "AND": "((double)({0} != 0.0 && {1} != 0.0))",
+    "OR": "((double)({0} != 0.0 || {1} != 0.0))",
+    "IF_ELSE_ZERO": "({0} != 0.0 ? {1} : 0.0)",
+    **{name: f"{fn}({{0}}, {{1}})"
+       for name, fn in (("POW", "pow"), ("CONSTPOW", "pow"), ("ATAN2", "atan2"),
+                        ("FMIN", "fmin"), ("FMAX", "fmax"), ("FMOD", "fmod"),
+                        ("HYPOT", "hypot"), ("COPYSIGN", "copysign"))},
+}
+"""C of the two-argument operations; comparisons give 1.0 or 0.0 as in CasADi, and
+``if_else_zero(c, x)`` is x where c is not 0 (NaN counts as true, as C's ``c ? x : 0``)."""
+
+PRELUDE = """\
+#ifdef __CUDACC__
+#define BD_FN static __device__ __forceinline__
+#define BD_RESTRICT __restrict__
+#define BD_GLOBAL extern "C" __global__
+typedef long long bd_long;
+#ifndef INFINITY
+#define INFINITY __longlong_as_double(0x7ff0000000000000ULL)
+#endif
+#ifndef NAN
+#define NAN __longlong_as_double(0x7ff8000000000000ULL)
+#endif
+#else
+#include <math.h>
+#include <string.h>
+#define BD_FN static inline
+#define BD_RESTRICT restrict
+typedef long long bd_long;
+#endif
+BD_FN double bd_sign(double x) { return x < 0 ? -1 : x > 0 ? 1 : x; }
+"""
+"""Macros that make one text a C library (gcc) and a CUDA module (NVRTC defines
+``__CUDACC__``; its math functions are device functions without an include)."""
+
+
+class Unsupported(ValueError):
+    """An operation ``scalar_c`` does not write, or a Function that is not SX."""
+
+
+def scalar_c(fn: ca.Function, name: str) -> str:
+    """``BD_FN void name(const double *x0, …, double *y0, …)``: the SX Function ``fn`` on
+    doubles, one C statement per instruction in CasADi's order (``Unsupported`` for an
+    operation outside ``UNARY``/``BINARY``)."""
+    if not fn.is_a("SXFunction"):
+        raise Unsupported(f"{fn.name()}: not an SX Function")
+    inputs = ", ".join(f"const double *BD_RESTRICT x{i}" for i in range(fn.n_in()))
+    outputs = ", ".join(f"double *BD_RESTRICT y{i}" for i in range(fn.n_out()))
+    lines = [f"BD_FN void {name}({inputs}, {outputs}) {{",
+             "  double " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+    for i in range(fn.n_instructions()):
+        op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
+            fn.instruction_input(i)
+        if op == "INPUT":
+            lines.append(f"  w{out[0]} = x{arg[0]}[{arg[1]}];")
+        elif op == "OUTPUT":
+            lines.append(f"  y{out[0]}[{out[1]}] = w{arg[0]};")
+        elif op == "CONST":
+            lines.append(f"  w{out[0]} = {_constant(float(fn.instruction_constant(i)))};")
+        elif op in UNARY:
+            lines.append(f"  w{out[0]} = {UNARY[op].format(f'w{arg[0]}')};")
+        elif op in BINARY:
+            lines.append(f"  w{out[0]} = {BINARY[op].format(f'w{arg[0]}', f'w{arg[1]}')};")
+        else:
+            raise Unsupported(f"{fn.name()}: operation {op} is not written as member C")
+    lines.append("}")
+    return "\n".join(lines)
+
+
+def _constant(value: float) -> str:
+    """A double literal that reads back exactly (inf and NaN by expression)."""
+    if value != value:
+        return "(0.0 / 0.0)"
+    if value in (float("inf"), float("-inf")):
+        return "(1.0 / 0.0)" if value > 0 else "(-1.0 / 0.0)"
+    return repr(value)
+
+
+def blow_up_c(n: int, pairs: Sequence[tuple[int, int | None]]) -> str:
+    """``bd_bad(z, limit)``: 1 when a state is not finite (``z - z == 0`` fails for inf and
+    NaN, needing no header on either build) or a centre displacement
+    (``hypot`` of a body's (x, y), ``fabs`` of x for a body moving along x) is beyond
+    ``limit`` (m); ``simulate.bad_states`` in C."""
+    lines = ["BD_FN int bd_bad(const double *z, double limit) {",
+             f"  for (int i = 0; i < {n}; i++) if (!(z[i] - z[i] == 0.0)) return 1;"]
+    for i, j in pairs:
+        shift = f"fabs(z[{i}])" if j is None else f"hypot(z[{i}], z[{j}])"
+        lines.append(f"  if ({shift} > limit) return 1;")
+    lines.append("  return 0;\n}")
+    lines.append("BD_FN void bd_extend(double *lo, double *hi, const double *z) {\n"
+                 f"  for (int i = 0; i < {n}; i++) {{ lo[i] = fmin(lo[i], z[i]); "
+                 "hi[i] = fmax(hi[i], z[i]); }\n}")
+    return "\n".join(lines)
+
+
+_ARGS = """bd_long m, const double *z0, const double *k0, const double *p, const double *h,
+    const double *t0, const double *limit, bd_long transient, bd_long every, bd_long n_sec,
+    bd_long skip, int keep, double *sections, double *logs, double *final,
+    bd_long *diverged, double *low, double *high"""
+"""The arguments of every member function and wrapper: member index, then per member
+(row-major, member first) the state z0 (n), step counter k0, parameters (n_par), step h
+(s), start time t0 (s) and blow-up limit (m); the schedule; the outputs: sections
+(n_sec × n, kept when ``keep``), logs (n_sec; tangent), final state (n), the step of the
+blow-up (-1: none), and the extremes of every state from step transient + skip·every."""
+
+_CALL = ("m, z0, k0, p, h, t0, limit, transient, every, n_sec, skip, keep, sections, logs, "
+         "final, diverged, low, high")
+
+_MEMBER_HEAD = """
+BD_FN void bd_member_{variant}({args}) {{
+  double s[{ns}], nx[{ns}], c[{nc}];
+  const double *pm = p + m * {npar};
+  const double hm = h[m], t0m = t0[m], lim = limit[m];
+  double *lo = low + m * {n}, *hi = high + m * {n};
+  for (int i = 0; i < {n}; i++) {{ s[i] = z0[m * {n} + i]; lo[i] = INFINITY; hi[i] = -INFINITY; }}
+  s[{n}] = k0[m];
+  rk4_constants(pm, &hm, &t0m, c);
+  const bd_long total = transient + every * n_sec, from = transient + skip * every;
+  bd_long step = 0, bad = -1, sec = 0;
+  if (from <= 0) bd_extend(lo, hi, s);
+  for (; step < transient; ) {{
+    rk4_steps1(s, pm, &hm, &t0m, c, nx);
+    for (int i = 0; i < {ns}; i++) s[i] = nx[i];
+    step++;
+    if (bd_bad(s, lim)) {{ bad = step; break; }}
+    if (step >= from) bd_extend(lo, hi, s);
+  }}
+"""
+
+_STATE_BODY = """
+  for (bd_long left = every; bad < 0 && step < total; ) {{
+    rk4_steps1(s, pm, &hm, &t0m, c, nx);
+    for (int i = 0; i < {ns}; i++) s[i] = nx[i];
+    step++;
+    if (bd_bad(s, lim)) {{ bad = step; break; }}
+    if (step >= from) bd_extend(lo, hi, s);
+    if (--left == 0) {{
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = s[i];
+      sec++; left = every;
+    }}
+  }}
+"""
+
+_TANGENT_BODY = """
+  double v[{n}], zs[{n}], vs[{n}], f[{n}], jv[{n}], az[{n}], av[{n}], d[{nd}];
+  stage_constants(pm, d);
+  for (int i = 0; i < {n}; i++) v[i] = i == 0 ? 1.0 : 0.0;
+  const double half = hm / 2.0, sixth = hm / 6.0;
+  for (bd_long left = every; bad < 0 && step < total; ) {{
+    const double t = t0m + s[{n}] * hm, th = t + half, tf = t + hm;
+    stage(&t, s, pm, v, d, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] = f[i]; av[i] = jv[i];
+      zs[i] = s[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
+    }}
+    stage(&th, zs, pm, vs, d, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
+      zs[i] = s[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
+    }}
+    stage(&th, zs, pm, vs, d, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
+      zs[i] = s[i] + hm * f[i]; vs[i] = v[i] + hm * jv[i];
+    }}
+    stage(&tf, zs, pm, vs, d, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      s[i] += sixth * (az[i] + f[i]); v[i] += sixth * (av[i] + jv[i]);
+    }}
+    s[{n}] += 1.0;
+    step++;
+    if (bd_bad(s, lim)) {{ bad = step; break; }}
+    if (step >= from) bd_extend(lo, hi, s);
+    if (--left == 0) {{
+      double norm = 0.0;
+      for (int i = 0; i < {n}; i++) norm += v[i] * v[i];
+      norm = sqrt(norm);
+      for (int i = 0; i < {n}; i++) v[i] /= norm;
+      logs[m * n_sec + sec] = log(norm);
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = s[i];
+      sec++; left = every;
+    }}
+  }}
+"""
+
+_MEMBER_TAIL = """
+  diverged[m] = bad < 0 ? -1 : (bd_long)k0[m] + bad;
+  for (; sec < n_sec; sec++) {{
+    if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = NAN;
+    {nan_log}
+  }}
+  for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
+}}
+"""
+
+_CPU_WRAPPER = """
+void bd_members_{variant}(bd_long count, int threads, {args_nom}) {{
+  if (threads <= 0) threads = 1;
+  #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (bd_long m = 0; m < count; m++) bd_member_{variant}({call});
+}}
+"""
+
+_CUDA_WRAPPER = """
+BD_GLOBAL void bd_members_{variant}(bd_long count, {args_nom}) {{
+  bd_long m = (bd_long)blockIdx.x * blockDim.x + threadIdx.x;
+  if (m < count) bd_member_{variant}({call});
+}}
+"""
+
+
+def _args_without_m() -> str:
+    return _ARGS.split(",", 1)[1].strip()
+
+
+def member_source(step: ca.Function, constants: ca.Function, n: int,
+                  pairs: Sequence[tuple[int, int | None]],
+                  stage: ca.Function | None = None,
+                  stage_constants: ca.Function | None = None, *, target: str = "cpu") -> str:
+    """The whole C text of one model and balls: the prelude, the written Functions
+    (``rk4_steps1`` and ``rk4_constants``; with ``stage``, the tangent's ``stage`` and
+    ``stage_constants``), ``bd_bad``, the member function ``bd_member_states`` or
+    ``bd_member_tangent`` and its wrapper for ``target`` (``"cpu"``: an OpenMP loop
+    ``bd_members_<variant>(count, threads, …)``; ``"cuda"``: a ``__global__`` kernel,
+    one member per thread)."""
+    variant = "states" if stage is None else "tangent"
+    ns, nc = step.size1_in(0), max(step.size1_in(4), 1)
+    parts = [PRELUDE, scalar_c(constants, "rk4_constants"), scalar_c(step, "rk4_steps1"),
+             blow_up_c(n, pairs)]
+    npar = step.size1_in(1)
+    body = _STATE_BODY.format(ns=ns, n=n)
+    if stage is not None:
+        nd = max(stage.size1_in(4), 1)
+        parts += [scalar_c(stage_constants, "stage_constants"), scalar_c(stage, "stage")]
+        body = _TANGENT_BODY.format(n=n, nd=nd)
+    parts.append(_MEMBER_HEAD.format(variant=variant, args=_ARGS, ns=ns, nc=nc, n=n,
+                                     npar=npar) + body
+                 + _MEMBER_TAIL.format(n=n, nan_log="logs[m * n_sec + sec] = NAN;"
+                                       if stage is not None else ""))
+    wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
+    parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL))
+    return "\n".join(parts)
+
+
+def state_functions(model: object, structure: tuple[int, ...]) -> tuple[ca.Function,
+                                                                         ca.Function]:
+    """The RK4 step of the compiled blocks (``compiled.rk4_blocks``) and its constants:
+    ``rk4_steps1(s, p, h, t0, c) -> s'`` with ``s = [z; k]``, ``rk4_constants(p, h, t0)``
+    (the same memoised Functions, so the same operations)."""
+    from analysis.integrate.tangent import Carry, tangent_step
+
+    return tuple(tangent_step(model.functions(structure).rk4_step,  # type: ignore[attr-defined]
+                              Carry(constants=True), "rk4_steps1", "rk4_constants"))
+
+
+def stage_functions(model: object, structure: tuple[int, ...]) -> tuple[ca.Function,
+                                                                         ca.Function]:
+    """``stage(t, z, p, v, d) -> (f, Jv)``: the model's rhs f(t, z) (SI units per s) and
+    its Jacobian–vector product J(t, z)·v (``casadi.jtimes``, the Jacobian never formed),
+    with the subexpressions of p alone as the input d; and ``stage_constants(p) -> d``."""
+    rhs = model.functions(structure).rhs  # type: ignore[attr-defined]
+    n, n_par = rhs.size1_in(1), rhs.size1_in(2)
+    t, z, p, v = ca.SX.sym("t"), ca.SX.sym("z", n), ca.SX.sym("p", n_par), ca.SX.sym("v", n)
+    f = rhs(t, z, p)
+    expr = ca.vertcat(f, ca.jtimes(f, z, v))
+    fused, extracted, values = ca.extract_parametric(ca.cse(expr), p)
+    d = ca.vertcat(*extracted)
+    stage = ca.Function("stage", [t, z, p, v, d], [fused[:n], fused[n:]])
+    return stage, ca.Function("stage_constants", [p], [ca.vertcat(*values)])
+
+
+def model_source(model: object, structure: tuple[int, ...], tangent: bool,
+                 target: str = "cpu") -> str:
+    """The member C of ``model`` with these balls (``member_source``): the state variant,
+    or with ``tangent`` the tangent variant, for ``target`` ``"cpu"`` or ``"cuda"``."""
+    step, constants = state_functions(model, structure)
+    extra = stage_functions(model, structure) if tangent else (None, None)
+    return member_source(step, constants, model.n_state,  # type: ignore[attr-defined]
+                         model.centre_indices(), *extra, target=target)  # type: ignore
