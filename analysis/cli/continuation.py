@@ -10,10 +10,17 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import (
+    DsMaxOption,
+    DtOption,
+    FromOption,
     JsonOption,
+    MaxPointsOption,
     NBallsOption,
+    ParamOption,
     PeriodOption,
+    QuietOption,
     SetOption,
+    SettleOption,
     app,
     figure_output,
     given_options,
@@ -39,9 +46,8 @@ def continue_(
         metavar="MODEL",
         help="Model: a shipped name, a name in a BEARINGDYN_MODELS folder, a .toml spec or a "
              "generated folder (not with --from-branch).")] = None,
-    param: Annotated[str | None, typer.Option(help="Runtime parameter to vary.")] = None,
-    start: Annotated[float | None, typer.Option(
-        "--from", help="Start value (parameter unit).")] = None,
+    param: ParamOption = None,
+    start: FromOption = None,
     from_branch: Annotated[Path | None, typer.Option(
         "--from-branch", help="Continue from a point of this branch file instead (its model, "
                               "parameters, period and step; either direction).")] = None,
@@ -50,13 +56,10 @@ def continue_(
     n_balls: NBallsOption = None,
     sets: SetOption = None,
     period: PeriodOption = None,
-    dt: Annotated[float | None, typer.Option(
-        help="Largest RK4 step, s (default: the spec's).")] = None,
-    settle: Annotated[float | None, typer.Option(
-        help="Simulated time for the first guess, s (default: the model's own time scale, "
-             "as floquet).")] = None,
-    max_points: Annotated[int, typer.Option(help="Points per branch.")] = 200,
-    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
+    dt: DtOption = None,
+    settle: SettleOption = None,
+    max_points: MaxPointsOption = 200,
+    ds_max: DsMaxOption = 0.05,
     switch_pd: Annotated[bool, typer.Option(
         "--switch-pd", help="Also continue the period-2 branch from the first PD.")] = False,
     switch_bp: Annotated[bool, typer.Option(
@@ -64,7 +67,7 @@ def continue_(
                             "(symmetry-breaking pitchfork).")] = False,
     plot: Annotated[Path | None, typer.Option(help="Figure of the branch(es).",
                                               callback=figure_output)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    quiet: QuietOption = False,
     as_json: JsonOption = False,
 ):
     """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection; every

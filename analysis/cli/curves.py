@@ -7,7 +7,17 @@ from typing import Annotated
 
 import typer
 
-from analysis.cli.common import app, figure_output, netcdf_output, reports_errors, write_figure
+from analysis.cli.common import (
+    DsMaxOption,
+    MaxPointsOption,
+    QuietOption,
+    app,
+    figure_output,
+    netcdf_output,
+    progress_lines,
+    reports_errors,
+    write_figure,
+)
 
 
 @app.command("curve")
@@ -23,14 +33,14 @@ def curve(
         "--to", help="End value of --param (its unit); it starts at the branch's value.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file of the curve.",
                                          callback=netcdf_output)],
-    max_points: Annotated[int, typer.Option(help="Points on the curve.")] = 300,
-    ds_max: Annotated[float, typer.Option(help="Largest scaled arclength step.")] = 0.05,
+    max_points: MaxPointsOption = 300,
+    ds_max: DsMaxOption = 0.05,
     chart: Annotated[Path | None, typer.Option(
         help="Stability chart (`bearingdyn chart`) over the same two parameters, drawn "
              "under the curve in --plot.")] = None,
     plot: Annotated[Path | None, typer.Option(help="Figure of the curve (PNG).",
                                               callback=figure_output)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", help="No progress lines.")] = False,
+    quiet: QuietOption = False,
 ):
     """Two-parameter continuation of an LP, PD or NS point; labels cusps (CP), strong
     resonances (R1-R4) and fold-flip/fold-NS/flip-NS points."""
@@ -44,7 +54,7 @@ def curve(
         raise InputError(f"chart: {chart} is not a stability chart of `bearingdyn chart`")
     ds = continue_curve(branch, point, param=param, stop=stop,
                         max_points=max_points, ds_max=ds_max,
-                        progress=None if quiet else typer.echo)
+                        progress=progress_lines(quiet, err=False))
     save_dataset(ds, output)
     typer.echo(f"wrote {output}: {ds.sizes['point']} points of the {ds.attrs['curve']} curve "
                f"in {ds.attrs['param1']} and {ds.attrs['param2']}, {ds.attrs['status']}")

@@ -49,21 +49,32 @@ def generate(
             default_root() if is_shipped(path) else cached_model_root(path))
         targets.setdefault(Path(target), []).append(str(name))
     if check:
-        if changed:
-            typer.echo("stale generated files (run `bearingdyn generate`):\n  "
-                       + "\n  ".join(changed), err=True)
-            raise typer.Exit(1)
-        inside = [n for t, ns in targets.items() if t == default_root() for n in ns]
-        outside = {t: ns for t, ns in targets.items() if t != default_root()}
-        if inside:
-            typer.echo(f"generated/ matches its specs ({', '.join(inside)})")
-        for target, ns in outside.items():
+        _say_checked(changed, targets, default_root())
+    else:
+        _say_written(changed, targets, default_root(), out)
+
+
+def _say_checked(changed: list[str], targets: dict[Path, list[str]], package: Path) -> None:
+    """`generate --check`: the stale files (exit code 1), or where the code matches."""
+    if changed:
+        typer.echo("stale generated files (run `bearingdyn generate`):\n  "
+                   + "\n  ".join(changed), err=True)
+        raise typer.Exit(1)
+    inside = [n for t, ns in targets.items() if t == package for n in ns]
+    if inside:
+        typer.echo(f"generated/ matches its specs ({', '.join(inside)})")
+    for target, ns in targets.items():
+        if target != package:
             typer.echo(f"{target} matches its specs ({', '.join(ns)})")
-        return
+
+
+def _say_written(changed: list[str], targets: dict[Path, list[str]], package: Path,
+                 out: Path | None) -> None:
+    """`generate`: the files written, and where each model went."""
     typer.echo(f"wrote {len(changed)} file(s)" + (": " + ", ".join(changed) if changed
                                                  else " (all up to date)"))
     for target, ns in targets.items():
-        if target == default_root():
+        if target == package:
             typer.echo(f"{', '.join(ns)}: in the package's generated/")
         elif out is not None:
             typer.echo(f"{', '.join(ns)}: in {target.resolve()} (load it by giving that folder "

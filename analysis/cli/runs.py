@@ -10,16 +10,18 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import (
+    DtOption,
     ModelArgument,
     NBallsOption,
     SetOption,
+    SpeedOption,
     app,
     figure_output,
     frequency_words,
     netcdf_output,
-    parameter_values,
     parse_n_balls,
     reports_errors,
+    run_speed,
     write_figure,
 )
 from analysis.errors import InputError
@@ -32,13 +34,11 @@ def simulate(
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
                                          callback=netcdf_output)],
     n_balls: NBallsOption = None,
-    speed_rpm: Annotated[str | None, typer.Option(
-        help="Shaft speed, rpm; a ramp A:B (A at t = 0, B at the end of the run), or a CSV "
-             "speed table t_s,speed_rpm (docs: Run-ups).")] = None,
+    speed_rpm: SpeedOption = None,
     sets: SetOption = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time, s.")] = None,
     transient: Annotated[float | None, typer.Option(help="Dropped initial time, s.")] = None,
-    dt: Annotated[float | None, typer.Option(help="RK4 step and output spacing, s.")] = None,
+    dt: DtOption = None,
     method: Annotated[str, typer.Option(help="rk4 (fixed step) or cvodes.")] = "rk4",
     save_every: Annotated[int, typer.Option(help="Keep every n-th step.")] = 1,
     no_compile: Annotated[bool, typer.Option(
@@ -52,26 +52,22 @@ def simulate(
 
     from analysis.integrate.simulate import simulate as run
     from analysis.integrate.simulate import simulate_to_file
-    from analysis.integrate.speed_profile import SpeedProfile, describe_speed, parse_speed
+    from analysis.integrate.speed_profile import describe_speed
     from analysis.io import save_dataset
     from analysis.model import balls_text
     from analysis.provenance import state_names
 
-    speed = None if speed_rpm is None else parse_speed(speed_rpm)
-    profile = speed if isinstance(speed, SpeedProfile) else None
-    params = parameter_values(None if profile else speed, sets)
+    params, profile = run_speed(speed_rpm, sets)
     if profile is not None:
-        if "speed_rpm" in params:
-            raise InputError("--speed-rpm: given twice (--speed-rpm and --set speed_rpm); "
-                             "give the speed once")
         params["speed_rpm"] = profile
     start = time.perf_counter()
     options = dict(duration=duration, transient=transient, dt=dt, save_every=save_every,
                    compiled=not no_compile, **params)
+    balls = parse_n_balls(n_balls)
     if method == "rk4":
-        simulate_to_file(model, output, parse_n_balls(n_balls), **options)
+        simulate_to_file(model, output, balls, **options)
     else:
-        save_dataset(run(model, parse_n_balls(n_balls), method=method, **options), output)
+        save_dataset(run(model, balls, method=method, **options), output)
     wall = time.perf_counter() - start
     with h5netcdf.File(output, "r") as f:  # the file's ends only: a long run stays on disk
         attrs, times = dict(f.attrs), f.variables["t"]
@@ -124,19 +120,7 @@ def spectrum(
     )
     from analysis.signal.spectrum import fault_frequencies, peak_table
 
-    passband = None
-    if band is not None:
-        from analysis.signal.envelope import parse_band
-
-        if not envelope:
-            raise InputError("--band: only with --envelope")
-        passband = parse_band(band)
-    if noise is not None:
-        from analysis.signal.noise import add_noise, check_snr
-
-        check_snr(noise)
-        if noise_seed < 0:
-            raise InputError(f"--noise-seed: must be an integer >= 0, got {noise_seed}")
+    passband = _spectrum_options(band, envelope, noise, noise_seed)
     ds = load_dataset(run_file)
     variables = tuple(var) if var else displacement_names(ds)
     for name in variables:
@@ -144,6 +128,8 @@ def spectrum(
             raise InputError(f"--var: no state variable {name!r} in this run; variables: "
                              f"{', '.join(map(str, ds.data_vars))}")
     if noise is not None:
+        from analysis.signal.noise import add_noise
+
         ds = add_noise(ds, noise, noise_seed, variables)
         if not as_json:
             typer.echo(f"white noise added to {', '.join(variables)}: SNR {noise:g} dB, "
@@ -170,6 +156,26 @@ def spectrum(
 
         save_figure(spectrum_figure(ds, variables, peaks=peaks), output)
         typer.echo(f"wrote {output}", err=as_json)
+
+
+def _spectrum_options(band: str | None, envelope: bool, noise: float | None,
+                      noise_seed: int) -> tuple[float, float] | str | None:
+    """The pass band of ``--band`` (None: chosen by kurtosis), every option of ``spectrum``
+    checked before the run is read."""
+    passband = None
+    if band is not None:
+        from analysis.signal.envelope import parse_band
+
+        if not envelope:
+            raise InputError("--band: only with --envelope")
+        passband = parse_band(band)
+    if noise is not None:
+        from analysis.signal.noise import check_snr
+
+        check_snr(noise)
+        if noise_seed < 0:
+            raise InputError(f"--noise-seed: must be an integer >= 0, got {noise_seed}")
+    return passband
 
 
 def _print_peaks(ds, variables, peaks) -> None:
@@ -263,12 +269,7 @@ def poincare(
         raise InputError(f"--section: must be {SECTION_SYNTAX}, got {section!r}") from None
     ds = load_dataset(run_file)
     names = state_names(ds)
-    for option, name in (("--x", x), ("--y", y)):
-        if name is not None and name not in names:
-            raise InputError(f"{option}: no state variable {name!r} in this run; "
-                             f"variables: {', '.join(names)}")
-    if y is not None and x is None:
-        raise InputError("--y: give --x too")
+    _check_axes(names, x, y)
     try:
         pts = poincare_section(ds, section)
     except InputError as exc:
@@ -294,6 +295,14 @@ def poincare(
         typer.echo(f"wrote {output}", err=as_json)
 
 
+def _check_axes(names: list[str], x: str | None, y: str | None) -> None:
+    """``--x`` and ``--y`` name state variables of the run, and ``--y`` comes with ``--x``."""
+    for option, name in (("--x", x), ("--y", y)):
+        if name is not None and name not in names:
+            raise InputError(f"{option}: no state variable {name!r} in this run; "
+                             f"variables: {', '.join(names)}")
+    if y is not None and x is None:
+        raise InputError("--y: give --x too")
 
 
 @app.command()

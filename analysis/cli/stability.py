@@ -10,12 +10,14 @@ import numpy as np
 import typer
 
 from analysis.cli.common import (
+    DtOption,
     JsonOption,
     ModelArgument,
     NBallsOption,
     PeriodOption,
     QuietOption,
     SetOption,
+    SettleOption,
     SpeedOption,
     app,
     figure_output,
@@ -47,7 +49,7 @@ def lyapunov(
     tangent_transient: Annotated[float | None, typer.Option(
         help="Renormalised time before the averaging whose logs are discarded, s (the last "
              "part of the transient; default: a tenth of the spec's transient).")] = None,
-    dt: Annotated[float | None, typer.Option(help="RK4 step, s (default: the spec's).")] = None,
+    dt: DtOption = None,
     renorm_every: Annotated[int, typer.Option(help="RK4 steps between QR steps.")] = 100,
     as_json: JsonOption = False,
     output: Annotated[Path | None, typer.Option(
@@ -141,11 +143,8 @@ def floquet(
     sets: SetOption = None,
     period: PeriodOption = None,
     segments: Annotated[int, typer.Option(help="Shooting segments (1: single).")] = 1,
-    dt: Annotated[float | None, typer.Option(
-        help="Largest RK4 step, s (default: the spec's).")] = None,
-    settle: Annotated[float | None, typer.Option(
-        help="Simulated time for the guess, s (default: the spec's transient, at least 20 "
-             "periods).")] = None,
+    dt: DtOption = None,
+    settle: SettleOption = None,
     as_json: JsonOption = False,
 ):
     """Periodic orbit by Newton shooting, its Floquet multipliers and stability."""
