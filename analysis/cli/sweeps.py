@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import (
+    DtOption,
     ExecutorOption,
     ModelArgument,
     NBallsOption,
@@ -50,8 +51,7 @@ def sweep(
     section: Annotated[str | None, typer.Option(
         help="shaft, cage, vc, cage[BEARING], vc[BEARING] or param:NAME (default: "
              "shaft).")] = None,
-    dt: Annotated[float | None, typer.Option(
-        help="RK4 step, s (default: the spec's [simulation] dt).")] = None,
+    dt: DtOption = None,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -100,8 +100,7 @@ def chart(
              "record).")] = None,
     lyapunov: Annotated[bool, typer.Option(help="Largest Lyapunov exponent at every "
                                                 "point.")] = True,
-    dt: Annotated[float | None, typer.Option(
-        help="RK4 step, s (default: the spec's [simulation] dt).")] = None,
+    dt: DtOption = None,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
