@@ -1,7 +1,7 @@
 """Ensembles (``analysis.integrate.ensemble``) against ``simulate``, member by member, bit for
 bit: the stroboscopic map's section points and ``ensemble``'s records, whatever members
-share a call of the state lane kernel (``lanes.state_kernel``), at different step counters,
-through a blow-up beside them, and the same without a kernel (the scalar blocks)."""
+share a call of the member kernel (``analysis.integrate.kernels``), at different step
+counters, through a blow-up beside them, and the same without a kernel (the scalar blocks)."""
 
 from __future__ import annotations
 
@@ -12,9 +12,10 @@ import pytest
 
 from analysis import simulate
 from analysis.errors import InputError, SimulationError
-from analysis.integrate import lanes
 from analysis.integrate.ensemble import StroboscopicMap, ensemble
-from analysis.integrate.lanes import Unsupported, rk4_state_step, state_kernel, vector_c
+from analysis.integrate.kernels import members, source
+from analysis.integrate.kernels.cpu import cpu_library
+from analysis.integrate.kernels.source import Unsupported, scalar_c, state_functions
 from analysis.integrate.simulate import check_bounded
 from analysis.model import System
 
@@ -57,7 +58,7 @@ def test_each_member_is_simulate_at_the_section_times(name):
     section points are ``simulate``'s states every N steps, bit for bit; the rows come back
     at their counters plus PERIODS·N."""
     smap = _map(name)
-    assert state_kernel(smap.system.model, smap.system.structure) is not None
+    assert cpu_library(smap.system.model, smap.system.structure, False) is not None
     n, big_n = smap.system.n_state, smap.steps
     starts = _starts(smap, 5)
     offsets = [0, 0, 3 * big_n + 17, 0, 5]
@@ -86,7 +87,7 @@ def test_save_every_n_matches_simulate_with_save_every():
 
 
 def test_a_member_does_not_depend_on_its_neighbours():
-    """The same member beside other members, in the other lane: the same bits."""
+    """The same member beside other members, at another index: the same bits."""
     smap = _map("duffing")
     starts = _starts(smap, 4)
     first = smap.advance(_rows(starts[:3], np.zeros(3)), PERIODS)
@@ -170,24 +171,27 @@ def test_ensemble_records_a_blow_up_without_raising():
 
 
 def test_without_a_kernel_the_members_run_one_by_one_with_the_same_bits(monkeypatch):
-    """An operation the writer does not know (sqrt taken away) means no state kernel; the
+    """An operation the writer does not know (sqrt taken away) means no member kernel; the
     map and ``ensemble`` then run member by member in the scalar blocks: the same bits."""
     smap = _map("balanced-rotor")
     model, structure = smap.system.model, smap.system.structure
     starts = _starts(smap, 3)
     rows = _rows(starts, np.array([0.0, 11.0, 0.0]))
-    with_lanes = smap.advance(rows.copy(), PERIODS)
+    with_kernel = smap.advance(rows.copy(), PERIODS)
     speeds = [{"speed_rpm": 7000.0}, {"speed_rpm": 9000.0}, {"speed_rpm": 8000.0}]
-    ds_lanes = ensemble(smap.system, starts, 0.002, parameters=speeds)
-    monkeypatch.delitem(lanes.UNARY, "SQRT")
-    state_kernel.cache_clear()
+    ds_kernel = ensemble(smap.system, starts, 0.002, parameters=speeds)
+    monkeypatch.delitem(source.UNARY, "SQRT")
+    cpu_library.cache_clear()
+    members._self_test.cache_clear()
     try:
         with pytest.raises(Unsupported, match="SQRT"):
-            vector_c(rk4_state_step(model, structure)[0], "step")
-        assert state_kernel(model, structure) is None
-        assert np.array_equal(smap.advance(rows.copy(), PERIODS), with_lanes)
+            scalar_c(state_functions(model, structure)[0], "step")
+        with pytest.raises(Unsupported, match="SQRT"):
+            cpu_library(model, structure, False)
+        assert np.array_equal(smap.advance(rows.copy(), PERIODS), with_kernel)
         ds_scalar = ensemble(smap.system, starts, 0.002, parameters=speeds)
         for v in smap.system.state_names:
-            assert np.array_equal(ds_scalar[v].values, ds_lanes[v].values)
+            assert np.array_equal(ds_scalar[v].values, ds_kernel[v].values)
     finally:
-        state_kernel.cache_clear()
+        cpu_library.cache_clear()
+        members._self_test.cache_clear()

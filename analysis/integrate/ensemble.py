@@ -8,18 +8,19 @@ of ``analysis.integrate.compiled``), step k running from ``k·h`` to ``(k + 1)·
 member i is ``simulate`` of its own System bit for bit (``np.array_equal``), whatever
 members share its call.
 
-Compiled, the members run ``lanes.LANES`` at a time in the state lane kernel
-(``lanes.state_kernel``: the step written for SSE2/NEON vector lanes, each lane's numbers
-those of the scalar step); without it (``compiled=False``, an operation the kernel writer
-does not know, no compiler, a failed self-test) one by one through the RK4 blocks, with the
-same results.
+Compiled, the members run in the member kernel's CPU build (``analysis.integrate.kernels``:
+the step written as scalar C from the same SX Function, one member per OpenMP iteration on
+every core, each member's numbers those of the scalar step); without it (``compiled=False``,
+an operation the kernel writer does not know, no compiler, a failed self-test) one by one
+through the RK4 blocks, with the same results.
 
 - ``StroboscopicMap``: the System sampled once per forcing period T, z_{j+1} = F(z_j) with
   N fixed RK4 steps of h = T/N; ``advance`` moves K rows ``[z, k]`` by whole periods.
 - ``ensemble``: K members over a duration, as an ``xarray.Dataset`` over (member, t).
 
-Members never stop each other: one that blows up carries NaN or inf to the end of the
-call, its neighbours unchanged; ``StroboscopicMap.diverged`` flags it (the blow-up rule of
+Members never stop each other: one that blows up stops at its first bad state and carries
+NaN to the end of the call (one that overflows in the scalar blocks carries NaN or inf), its
+neighbours unchanged; ``StroboscopicMap.diverged`` flags it (the blow-up rule of
 ``simulate.check_bounded``) and ``ensemble`` records when (``diverged_at``).
 """
 
@@ -32,9 +33,11 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.integrate.compiled import Library, block_plan, library
+from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
-from analysis.integrate.lanes import LANES, state_kernel
+from analysis.integrate.kernels.members import Schedule
+from analysis.integrate.kernels.members import run_members as run_kernel
+from analysis.integrate.kernels.source import Unsupported
 from analysis.integrate.plan import RunPlan, check_memory
 from analysis.integrate.simulate import bad_states, blow_up_limit
 from analysis.model import System
@@ -68,31 +71,31 @@ def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_o
     place), step k from ``k·h``. Returns (K, n_out, n): each member's z after every
     ``every`` steps.
 
-    Compiled: ``LANES`` members per call of the state lane kernel
-    (``lanes.state_kernel``; an odd last member beside a copy of itself, whose results are
-    dropped); without a kernel (``compiled=False``, an operation it does not write, no
-    compiler, a failed self-test) member by member through the RK4 blocks
+    Compiled: all members in one call of the member kernel's CPU build
+    (``kernels.run_members``, every core; a member that blows up stops there, its later
+    states NaN, its row the first bad state); without it (``compiled=False``, an operation
+    the writer does not know, no compiler) member by member through the RK4 blocks
     (``run_scalar``). Both give ``simulate``'s steps bit for bit."""
     k, n = s.shape[0], s.shape[1] - 1
-    out = np.empty((k, n_out, n))
-    kern = state_kernel(system.model, system.structure) if compiled else None
-    if kern is None:
+    if n_out == 0:
+        return np.empty((k, 0, n))
+    out = None
+    if compiled:
+        try:
+            out = run_kernel(system, s[:, :n], p, h, Schedule(0, every, n_out), k0=s[:, n])
+        except (Unsupported, CompileError):
+            out = None
+    if out is None:
+        result = np.empty((k, n_out, n))
         lib = library(system.model, system.structure, compiled)
         for i in range(k):
             row = np.ascontiguousarray(s[i], dtype=float)
-            out[i] = run_scalar(lib, p[i], float(h[i]), row, n_out, every)
+            result[i] = run_scalar(lib, p[i], float(h[i]), row, n_out, every)
             s[i] = row
-        return out
-    zeros = np.zeros(LANES)
-    for start in range(0, k, LANES):
-        group = [min(i, k - 1) for i in range(start, start + LANES)]
-        lanes = np.ascontiguousarray(s[group].T, dtype=float)
-        states = kern.run(lanes, np.ascontiguousarray(p[group].T), h[group], zeros,
-                          n_out, every)
-        count = min(LANES, k - start)
-        out[start:start + count] = states[:count]
-        s[start:start + count] = lanes[:, :count].T
-    return out
+        return result
+    s[:, :n] = out.final
+    s[:, n] += n_out * every
+    return out.sections
 
 
 bad_points = bad_states

@@ -181,7 +181,8 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
                 progress: Callable[[int, int], None] | None = None) -> MemberResult:
     """Run M members of ``system``'s model and balls by ``schedule``.
 
-    ``states`` (M, n): initial states (SI units); ``parameters`` (M, n_par): each member's
+    ``states`` (M, n): initial states (SI units; a state that is not finite diverges at
+    the first step); ``parameters`` (M, n_par): each member's
     full parameter vector (``Model.parameter_vector``; speed in rpm), or None for
     ``system.p`` for all; ``h`` (s; one or per member): the RK4 step; ``t0`` (s) and ``k0``
     (step counters, whole numbers; one or per member): step k runs from ``t0 + k·h``, the
@@ -197,8 +198,6 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     z0 = np.asarray(states, dtype=float)
     if z0.ndim != 2 or z0.shape[1] != n or len(z0) < 1:
         raise InputError(f"states: an array of shape (members, {n}), got shape {z0.shape}")
-    if not np.all(np.isfinite(z0)):
-        raise InputError("states: finite values (SI units)")
     m = len(z0)
     if parameters is None:
         p = np.repeat(system.p[None, :], m, axis=0)
