@@ -26,7 +26,7 @@ import numpy as np
 import scipy.signal
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.speed_profile import profile_of
 from analysis.provenance import displacement_names
 
@@ -60,8 +60,7 @@ def synchronous_phasor(ds: xr.Dataset, var: str, order: int = 1) -> complex:
     if var not in ds.data_vars:
         raise InputError(f"var: no variable {var!r} in the run; variables: "
                          f"{', '.join(map(str, ds.data_vars))}")
-    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 1:
-        raise InputError(f"order: must be a whole number >= 1, got {order!r}")
+    check_count("order", order)
     values = np.asarray(ds[var].values, dtype=float)
     if values.size < 3:
         raise InputError(f"{var}: need at least 3 samples for a phasor, got {values.size}")

@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, Protocol
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 MAX_WORKERS = 1024
 """Most local worker processes."""
@@ -224,9 +224,8 @@ def make_executor(kind: str = "processes", workers: int | None = None,
                   scheduler: str | None = None) -> Executor:
     """``serial``, ``processes`` (default: all cores) or ``dask`` (``scheduler`` address,
     or a LocalCluster with ``workers`` workers)."""
-    if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
-        raise InputError(f"--workers: must be a whole number in [1, {MAX_WORKERS}], "
-                         f"got {workers}")
+    if workers is not None:
+        check_count("--workers", workers, 1, MAX_WORKERS)
     if scheduler is not None:
         return DaskExecutor(scheduler=scheduler)
     if kind == "serial":

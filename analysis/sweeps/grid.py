@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_seconds
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
@@ -295,9 +295,8 @@ def _check_section_at(setting: Setting, name: str, value: float) -> None:
 def _check_setting_times(setting: Setting) -> None:
     """The times every point shares, each named as its option."""
     check_seconds("transient", setting.transient, zero=True)
-    if not (isinstance(setting.samples, int) and 1 <= setting.samples <= MAX_SAMPLES):
-        raise InputError(f"samples: must be a whole number in [1, {MAX_SAMPLES}] (section "
-                         f"periods recorded per value), got {setting.samples}")
+    check_count("samples", setting.samples, 1, MAX_SAMPLES,
+                " (section periods recorded per value)")
 
 
 def amplitude_fields(model: Model) -> list[str]:
