@@ -146,3 +146,24 @@ def test_the_writer_refuses_what_it_cannot_write():
     x = ca.MX.sym("x")
     with pytest.raises(Unsupported, match="not an SX"):
         scalar_c(ca.Function("f", [x], [x]), "f")
+
+
+def test_per_member_schedules_are_each_members_own_call():
+    """Members of different schedules in one call: each equals its call alone; sections
+    past a member's own K are NaN; λ1 averages its own logs."""
+    system = _system()
+    z0 = system.state * (1 + 0.05 * np.arange(3))[:, None]
+    hs = np.array([1e-5, 1.1e-5, 0.9e-5])
+    together = run_members(system, z0, None, hs,
+                           Schedule([5, 0, 9], [10, 7, 12], [4, 6, 3], tangent=True,
+                                    lyapunov_skip=[1, 0, 2]))
+    for i, (tr, ev, k, skip) in enumerate([(5, 10, 4, 1), (0, 7, 6, 0), (9, 12, 3, 2)]):
+        alone = run_members(system, z0[i:i + 1], None, hs[i],
+                            Schedule(tr, ev, k, tangent=True, lyapunov_skip=skip))
+        assert np.array_equal(together.sections[i, :k], alone.sections[0])
+        assert np.all(np.isnan(together.sections[i, k:]))
+        assert together.lambda1[i] == alone.lambda1[0]
+        assert np.isclose(alone.lambda1[0], alone.logs[0, skip:].mean() / (ev * hs[i]),
+                          rtol=1e-14)
+    with pytest.raises(InputError, match="n_sections"):
+        run_members(system, z0, None, 1e-5, Schedule(0, 1, [1, 2]))

@@ -77,18 +77,15 @@ class CpuLibrary:
     path: Path
     fn: Any
 
-    def run(self, count: int, threads: int, args: list[np.ndarray],
-            schedule: tuple[int, int, int, int, int]) -> None:
-        """One call over ``count`` members (``args``: the arrays of ``source._ARGS`` in
-        order, C-contiguous: z0, k0, p, h, t0, limit, then the outputs sections, logs,
-        final, diverged, low, high; ``schedule``: transient, every, n_sec, skip, keep)."""
-        inputs, outputs = args[:6], args[6:]
-        transient, every, n_sec, skip, keep = schedule
+    def run(self, count: int, threads: int, inputs: list[np.ndarray], kmax: int, keep: bool,
+            outputs: list[np.ndarray]) -> None:
+        """One call over ``count`` members on ``threads`` cores. ``inputs``: the per-member
+        arrays of ``source._ARGS`` in order (z0, k0, p, h, t0, limit as float64; transient,
+        every, n_sec, skip as int64), ``outputs``: sections, logs, final, diverged (int64),
+        low, high; all C-contiguous."""
         ptr = [a.ctypes.data_as(ctypes.c_void_p) for a in (*inputs, *outputs)]
-        self.fn(ctypes.c_longlong(count), ctypes.c_int(threads), *ptr[:6],
-                ctypes.c_longlong(transient), ctypes.c_longlong(every),
-                ctypes.c_longlong(n_sec), ctypes.c_longlong(skip), ctypes.c_int(keep),
-                *ptr[6:])
+        self.fn(ctypes.c_longlong(count), ctypes.c_int(threads), *ptr[:len(inputs)],
+                ctypes.c_longlong(kmax), ctypes.c_int(int(keep)), *ptr[len(inputs):])
 
 
 def build(source: str, stem: str, symbol: str) -> CpuLibrary:

@@ -71,18 +71,17 @@ class CudaKernel:
 
     fn: Any
 
-    def run(self, count: int, args: list[np.ndarray],
-            schedule: tuple[int, int, int, int, int]) -> None:
+    def run(self, count: int, inputs: list[np.ndarray], kmax: int, keep: bool,
+            outputs: list[np.ndarray]) -> None:
         """One launch over ``count`` members (the arrays of ``cpu.CpuLibrary.run``, host
         NumPy: inputs copied to the GPU, outputs copied back into them)."""
         cupy = cupy_module()
-        transient, every, n_sec, skip, keep = schedule
-        device = [cupy.asarray(a) for a in args]
+        dev_in = [cupy.asarray(a) for a in inputs]
+        dev_out = [cupy.empty(a.shape, dtype=a.dtype) for a in outputs]
         grid = ((count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK,)
         self.fn(grid, (THREADS_PER_BLOCK,),
-                (np.int64(count), *device[:6], np.int64(transient), np.int64(every),
-                 np.int64(n_sec), np.int64(skip), np.int32(keep), *device[6:]))
-        for host, dev in zip(args[6:], device[6:], strict=True):
+                (np.int64(count), *dev_in, np.int64(kmax), np.int32(int(keep)), *dev_out))
+        for host, dev in zip(outputs, dev_out, strict=True):
             host[...] = cupy.asnumpy(dev)
 
 

@@ -16,7 +16,7 @@ bit; the CUDA build agrees with it to the last bits of CUDA's libm.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
 
@@ -41,39 +41,67 @@ SELF_TEST_TOL = 1e-12
 
 @dataclass(frozen=True)
 class Schedule:
-    """What every member runs and records (steps are RK4 steps of the member's h)."""
+    """What every member runs and records (steps are RK4 steps of the member's h). The four
+    counts are whole numbers, one for every member or one per member (1-D sequences of
+    length M: a chart's points differ in section period and record length)."""
 
-    transient_steps: int
+    transient_steps: int | Sequence[int]
     """RK4 steps before the first recorded section interval (>= 0)."""
-    steps_per_section: int
+    steps_per_section: int | Sequence[int]
     """RK4 steps between recorded sections (>= 1); section j is the state after
     ``transient_steps + (j + 1)·steps_per_section`` steps."""
-    n_sections: int
+    n_sections: int | Sequence[int]
     """K sections recorded per member (>= 1)."""
     tangent: bool = False
     """Also carry one tangent vector (from e1 at the end of the transient), renormalised at
     each section."""
-    lyapunov_skip: int = 0
-    """Sections whose logs are not averaged into λ1; the extremes are taken from the end of
-    these sections on (the record)."""
+    lyapunov_skip: int | Sequence[int] = 0
+    """Sections whose logs are not averaged into λ1 (< n_sections); the extremes are taken
+    from the end of these sections on (the record)."""
     keep_sections: bool = True
     """False: only reduced results leave the device (no (M, K, n) sections)."""
 
     def __post_init__(self) -> None:
         for name, low in (("transient_steps", 0), ("steps_per_section", 1),
                           ("n_sections", 1), ("lyapunov_skip", 0)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-                    or value < low:
-                raise InputError(f"{name}: a whole number >= {low}, got {value!r}")
-        if self.lyapunov_skip >= self.n_sections:
+            self.counts(name, low)
+        if np.any(self.counts("lyapunov_skip") >= self.counts("n_sections")):
             raise InputError(f"lyapunov_skip: fewer than n_sections ({self.n_sections}), got "
                              f"{self.lyapunov_skip}")
 
+    def counts(self, name: str, low: int = 0) -> np.ndarray:
+        """The field ``name`` as int64 (0-d or 1-d), checked: whole numbers >= ``low``."""
+        value = getattr(self, name)
+        arr = np.asarray(value)
+        if arr.ndim > 1 or arr.size == 0 or arr.dtype == bool \
+                or not np.issubdtype(arr.dtype, np.number) \
+                or not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)) \
+                or np.any(arr < low):
+            raise InputError(f"{name}: a whole number >= {low} (or one per member), got "
+                             f"{value!r}")
+        return arr.astype(np.int64)
+
+    def per_member(self, m: int) -> list[np.ndarray]:
+        """transient, steps per section, sections, skip: (m,) int64 each (``InputError``
+        when a per-member field's length is not m)."""
+        out = []
+        for name in ("transient_steps", "steps_per_section", "n_sections", "lyapunov_skip"):
+            arr = self.counts(name)
+            if arr.ndim == 1 and len(arr) != m:
+                raise InputError(f"{name}: one number or one per member ({m}), got {len(arr)}")
+            out.append(np.ascontiguousarray(np.broadcast_to(arr, (m,)), dtype=np.int64))
+        return out
+
     @property
     def total_steps(self) -> int:
-        """RK4 steps of a member that does not blow up."""
-        return self.transient_steps + self.steps_per_section * self.n_sections
+        """RK4 steps of the longest member that does not blow up."""
+        return int(np.max(self.counts("transient_steps") + self.counts("steps_per_section")
+                          * self.counts("n_sections")))
+
+    @property
+    def max_sections(self) -> int:
+        """K: the most sections of a member (the second axis of the results)."""
+        return int(np.max(self.counts("n_sections")))
 
 
 @dataclass
@@ -117,7 +145,7 @@ def _per_member(name: str, value: np.ndarray | float, m: int, positive: bool) ->
 
 def _bytes_per_member(schedule: Schedule, n: int, n_par: int) -> int:
     """Bytes of one member's inputs and outputs in a call."""
-    k = schedule.n_sections
+    k = schedule.max_sections
     kept = k * n if schedule.keep_sections else 0
     return 8 * (n + 1 + n_par + 3 + kept + (k if schedule.tangent else 0) + 3 * n + 1)
 
@@ -130,7 +158,7 @@ def check_fits(device: str, members: int, schedule: Schedule, n: int,
     per = _bytes_per_member(schedule, n, n_par)
     kept = members * per
     if kept > HOST_BUDGET:
-        raise InputError(f"members: {members} members with {schedule.n_sections} sections "
+        raise InputError(f"members: {members} members with {schedule.max_sections} sections "
                          f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
                          f"{HOST_BUDGET / 2**30:g} GiB: run fewer members per call (blocks), or "
                          "keep_sections=False")
@@ -164,14 +192,6 @@ def _kernel(system: System, tangent: bool, device: str):
         return cuda_kernel(system.model, system.structure, tangent)
     _self_test(system.model, system.structure, tangent)
     return cpu_library(system.model, system.structure, tangent)
-
-
-def _call(kern, device: str, count: int, args: list[np.ndarray],
-          schedule: tuple[int, int, int, int, int]) -> None:
-    if device == "gpu":
-        kern.run(count, args, schedule)
-    else:
-        kern.run(count, min(cores(), max(count, 1)), args, schedule)
 
 
 def run_members(system: System, states: np.ndarray, parameters: np.ndarray | None,
@@ -215,36 +235,39 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     check_fits(device, m, schedule, n, n_par)
     limits = _limits(system, p, parameters is None)
     kern = _kernel(system, schedule.tangent, device)
-    k = schedule.n_sections
+    counts = schedule.per_member(m)
+    k = schedule.max_sections
     sections = np.full((m, k, n), np.nan) if schedule.keep_sections else None
     logs = np.full((m, k), np.nan) if schedule.tangent else None
     final, low, high = np.empty((m, n)), np.empty((m, n)), np.empty((m, n))
     diverged = np.empty(m, dtype=np.int64)
     size = _block_size(device, m, _bytes_per_member(schedule, n, n_par), block)
-    plan = (schedule.transient_steps, schedule.steps_per_section, k, schedule.lyapunov_skip,
-            int(schedule.keep_sections))
     z0, p = np.ascontiguousarray(z0), np.ascontiguousarray(p)
     for start in range(0, m, size):
         part = slice(start, min(m, start + size))
         count = part.stop - start
-        out_sec = np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n))
-        out_logs = np.empty((count, k)) if logs is not None else np.empty((1, 1))
-        outs = [out_sec, out_logs, np.empty((count, n)), np.empty(count, dtype=np.int64),
+        outs = [np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n)),
+                np.empty((count, k)) if logs is not None else np.empty((1, 1)),
+                np.empty((count, n)), np.empty(count, dtype=np.int64),
                 np.empty((count, n)), np.empty((count, n))]
-        ins = [np.ascontiguousarray(a[part]) for a in (z0, k0s, p, hs, t0s, limits)]
-        _call(kern, device, count, ins + outs, plan)
+        ins = [np.ascontiguousarray(a[part]) for a in (z0, k0s, p, hs, t0s, limits, *counts)]
+        if device == "gpu":
+            kern.run(count, ins, k, schedule.keep_sections, outs)
+        else:
+            kern.run(count, min(cores(), count), ins, k, schedule.keep_sections, outs)
         if sections is not None:
-            sections[part] = out_sec
+            sections[part] = outs[0]
         if logs is not None:
-            logs[part] = out_logs
+            logs[part] = outs[1]
         final[part], diverged[part], low[part], high[part] = outs[2:]
         if progress is not None:
             progress(part.stop, m)
     lambda1 = None
     if logs is not None:
+        skip, n_sec, every = counts[3], counts[2], counts[1]
+        used = (np.arange(k)[None, :] >= skip[:, None]) & (np.arange(k)[None, :] < n_sec[:, None])
         with np.errstate(invalid="ignore"):
-            lambda1 = logs[:, schedule.lyapunov_skip:].mean(axis=1) \
-                / (schedule.steps_per_section * hs)
+            lambda1 = np.where(used, logs, 0.0).sum(axis=1) / (n_sec - skip) / (every * hs)
     return MemberResult(sections, logs, lambda1, diverged, final, low, high, device)
 
 
@@ -276,11 +299,12 @@ def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
     z0 = np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)])
     p = np.stack([p0 * (1 + 0.01 * j) for j in range(2)])
     hs, t0s, k0s = h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.array([3.0, 4.0])
-    sched = (1, 2, 2, 0, 1)
+    sched = [np.ones(2, dtype=np.int64), np.full(2, 2, dtype=np.int64),
+             np.full(2, 2, dtype=np.int64), np.zeros(2, dtype=np.int64)]
     outs = [np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, n)),
             np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
     lib = cpu_library(model, structure, tangent)
-    lib.run(2, 1, [z0, k0s, p, hs, t0s, np.full(2, np.inf), *outs], sched)
+    lib.run(2, 1, [z0, k0s, p, hs, t0s, np.full(2, np.inf), *sched], 2, True, outs)
     stage = stage_functions(model, structure) if tangent else None
     for j in range(2):
         c = constants(p[j], hs[j], t0s[j])

@@ -13,10 +13,10 @@ one member from its index ``m``, so the OpenMP loop (``cpu.py``) and the CUDA ke
 
 Two variants:
 
-- **states** (``state_source``): the RK4 step of the compiled blocks
+- **states** (``model_source``): the RK4 step of the compiled blocks
   (``tangent.tangent_step(rk4_step, Carry(constants=True))``: ``rk4_steps1(s, p, h, t0, c)``
   with ``s = [z; k]``, step k from ``t0 + k·h``) and its parameter-only constants;
-- **tangent** (``tangent_source``): the same steps over the transient, then RK4 of the state
+- **tangent** (``model_source(…, tangent=True)``): the same steps over the transient, then RK4 of the state
   and of the variational equation stage by stage: ``stage(t, z, p, v, c) -> (f(t, z),
   J(t, z)·v)`` (the model's ``rhs`` and its Jacobian–vector product, ``casadi.jtimes``), so
   v' is the exact derivative of the discrete RK4 map the member follows
@@ -148,17 +148,19 @@ def blow_up_c(n: int, pairs: Sequence[tuple[int, int | None]]) -> str:
 
 
 _ARGS = """bd_long m, const double *z0, const double *k0, const double *p, const double *h,
-    const double *t0, const double *limit, bd_long transient, bd_long every, bd_long n_sec,
-    bd_long skip, int keep, double *sections, double *logs, double *final,
-    bd_long *diverged, double *low, double *high"""
+    const double *t0, const double *limit, const bd_long *transient, const bd_long *every,
+    const bd_long *n_sec, const bd_long *skip, bd_long kmax, int keep, double *sections,
+    double *logs, double *final, bd_long *diverged, double *low, double *high"""
 """The arguments of every member function and wrapper: member index, then per member
 (row-major, member first) the state z0 (n), step counter k0, parameters (n_par), step h
-(s), start time t0 (s) and blow-up limit (m); the schedule; the outputs: sections
-(n_sec × n, kept when ``keep``), logs (n_sec; tangent), final state (n), the step of the
-blow-up (-1: none), and the extremes of every state from step transient + skip·every."""
+(s), start time t0 (s), blow-up limit (m) and schedule (transient steps, steps per section,
+sections, skipped sections); the sections' stride kmax (>= every n_sec) and whether they
+are kept; the outputs: sections (kmax × n), logs (kmax; tangent), final state (n), the
+step of the blow-up (-1: none), and the extremes of every state from step transient +
+skip·every on. Sections and logs past a member's own are NaN."""
 
-_CALL = ("m, z0, k0, p, h, t0, limit, transient, every, n_sec, skip, keep, sections, logs, "
-         "final, diverged, low, high")
+_CALL = ("m, z0, k0, p, h, t0, limit, transient, every, n_sec, skip, kmax, keep, sections, "
+         "logs, final, diverged, low, high")
 
 _MEMBER_HEAD = """
 BD_FN void bd_member_{variant}({args}) {{
@@ -169,10 +171,11 @@ BD_FN void bd_member_{variant}({args}) {{
   for (int i = 0; i < {n}; i++) {{ s[i] = z0[m * {n} + i]; lo[i] = INFINITY; hi[i] = -INFINITY; }}
   s[{n}] = k0[m];
   rk4_constants(pm, &hm, &t0m, c);
-  const bd_long total = transient + every * n_sec, from = transient + skip * every;
+  const bd_long tr = transient[m], ev = every[m], ns = n_sec[m];
+  const bd_long total = tr + ev * ns, from = tr + skip[m] * ev;
   bd_long step = 0, bad = -1, sec = 0;
   if (from <= 0) bd_extend(lo, hi, s);
-  for (; step < transient; ) {{
+  for (; step < tr; ) {{
     rk4_steps1(s, pm, &hm, &t0m, c, nx);
     for (int i = 0; i < {ns}; i++) s[i] = nx[i];
     step++;
@@ -182,15 +185,15 @@ BD_FN void bd_member_{variant}({args}) {{
 """
 
 _STATE_BODY = """
-  for (bd_long left = every; bad < 0 && step < total; ) {{
+  for (bd_long left = ev; bad < 0 && step < total; ) {{
     rk4_steps1(s, pm, &hm, &t0m, c, nx);
     for (int i = 0; i < {ns}; i++) s[i] = nx[i];
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
     if (step >= from) bd_extend(lo, hi, s);
     if (--left == 0) {{
-      if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = s[i];
-      sec++; left = every;
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
+      sec++; left = ev;
     }}
   }}
 """
@@ -200,7 +203,7 @@ _TANGENT_BODY = """
   stage_constants(pm, d);
   for (int i = 0; i < {n}; i++) v[i] = i == 0 ? 1.0 : 0.0;
   const double half = hm / 2.0, sixth = hm / 6.0;
-  for (bd_long left = every; bad < 0 && step < total; ) {{
+  for (bd_long left = ev; bad < 0 && step < total; ) {{
     const double t = t0m + s[{n}] * hm, th = t + half, tf = t + hm;
     stage(&t, s, pm, v, d, f, jv);
     for (int i = 0; i < {n}; i++) {{
@@ -230,17 +233,17 @@ _TANGENT_BODY = """
       for (int i = 0; i < {n}; i++) norm += v[i] * v[i];
       norm = sqrt(norm);
       for (int i = 0; i < {n}; i++) v[i] /= norm;
-      logs[m * n_sec + sec] = log(norm);
-      if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = s[i];
-      sec++; left = every;
+      logs[m * kmax + sec] = log(norm);
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
+      sec++; left = ev;
     }}
   }}
 """
 
 _MEMBER_TAIL = """
   diverged[m] = bad < 0 ? -1 : (bd_long)k0[m] + bad;
-  for (; sec < n_sec; sec++) {{
-    if (keep) for (int i = 0; i < {n}; i++) sections[(m * n_sec + sec) * {n} + i] = NAN;
+  for (; sec < kmax; sec++) {{
+    if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = NAN;
     {nan_log}
   }}
   for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
@@ -289,7 +292,7 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
         body = _TANGENT_BODY.format(n=n, nd=nd)
     parts.append(_MEMBER_HEAD.format(variant=variant, args=_ARGS, ns=ns, nc=nc, n=n,
                                      npar=npar) + body
-                 + _MEMBER_TAIL.format(n=n, nan_log="logs[m * n_sec + sec] = NAN;"
+                 + _MEMBER_TAIL.format(n=n, nan_log="logs[m * kmax + sec] = NAN;"
                                        if stage is not None else ""))
     wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
     parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL))
