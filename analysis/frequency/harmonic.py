@@ -35,7 +35,6 @@ reports how the solution moves when H (and N with it) doubles.
 from __future__ import annotations
 
 import math
-from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -46,6 +45,7 @@ import scipy.fft
 from analysis.errors import InputError
 from analysis.integrate.flow import Period
 from analysis.model import System
+from analysis.threads import BLAS_THREADS, blas_threads  # noqa: F401  (their home)
 
 MAX_UNKNOWNS = 20_000
 """Most Fourier unknowns n(2H + 1) of one solve: the dense Newton matrix and the Hill
@@ -54,22 +54,6 @@ matrix are (n(2H + 1))² doubles each (3.2 GB at this bound)."""
 MEMORY_BUDGET = 2 * 2**30
 """Bytes the dense matrices of one solve may take (``check_size``): the Jacobian, its LU
 factors, the complex Hill matrix and its eigenvectors, about 6·(n(2H + 1))² doubles."""
-
-
-BLAS_THREADS = 1
-"""BLAS threads of the dense solves and eigenvalue problems (``blas_threads``). One: on a
-loaded machine OpenBLAS's threads spin against other processes and a 644 × 644
-eigenproblem took 11 s on two threads against 0.4 s on one (measured on 2 shared cores)."""
-
-
-def blas_threads() -> AbstractContextManager:
-    """A context with at most ``BLAS_THREADS`` BLAS threads (threadpoolctl when installed,
-    else nothing changes)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover
-        return nullcontext()
-    return threadpool_limits(limits=BLAS_THREADS, user_api="blas")
 
 
 def fast_samples(harmonics: int, samples: int | None = None) -> int:
