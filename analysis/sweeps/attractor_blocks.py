@@ -35,6 +35,7 @@ from analysis.errors import InputError
 from analysis.io import save_dataset
 from analysis.model import System, load_model
 from analysis.stability.attractors.continuation import MATCH_DISTANCE
+from analysis.stability.attractors.featurizing import FeatureOptions
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions, Scale
 from analysis.stability.attractors.sampling import Box, Range, check_pair
@@ -44,13 +45,7 @@ from analysis.stability.attractors.studies import (
     check_count,
     global_continuation,
 )
-from analysis.stability.attractors.study import (
-    BLOCK,
-    AttractorStudy,
-    Block,
-    Blocks,
-    check_memory,
-)
+from analysis.stability.attractors.study import AttractorStudy, Block, make_study
 from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
 from analysis.sweeps.store import PointStore
 
@@ -147,7 +142,8 @@ class StoredRunner:
         pending = [j for j, k in enumerate(keys) if found[k] is None]
         total = sum(len(b) for b in blocks)
         done = [total - sum(len(blocks[j]) for j in pending)]
-        if len(pending) == 1 or isinstance(self.executor, SerialExecutor):
+        if len(pending) == 1 or isinstance(self.executor, SerialExecutor) \
+                or study.in_process:  # the member kernel takes every core (or the GPU)
             for j in pending:
                 def report(k: int, _: int, before: int = done[0]) -> None:
                     progress(before + k, total)
@@ -180,44 +176,57 @@ def system_definition(system: System) -> dict:
             "state": [float(v) for v in system.state]}
 
 
-def check_study(system: System, period: str | None, dt: float | None,
+def check_study(system: System, members: int, period: str | None, dt: float | None,
                 options: MapperOptions | None, label_options: LabelOptions | None,
-                block: int) -> AttractorStudy:
-    """Every setting of a study checked (``InputError``), before any work: the block size,
-    the period and its section, the step. Returns the study (its scale not computed)."""
-    Blocks(block)
-    return AttractorStudy(system, period, dt, options, label_options)
+                block: int | None, mapper: str = "auto", device: str = "auto",
+                feature_options: FeatureOptions | None = None) -> AttractorStudy:
+    """Every setting of a study of ``members`` states checked (``InputError``), before any
+    work: the block size, the period and its section, the step, the memory, the mapper and
+    the device (``study.make_study``). Returns the study (its scale not computed)."""
+    return make_study(system, members, period=period, dt=dt, options=options,
+                      label_options=label_options, mapper=mapper, device=device,
+                      feature_options=feature_options, block=block)
 
 
-def study_definition(study: AttractorStudy, kind: str, block: int, **extra) -> dict:
+def study_definition(study: AttractorStudy, kind: str, block: int | None, **extra) -> dict:
+    """A store's definition: what makes its blocks (the mapper and, for the featurizing
+    one, its settings and device: a block from the GPU equals the CPU's to round-off, not
+    bit for bit)."""
+    mapper = {} if study.mapper_kind == "recurrence" else {
+        "mapper": study.mapper_kind, "device": study.device,
+        "feature_options": asdict(study.feature_options)}
     return {"kind": kind, "system": system_definition(study.system),
             "period": str(study.period), "dt": study.dt, "compiled": study.map.compiled,
             "options": asdict(study.options), "label_options": asdict(study.label_options),
-            "block": block, **extra}
+            "block": block or study.default_block, **mapper, **extra}
 
 
 def check_basins(system: System, x: Range, y: Range, *, period: str | None = None,
                  dt: float | None = None, options: MapperOptions | None = None,
-                 label_options: LabelOptions | None = None, block: int = BLOCK) -> dict:
+                 label_options: LabelOptions | None = None, block: int | None = None,
+                 mapper: str = "auto", device: str = "auto",
+                 feature_options: FeatureOptions | None = None) -> dict:
     """Every input of ``basins_to_file`` checked before any work; its store's
     definition."""
-    study = check_study(system, period, dt, options, label_options, block)
     check_count("x", x.num)
     check_count("y", y.num)
     check_pair(system, x, y)
-    check_memory(x.num * y.num, system.n_state, study.options)  # no grid allocated
+    study = check_study(system, x.num * y.num, period, dt, options, label_options, block,
+                        mapper, device, feature_options)  # no grid allocated
     return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
 
 
 def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     period: str | None = None, dt: float | None = None,
                     options: MapperOptions | None = None,
-                    label_options: LabelOptions | None = None, block: int = BLOCK) -> dict:
+                    label_options: LabelOptions | None = None, block: int | None = None,
+                    mapper: str = "auto", device: str = "auto",
+                    feature_options: FeatureOptions | None = None) -> dict:
     """Every input of ``fractions_to_file`` checked before any work; its definition."""
-    study = check_study(system, period, dt, options, label_options, block)
     check_count("samples", samples)
     box.check(system)
-    check_memory(samples, system.n_state, study.options)
+    study = check_study(system, samples, period, dt, options, label_options, block, mapper,
+                        device, feature_options)
     return study_definition(study, "attractors", block, box=box.text, samples=samples,
                             seed=seed)
 
@@ -226,20 +235,21 @@ def check_continuation(system: System, parameter: str, values: Sequence[float], 
                        samples: int, *, seed: int = 0, period: str | None = None,
                        dt: float | None = None, options: MapperOptions | None = None,
                        label_options: LabelOptions | None = None,
-                       match_distance: float = MATCH_DISTANCE, block: int = BLOCK) -> dict:
+                       match_distance: float = MATCH_DISTANCE, block: int | None = None,
+                       mapper: str = "auto", device: str = "auto",
+                       feature_options: FeatureOptions | None = None) -> dict:
     """Every input of ``continuation_to_file`` checked before any work (the study at each
     value); its definition."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
                          f"{', '.join(system.model.parameter_names)}")
-    study = check_study(system, period, dt, options, label_options, block)
-    for value in values:
-        check_study(system.replace(**{parameter: float(value)}), period, dt, options,
-                    label_options, block)
     check_count("samples", samples)
     box.check(system)
-    check_memory(samples + 16, system.n_state, study.options)
+    settings = (period, dt, options, label_options, block, mapper, device, feature_options)
+    study = check_study(system, samples + 16, *settings)
+    for value in values:
+        check_study(system.replace(**{parameter: float(value)}), samples + 16, *settings)
     return study_definition(study, "attractor-continuation", block, param=parameter,
                             values=[float(v) for v in values], box=box.text,
                             samples=samples, seed=seed, match_distance=match_distance)
@@ -263,31 +273,39 @@ def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner
 def basins_to_file(system: System, x: Range, y: Range, output: str | Path, *,
                    period: str | None = None, dt: float | None = None,
                    options: MapperOptions | None = None,
-                   label_options: LabelOptions | None = None, block: int = BLOCK,
+                   label_options: LabelOptions | None = None, block: int | None = None,
                    executor: Executor | None = None, progress: Progress | None = None,
-                   on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
-    """``studies.basins`` with its blocks on ``executor`` (default: serial) and stored
-    under ``output``; writes the netCDF file ``output`` and returns its Dataset."""
+                   on_damaged: Callable[[str], None] | None = None, mapper: str = "auto",
+                   device: str = "auto",
+                   feature_options: FeatureOptions | None = None) -> xr.Dataset:
+    """``studies.basins`` with its blocks on ``executor`` (default: serial; the featurizing
+    mapper's blocks in this process, on the member kernel) and stored under ``output``;
+    writes the netCDF file ``output`` and returns its Dataset."""
+    how = dict(mapper=mapper, device=device, feature_options=feature_options)
     definition = check_basins(system, x, y, period=period, dt=dt, options=options,
-                              label_options=label_options, block=block)
+                              label_options=label_options, block=block, **how)
     return stored_run(output, definition, lambda runner: basins(
         system, x, y, period=period, dt=dt, options=options, label_options=label_options,
-        progress=progress, block=block, runner=runner), executor, on_damaged)
+        progress=progress, block=block, runner=runner, **how), executor, on_damaged)
 
 
 def fractions_to_file(system: System, box: Box, samples: int, output: str | Path, *,
                       seed: int = 0, period: str | None = None, dt: float | None = None,
                       options: MapperOptions | None = None,
-                      label_options: LabelOptions | None = None, block: int = BLOCK,
+                      label_options: LabelOptions | None = None, block: int | None = None,
                       executor: Executor | None = None, progress: Progress | None = None,
-                      on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+                      on_damaged: Callable[[str], None] | None = None,
+                      mapper: str = "auto", device: str = "auto",
+                      feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """``studies.basin_fractions`` with its blocks on ``executor``, stored under
     ``output``; writes ``output``."""
+    how = dict(mapper=mapper, device=device, feature_options=feature_options)
     definition = check_fractions(system, box, samples, seed=seed, period=period, dt=dt,
-                                 options=options, label_options=label_options, block=block)
+                                 options=options, label_options=label_options, block=block,
+                                 **how)
     return stored_run(output, definition, lambda runner: basin_fractions(
         system, box, samples, seed=seed, period=period, dt=dt, options=options,
-        label_options=label_options, progress=progress, block=block, runner=runner),
+        label_options=label_options, progress=progress, block=block, runner=runner, **how),
         executor, on_damaged)
 
 
@@ -296,19 +314,22 @@ def continuation_to_file(system: System, parameter: str, values: Sequence[float]
                          period: str | None = None, dt: float | None = None,
                          options: MapperOptions | None = None,
                          label_options: LabelOptions | None = None,
-                         match_distance: float = MATCH_DISTANCE, block: int = BLOCK,
+                         match_distance: float = MATCH_DISTANCE, block: int | None = None,
                          executor: Executor | None = None,
                          progress: Callable[[str], None] | None = None,
-                         on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+                         on_damaged: Callable[[str], None] | None = None,
+                         mapper: str = "auto", device: str = "auto",
+                         feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """``studies.global_continuation`` with the blocks of each value on ``executor`` (the
     values one after the other: each is seeded from the previous one), stored under
     ``output``; writes ``output``. On a re-run the stored values' attractors are described
     again (in this process) to seed the next value."""
+    how = dict(mapper=mapper, device=device, feature_options=feature_options)
     definition = check_continuation(system, parameter, values, box, samples, seed=seed,
                                     period=period, dt=dt, options=options,
                                     label_options=label_options,
-                                    match_distance=match_distance, block=block)
+                                    match_distance=match_distance, block=block, **how)
     return stored_run(output, definition, lambda runner: global_continuation(
         system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
         options=options, label_options=label_options, match_distance=match_distance,
-        progress=progress, block=block, runner=runner), executor, on_damaged)
+        progress=progress, block=block, runner=runner, **how), executor, on_damaged)

@@ -30,10 +30,11 @@ from scipy.spatial import cKDTree
 from analysis.errors import InputError
 from analysis.integrate.flow import Period
 from analysis.model import System
+from analysis.stability.attractors.featurizing import FeatureOptions
 from analysis.stability.attractors.label import Attractor, LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions, Scale
 from analysis.stability.attractors.sampling import Box
-from analysis.stability.attractors.study import AttractorStudy, Result
+from analysis.stability.attractors.study import AttractorStudy, Blocks, Result, make_study
 
 MATCH_DISTANCE = 0.25
 """Largest ``set_distance`` (in orbit sizes) at which an attractor reached by no seed still
@@ -115,12 +116,19 @@ def continue_attractors(
     label_options: LabelOptions | None = None,
     match_distance: float = MATCH_DISTANCE,
     progress: Callable[[str], None] | None = None,
+    blocks: Blocks | None = None,
+    mapper: str = "auto",
+    device: str = "auto",
+    feature_options: FeatureOptions | None = None,
 ) -> list[Step]:
     """The attractors of ``system`` at each of ``values`` of ``parameter`` (its own unit:
     rpm for ``speed_rpm``), found from the previous value's attractors plus ``samples``
     random initial states in ``box`` (``seed``: the random generator's seed; the states
     at value i are drawn from the stream ``(seed, i)``), matched across values (see the
-    module). ``period``, ``dt``, ``options``, ``label_options``: as ``AttractorStudy``."""
+    module). ``period``, ``dt``, ``options``, ``label_options``: as ``AttractorStudy``;
+    ``blocks``: how each value's states are cut and mapped (``study.Blocks``; default: the
+    study's own block size, in this process); ``mapper``, ``device``, ``feature_options``:
+    as ``study.make_study``, resolved at each value."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
@@ -129,11 +137,14 @@ def continue_attractors(
     next_id = 1
     for i, value in enumerate(values):
         here = system.replace(**{parameter: float(value)})
-        study = AttractorStudy(here, period, dt, options, label_options)
         previous = steps[-1].attractors() if steps else []
+        study = make_study(here, samples + len(previous), period=period, dt=dt,
+                           options=options, label_options=label_options, mapper=mapper,
+                           device=device, feature_options=feature_options,
+                           block=None if blocks is None else blocks.size)
         seeds = np.array([a.representative for _, a in previous]).reshape(-1, here.n_state)
         random = box.sample(here, samples, np.random.default_rng([seed, i]))
-        result = study.find(np.concatenate([seeds, random]))
+        result = study.find(np.concatenate([seeds, random]), blocks=blocks)
         seeded = {g: int(result.labels[k]) for k, (g, _) in enumerate(previous)}
         ids, next_id = match(previous, seeded, result.attractors, study.scale, next_id,
                              match_distance)

@@ -13,6 +13,7 @@ and, when a block failed, ``failed_blocks``."""
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import asdict
 
 import numpy as np
 import xarray as xr
@@ -26,17 +27,16 @@ from analysis.stability.attractors.dataset import (
     continuation_dataset,
     fractions_dataset,
 )
+from analysis.stability.attractors.featurizing import FeatureOptions
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions
 from analysis.stability.attractors.sampling import Box, Range, check_pair, grid_states
 from analysis.stability.attractors.study import (
-    BLOCK,
     AttractorStudy,
     Blocks,
     Result,
     Runner,
-    check_memory,
-    use_blocks,
+    make_study,
 )
 
 Progress = Callable[[int, int], None]
@@ -53,9 +53,15 @@ LABEL_PERIODS = {"units": "forcing periods",
                  "long_name": "periods integrated before the initial state was labelled"}
 
 
-def blocks_attrs(ds: xr.Dataset, block: int, results: Sequence[Result]) -> xr.Dataset:
-    """``ds`` with the attrs ``block`` and (when any) ``failed_blocks``."""
+def blocks_attrs(ds: xr.Dataset, block: int, results: Sequence[Result],
+                 study: AttractorStudy) -> xr.Dataset:
+    """``ds`` with the attrs ``block``, ``mapper`` and ``device`` (the featurizing
+    mapper's run settings too) and (when any) ``failed_blocks``."""
     ds.attrs["block"] = block
+    ds.attrs["mapper"] = study.mapper_kind
+    if study.mapper_kind == "features":
+        ds.attrs["device"] = study.device
+        ds.attrs.update({f"features_{k}": v for k, v in asdict(study.feature_options).items()})
     failed = [f"{k}: {message}" for r in results for k, message in r.failed.items()]
     if failed:
         ds.attrs["failed_blocks"] = "; ".join(failed)
@@ -65,45 +71,51 @@ def blocks_attrs(ds: xr.Dataset, block: int, results: Sequence[Result]) -> xr.Da
 def basins(system: System, x: Range, y: Range, *, period: str | Period | None = None,
            dt: float | None = None, options: MapperOptions | None = None,
            label_options: LabelOptions | None = None,
-           progress: Progress | None = None, block: int = BLOCK,
-           runner: Runner | None = None) -> xr.Dataset:
+           progress: Progress | None = None, block: int | None = None,
+           runner: Runner | None = None, mapper: str = "auto", device: str = "auto",
+           feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """Basins of attraction on a grid of ``x.num`` × ``y.num`` initial states over two
     state coordinates (SI units; the others at ``system.state``): the attractor id of every
     grid cell and the attractors' table (``dataset.basins_dataset``). ``period``: the
     map's forcing period (None: the model's default); ``dt``: largest RK4 step, s;
-    ``block``, ``runner``: see the module."""
-    how = Blocks(block, runner)
+    ``block``, ``runner``: see the module; ``mapper``, ``device``, ``feature_options``: the
+    mapper and where it runs (``study.make_study``)."""
     check_count("x", x.num)
     check_count("y", y.num)
     check_pair(system, x, y)
-    check_memory(x.num * y.num, system.n_state, options or MapperOptions())  # before the grid
+    study = make_study(system, x.num * y.num, period=period, dt=dt, options=options,
+                       label_options=label_options, mapper=mapper, device=device,
+                       feature_options=feature_options, block=block)  # before the grid
+    block = block or study.default_block
     states = grid_states(system, x, y)
-    study = AttractorStudy(system, period, dt, options, label_options)
-    result = study.find(states, progress, how)
+    result = study.find(states, progress, Blocks(block, runner))
     ds = basins_dataset(study, result, x, y)
     ds["label_periods"] = (ds.basin.dims, result.spent.reshape(y.num, x.num).astype(np.int32),
                            LABEL_PERIODS)
-    return blocks_attrs(ds, block, [result])
+    return blocks_attrs(ds, block, [result], study)
 
 
 def basin_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     period: str | Period | None = None, dt: float | None = None,
                     options: MapperOptions | None = None,
                     label_options: LabelOptions | None = None,
-                    progress: Progress | None = None, block: int = BLOCK,
-                    runner: Runner | None = None) -> xr.Dataset:
+                    progress: Progress | None = None, block: int | None = None,
+                    runner: Runner | None = None, mapper: str = "auto",
+                    device: str = "auto",
+                    feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """Each attractor's basin fraction, with its standard error, among ``samples`` initial
     states drawn uniformly in ``box`` (``seed``: NumPy's ``default_rng`` seed)."""
-    how = Blocks(block, runner)
     check_count("samples", samples)
     box.check(system)
-    check_memory(samples, system.n_state, options or MapperOptions())
-    study = AttractorStudy(system, period, dt, options, label_options)
+    study = make_study(system, samples, period=period, dt=dt, options=options,
+                       label_options=label_options, mapper=mapper, device=device,
+                       feature_options=feature_options, block=block)
+    block = block or study.default_block
     states = box.sample(system, samples, np.random.default_rng(seed))
-    result = study.find(states, progress, how)
+    result = study.find(states, progress, Blocks(block, runner))
     ds = fractions_dataset(study, result, states, box, seed)
     ds["label_periods"] = ("sample", result.spent.astype(np.int32), LABEL_PERIODS)
-    return blocks_attrs(ds, block, [result])
+    return blocks_attrs(ds, block, [result], study)
 
 
 def global_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
@@ -111,19 +123,24 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                         dt: float | None = None, options: MapperOptions | None = None,
                         label_options: LabelOptions | None = None,
                         match_distance: float = MATCH_DISTANCE,
-                        progress: Callable[[str], None] | None = None, block: int = BLOCK,
-                        runner: Runner | None = None) -> xr.Dataset:
+                        progress: Callable[[str], None] | None = None,
+                        block: int | None = None, runner: Runner | None = None,
+                        mapper: str = "auto", device: str = "auto",
+                        feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """The attractors at each of ``values`` of ``parameter``, seeded from the previous
     value's and ``samples`` random states in ``box``, matched across values
     (``continuation.continue_attractors``)."""
-    how = Blocks(block, runner)
     check_count("samples", samples)
     box.check(system)
-    check_memory(samples + 16, system.n_state, options or MapperOptions())
-    with use_blocks(how):
-        steps = continue_attractors(system, parameter, values, box, samples, seed=seed,
-                                    period=period, dt=dt, options=options,
-                                    label_options=label_options,
-                                    match_distance=match_distance, progress=progress)
+    study = make_study(system, samples + 16, period=period, dt=dt, options=options,
+                       label_options=label_options, mapper=mapper, device=device,
+                       feature_options=feature_options, block=block)
+    block = block or study.default_block
+    steps = continue_attractors(system, parameter, values, box, samples, seed=seed,
+                                period=period, dt=dt, options=options,
+                                label_options=label_options, match_distance=match_distance,
+                                progress=progress, blocks=Blocks(block, runner),
+                                mapper=mapper, device=device,
+                                feature_options=feature_options)
     ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed)
-    return blocks_attrs(ds, block, [s.result for s in steps])
+    return blocks_attrs(ds, block, [s.result for s in steps], steps[0].study)

@@ -12,23 +12,23 @@ periods and ``FAILED`` (−3) for the states of a block whose integration raised
 ``SimulationError``.
 
 **Blocks.** ``find`` cuts the initial states into blocks of ``Blocks.size`` states (default
-``BLOCK``, in order). Each block is mapped by a fresh ``RecurrenceMapper`` with the study's
-scale and options (``map_block``, a ``Block``: what a worker computes and a store keeps);
+``BLOCK``, in order). Each block is mapped by a fresh mapper with the study's scale and
+options (``RecurrenceMapper``, or ``featurizing.FeaturizingMapper`` with
+``mapper="features"``, whose blocks' clusters are merged when their feature cells touch;
+``map_block``, a ``Block``: what a worker computes and a store keeps);
 then ``merge`` joins the attractors of all blocks whose cell sets overlap (union–find; the
 attractor of the lowest-numbered block, then the lowest label, is kept as the
 representative), numbers them in the order of their representatives and describes each
 once. A result depends on the states, the settings and the block size only: not on where,
 in which order or by how many workers the blocks were mapped. ``Blocks.runner`` maps them
 (default: in this process, one after the other); ``analysis.sweeps.attractor_blocks`` gives
-one that runs them on an executor and stores each. ``use_blocks`` sets both for the studies
-called inside it (``continuation.continue_attractors`` too).
+one that runs them on an executor and stores each. ``continuation.continue_attractors``
+takes the same ``Blocks``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
-from contextvars import ContextVar
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +38,16 @@ from analysis.integrate.ensemble import StroboscopicMap
 from analysis.integrate.flow import Period
 from analysis.integrate.simulate import simulate
 from analysis.model import System
+from analysis.stability.attractors.featurizing import (
+    FEATURE_BLOCK,
+    FeatureOptions,
+    FeaturizingMapper,
+    Recorder,
+    choose,
+    merge_groups,
+    recorder,
+    resolve,
+)
 from analysis.stability.attractors.label import Attractor, LabelOptions, describe
 from analysis.stability.attractors.mapper import (
     DIVERGED,
@@ -86,18 +96,28 @@ def section_name(period: Period) -> str:
     return str(period)
 
 
-def check_memory(members: int, n_state: int, options: MapperOptions) -> None:
+def check_memory(members: int, n_state: int, options: MapperOptions,
+                 features: FeatureOptions | None = None, block: int = BLOCK) -> None:
     """``InputError`` before any work when ``members`` initial states would need more than
-    ``MEMORY_BUDGET``: their labels and states, a chunk of section points each and, per
-    member, up to ``revisits`` + ``record`` cells of ``n_state`` indices."""
-    per_member = 8 * (3 * (n_state + 1) + options.chunk * n_state
-                      + (options.revisits + options.record) * (n_state + 8))
-    need = members * per_member
+    ``MEMORY_BUDGET``. Recurrence mapper: their labels and states, a chunk of section points
+    each and, per member, up to ``revisits`` + ``record`` cells of ``n_state`` indices.
+    Featurizing mapper (``features`` given): per member its state, label and periods, and
+    per block of ``block`` members their recorded section points, features and cells (only
+    features leave a block, so the sections of one block at a time)."""
+    if features is None:
+        per_member = 8 * (3 * (n_state + 1) + options.chunk * n_state
+                          + (options.revisits + options.record) * (n_state + 8))
+        fixed = 0
+    else:
+        per_member = 8 * (n_state + 3)
+        fixed = 8 * min(block, members) * ((features.sections + 2) * n_state + 6 * n_state)
+    need = members * per_member + fixed
     if need > MEMORY_BUDGET:
-        most = MEMORY_BUDGET // per_member
+        most = max((MEMORY_BUDGET - fixed) // per_member, 0)
         raise InputError(f"samples: {members} initial states would need about "
                          f"{need / 2**30:.3g} GiB; at most {MEMORY_BUDGET / 2**30:g} GiB "
-                         f"({most} states with these settings): use fewer")
+                         f"({most} states with these settings): use fewer"
+                         + (" or a smaller --block" if features is not None else ""))
 
 
 @dataclass
@@ -146,6 +166,13 @@ class Block:
     n_state: int
     failed: str = ""
     """The ``SimulationError`` that stopped the block (its labels all ``FAILED``)."""
+    cell_width: int = 0
+    """Indices per cell of ``found``'s cells (0: ``n_state``, the recurrence mapper's state
+    cells; 2n: the featurizing mapper's feature cells)."""
+
+    @property
+    def width(self) -> int:
+        return self.cell_width or self.n_state
 
     @classmethod
     def failure(cls, count: int, n_state: int, message: str) -> Block:
@@ -158,7 +185,7 @@ class Block:
         def rows(values, width):
             return np.array(values, dtype=float).reshape(-1, width)
 
-        cells = [cells_array(f.cells, n) for f in found]
+        cells = [cells_array(f.cells, self.width) for f in found]
         points = [rows(f.points, n) for f in found]
         missing = np.full(n + 1, np.nan)
         return {
@@ -172,7 +199,9 @@ class Block:
             "last_state": rows([missing if f.last_state is None else f.last_state
                                 for f in found], n + 1),
             "cell_count": np.array([len(c) for c in cells], dtype=np.int64),
-            "cells": np.concatenate(cells) if cells else np.zeros((0, n), dtype=np.int64),
+            "cell_width": np.array(self.cell_width),
+            "cells": np.concatenate(cells) if cells else np.zeros((0, self.width),
+                                                                  dtype=np.int64),
             "point_count": np.array([len(p) for p in points], dtype=np.int64),
             "points": np.concatenate(points) if points else np.zeros((0, n)),
         }
@@ -181,6 +210,7 @@ class Block:
     def from_arrays(cls, data) -> Block:
         """The block of ``arrays`` (``KeyError``/``ValueError`` when they are not one)."""
         n = int(data["n_state"])
+        width = int(data["cell_width"]) if "cell_width" in data else 0
         cell_ends = np.cumsum(data["cell_count"])
         point_ends = np.cumsum(data["point_count"])
         found = []
@@ -200,7 +230,7 @@ class Block:
         spent = np.asarray(data["spent"], dtype=np.int64)
         if labels.shape != spent.shape:
             raise ValueError("labels and spent differ in length")
-        return cls(labels, spent, found, n, str(data["failed"]))
+        return cls(labels, spent, found, n, str(data["failed"]), width)
 
 
 Runner = Callable[["AttractorStudy", list[np.ndarray], Callable[[int, int], None] | None],
@@ -237,34 +267,18 @@ class Blocks:
             raise InputError(f"block: must be a whole number >= 1, got {size!r}")
 
 
-_BLOCKS: ContextVar[Blocks | None] = ContextVar("attractor_blocks", default=None)
-
-
-@contextmanager
-def use_blocks(blocks: Blocks) -> Iterator[Blocks]:
-    """Within the ``with``, ``AttractorStudy.find`` cuts and maps its states by
-    ``blocks`` (unless given its own)."""
-    token = _BLOCKS.set(blocks)
-    try:
-        yield blocks
-    finally:
-        _BLOCKS.reset(token)
-
-
-def current_blocks() -> Blocks:
-    """The ``Blocks`` in force (``use_blocks``; default ``Blocks()``)."""
-    return _BLOCKS.get() or Blocks()
-
-
 class AttractorStudy:
     """The attractors of ``system``'s map over ``period`` (None: the model's default,
     ``stability.periodic.default_period``), with RK4 steps of at most ``dt`` s (None: the
-    spec's)."""
+    spec's). ``mapper``: ``recurrence`` or ``features`` (``featurizing.choose`` resolves
+    ``auto``), the latter with ``feature_options`` on ``device`` (``cpu`` or ``gpu``,
+    resolved: ``analysis.integrate.kernels.resolve_device``)."""
 
     def __init__(self, system: System, period: str | Period | None = None,
                  dt: float | None = None, options: MapperOptions | None = None,
                  label_options: LabelOptions | None = None, scale: Scale | None = None,
-                 compiled: bool = True):
+                 compiled: bool = True, mapper: str = "recurrence",
+                 feature_options: FeatureOptions | None = None, device: str = "cpu"):
         self.system = system
         self.dt = dt
         """The largest RK4 step asked for, s (None: the spec's); the map's own is
@@ -276,6 +290,35 @@ class AttractorStudy:
         self.map = StroboscopicMap.make(system, self.period, dt, compiled)
         self.autonomous = one_forcing(system, self.period)
         self._scale = scale
+        if mapper not in ("recurrence", "features"):
+            raise InputError(f"mapper: must be recurrence or features, got {mapper!r}")
+        self.mapper_kind = mapper
+        self.feature_options = feature_options or FeatureOptions()
+        self.device = device
+        self._record: Recorder | None = None
+
+    def prepare(self, block: int) -> None:
+        """Check, before any work, that blocks of ``block`` states fit the device and that
+        the member kernel builds (``featurizing.recorder``; featurizing mapper only)."""
+        if self.mapper_kind == "features":
+            self._record = recorder(self.map, self.device, block, self.feature_options)
+
+    def check_memory(self, members: int, block: int) -> None:
+        """``check_memory`` of ``members`` states in blocks of ``block`` by this mapper."""
+        check_memory(members, self.system.n_state, self.options,
+                     self.feature_options if self.mapper_kind == "features" else None, block)
+
+    @property
+    def default_block(self) -> int:
+        """States per block when none is given: ``BLOCK`` for the recurrence mapper, the
+        device's ``featurizing.FEATURE_BLOCK`` for the featurizing one."""
+        return FEATURE_BLOCK[self.device] if self.mapper_kind == "features" else BLOCK
+
+    @property
+    def in_process(self) -> bool:
+        """Whether blocks run in this process only: the featurizing mapper's member kernel
+        uses every core (or the GPU) itself, so workers would only compete for them."""
+        return self.mapper_kind == "features"
 
     @property
     def scale(self) -> Scale:
@@ -307,6 +350,8 @@ class AttractorStudy:
         """One block of initial states (K × n, SI, t = 0) mapped by a fresh mapper; a
         ``SimulationError`` makes it a failed block (its states ``FAILED``, recorded)."""
         states = np.atleast_2d(np.asarray(states, dtype=float))
+        if self.mapper_kind == "features":
+            return self.feature_block(states, progress)
         mapper = self.mapper()
         try:
             labels = mapper.map(states, progress=progress)
@@ -316,24 +361,44 @@ class AttractorStudy:
         return Block(labels, mapper.spent.copy(), [mapper.attractor(k) for k in used],
                      self.system.n_state)
 
+    def feature_block(self, states: np.ndarray,
+                      progress: Callable[[int, int], None] | None = None) -> Block:
+        """``map_block`` by a fresh ``FeaturizingMapper`` (its clusters' cells are feature
+        cells, 2n indices wide)."""
+        if self._record is None:
+            self.prepare(len(states))
+        mapper = FeaturizingMapper(self.map, self.scale, self.feature_options, self._record)
+        try:
+            labels = mapper.map(states, progress)
+        except SimulationError as exc:
+            return Block.failure(len(states), self.system.n_state, str(exc))
+        return Block(labels, mapper.spent.copy(), list(mapper.found.values()),
+                     self.system.n_state, cell_width=2 * self.system.n_state)
+
     def find(self, states: np.ndarray,
              progress: Callable[[int, int], None] | None = None,
              blocks: Blocks | None = None) -> Result:
         """Label the initial states ``states`` (K × n, SI units, at t = 0) and describe
         every attractor met: the states cut into blocks and mapped by ``blocks`` (default:
-        ``current_blocks()``), the blocks' attractors merged (see the module)."""
+        ``Blocks()``), the blocks' attractors merged (see the module)."""
         states = np.atleast_2d(np.asarray(states, dtype=float))
-        check_memory(len(states), self.system.n_state, self.options)
-        how = blocks or current_blocks()
+        how = blocks or Blocks(self.default_block)
+        self.check_memory(len(states), how.size)
         parts = [states[i:i + how.size] for i in range(0, len(states), how.size)]
         mapped = (how.runner or map_blocks)(self, parts, progress)
         return self.merge(mapped)
 
     def merge(self, blocks: Sequence[Block]) -> Result:
         """One ``Result`` of the blocks (in block order): attractors whose cells overlap
-        are one (union–find; the lowest (block, label) is the representative), numbered
-        1, 2, … in the order of their representatives, each described once."""
+        (featurizing mapper: touch) are one (the lowest (block, label) is the
+        representative), numbered 1, 2, … in the order of their representatives, each
+        described once."""
         nodes = [(b, f) for b, block in enumerate(blocks) for f in block.found]
+        if self.mapper_kind == "features":
+            width = 2 * self.system.n_state
+            group = merge_groups([cells_array(f.cells, width) for _, f in nodes])
+            first = {int(g): i for i, g in reversed(list(enumerate(group)))}
+            return self.merged(blocks, nodes, [first[int(g)] for g in group])
         parent = list(range(len(nodes)))
 
         def root(i: int) -> int:
@@ -349,14 +414,23 @@ class AttractorStudy:
                 a, b = root(i), root(j)
                 if a != b:
                     parent[max(a, b)] = min(a, b)
+        return self.merged(blocks, nodes, [root(i) for i in range(len(nodes))])
+
+    def merged(self, blocks: Sequence[Block], nodes: list[tuple[int, Found]],
+               roots: list[int]) -> Result:
+        """The ``Result`` of ``merge``: ``roots[i]`` is the lowest node of node i's
+        group."""
         ids: dict[int, int] = {}
         for i in range(len(nodes)):  # a group's root is its lowest node: met first
-            ids.setdefault(root(i), len(ids) + 1)
-        index = {(b, f.label): ids[root(i)] for i, (b, f) in enumerate(nodes)}
-        labels = np.concatenate(
-            [np.array([index[b, int(k)] if k > 0 else int(k) for k in block.labels],
-                      dtype=np.int64) for b, block in enumerate(blocks)]
-            or [np.zeros(0, dtype=np.int64)])
+            ids.setdefault(roots[i], len(ids) + 1)
+        index = {(b, f.label): ids[roots[i]] for i, (b, f) in enumerate(nodes)}
+        parts = []
+        for b, block in enumerate(blocks):  # a block's few labels, each once
+            part = np.array(block.labels, dtype=np.int64)
+            for k in np.unique(part[part > 0]):
+                part[block.labels == k] = index[b, int(k)]
+            parts.append(part)
+        labels = np.concatenate(parts or [np.zeros(0, dtype=np.int64)])
         attractors = [describe(self.system, nodes[r][1], i, self.section, self.map.period_s,
                                self.map.dt, self.label_options) for r, i in ids.items()]
         spent = np.concatenate([b.spent for b in blocks] or [np.zeros(0, dtype=np.int64)])
@@ -365,10 +439,34 @@ class AttractorStudy:
                       {b: block.failed for b, block in enumerate(blocks) if block.failed})
 
 
+def make_study(system: System, members: int, *, period: str | Period | None = None,
+               dt: float | None = None, options: MapperOptions | None = None,
+               label_options: LabelOptions | None = None, mapper: str = "auto",
+               device: str = "auto", feature_options: FeatureOptions | None = None,
+               block: int | None = None, scale: Scale | None = None,
+               compiled: bool = True) -> AttractorStudy:
+    """An ``AttractorStudy`` for ``members`` initial states in blocks of ``block`` (None:
+    its ``default_block``), its device resolved (``featurizing.resolve``: ``cpu``, ``gpu``
+    or ``auto``) and its mapper chosen (``featurizing.choose``: ``auto``, ``recurrence``
+    or ``features``), every input checked before any work (``InputError``): the period,
+    step, memory, and for the featurizing mapper the device's room and the kernel's
+    build."""
+    study = AttractorStudy(system, period, dt, options, label_options, scale, compiled,
+                           feature_options=feature_options)
+    resolved = resolve(device, members, study.map, study.feature_options)
+    kind = choose(mapper, resolved, members)
+    if kind == "features":
+        study.mapper_kind, study.device = kind, resolved
+    size = study.default_block if block is None else Blocks(block).size
+    study.check_memory(members, size)
+    study.prepare(min(size, members))
+    return study
+
+
 def special_name(label: int) -> str:
     """``diverged`` or ``undecided``: the class of a label that is not an attractor."""
     return SPECIAL_LABELS[label]
 
 
 __all__ = ["BLOCK", "DIVERGED", "FAILED", "UNDECIDED", "AttractorStudy", "Block", "Blocks",
-           "Result", "map_blocks", "one_forcing", "use_blocks"]
+           "Result", "make_study", "map_blocks", "one_forcing"]

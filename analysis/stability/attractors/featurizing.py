@@ -1,0 +1,308 @@
+"""Attractors of a stroboscopic map found by features of fixed-time runs, for ensembles of
+10⁵–10⁷ initial states (Attractors.jl's ``AttractorsViaFeaturizing``; Stender & Hoffmann,
+Nonlinear Dyn. 2021, bSTAB).
+
+Where the recurrence mapper (``mapper``) walks every trajectory on the host one chunk of
+periods at a time, this mapper integrates a whole block of initial states in one call of
+the member kernel (``analysis.integrate.kernels.run_members``: every core, or the GPU),
+for a fixed time: ``transient`` forcing periods dropped, then ``sections`` section points
+recorded per member. Only those points come back; on the host each member becomes a
+feature vector and the vectors are clustered:
+
+- **features** (each coordinate divided by the study's ``Scale``, so in orbit sizes): the
+  centroid of the member's section points and their extent (max − min) along every state
+  coordinate, 2n numbers. A periodic-p orbit has p distinct points, so period-1 and
+  period-3 orbits differ in extent even when their centroids are close; the extent halved is
+  the amplitude on the section. The **period** (the smallest p ≤ ``max_period`` with
+  ``|z_{k+p} − z_k| ≤ tolerance`` for every recorded k, 0: none) is computed too and kept
+  per cluster (its most common value), but it is not a clustering coordinate: a member
+  still converging would otherwise make a cluster of its own.
+- **clustering** without N² memory: the features are cut into cells of
+  ``1/resolution`` orbit sizes; the distinct occupied cells (np.unique) are joined when
+  they touch (Chebyshev distance ≤ 1 cell, a k-d tree's pairs), and every connected group
+  of cells is one attractor (DBSCAN with one point per core and a cell-sized radius). Cost
+  and memory grow with the members and the occupied cells, never with their square.
+- a member whose state leaves the blow-up bound (``StroboscopicMap.diverged``, the rule of
+  ``simulate.check_bounded``), or is not finite, is ``DIVERGED``: labelled, never dropped.
+
+Blocks of a study (``study.AttractorStudy.find``) are merged by the same rule
+(``touching_groups`` on the clusters' cells), so a result depends on the states, the
+settings and the block size, not on where a block ran. Each attractor is then described
+as the recurrence mapper's are (``label.describe``: simulate, classify, λ1) from the first
+member of its cluster.
+
+**When to use which.** The recurrence mapper stops each trajectory as soon as it is
+labelled (a few dozen periods on a stable orbit) and needs no choice of run length; it is
+the default for small ensembles. The featurizing mapper runs every member for the same
+fixed time, which a vector of cores or a GPU does at once; ``choose`` picks it for
+``FEATURES_FROM`` members or more, or when the device is a GPU.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from analysis.errors import InputError
+from analysis.integrate.ensemble import StroboscopicMap
+from analysis.stability.attractors.mapper import DIVERGED, Found, Scale
+
+MAPPERS = ("auto", "recurrence", "features")
+"""The mapper names of ``choose`` (and of ``--mapper``)."""
+FEATURES_FROM = 100_000
+"""Initial states from which ``choose("auto", …)`` takes the featurizing mapper: below it
+the recurrence mapper's early stopping costs fewer periods than a fixed-time run on one
+process, and its memory (a few kB of cells per state in flight, ``study.check_memory``'s
+4 GiB budget) still fits; above it the member kernel's width wins."""
+FEATURE_BLOCK = {"cpu": 1 << 16, "gpu": 1 << 20}
+"""Initial states per block of the featurizing mapper by device: a block's sections are
+what the host holds at once (2¹⁶ × 48 sections × 4 states: 100 MB); the GPU wants 10⁶
+members in flight to reach its throughput."""
+TRANSIENT_CHUNK = 64
+"""Periods per call of the map when no member kernel is at hand (the transient's points
+are checked for blow-up chunk by chunk, then dropped)."""
+
+
+@dataclass(frozen=True)
+class FeatureOptions:
+    """The settings of the featurizing mapper (periods are forcing periods of the map)."""
+
+    transient: int = 200
+    """Periods integrated and dropped before the section points are recorded."""
+    sections: int = 48
+    """Section points recorded per member (the features' sample)."""
+    resolution: int = 20
+    """Feature cells per orbit size: two members are one attractor when their features are
+    joined by cells that touch. Coarser merges close attractors; finer splits one whose
+    members have not all settled."""
+    max_period: int = 12
+    """Longest period looked for (at most ``sections // 2``)."""
+    tolerance: float = 1e-4
+    """Largest difference, in orbit sizes, of two points one period apart on a periodic
+    orbit."""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "tolerance":
+                if not (isinstance(value, (int, float)) and 0 < value < 1):
+                    raise InputError(f"tolerance: must be a number in (0, 1), got {value!r}")
+                continue
+            low = 0 if f.name == "transient" else 1
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < low:
+                raise InputError(f"{f.name}: must be a whole number >= {low}, got {value!r}")
+        if self.sections < 2 * self.max_period:
+            raise InputError(f"sections: must be at least 2 × max_period "
+                             f"({2 * self.max_period}), got {self.sections}")
+
+
+def choose(mapper: str, device: str, members: int) -> str:
+    """``recurrence`` or ``features``: ``mapper`` itself, or for ``auto`` the featurizing
+    mapper when ``members`` >= ``FEATURES_FROM`` or ``device`` (already resolved) is
+    ``gpu``. ``InputError`` for an unknown name, or for the recurrence mapper on a GPU (it
+    walks each trajectory on the host)."""
+    if mapper not in MAPPERS:
+        raise InputError(f"mapper: must be one of {', '.join(MAPPERS)}, got {mapper!r}")
+    if mapper == "auto":
+        return "features" if device == "gpu" or members >= FEATURES_FROM else "recurrence"
+    if mapper == "recurrence" and device == "gpu":
+        raise InputError("mapper: the recurrence mapper runs on the CPU; use --mapper "
+                         "features (or auto) with --device gpu")
+    return mapper
+
+
+@dataclass
+class Record:
+    """What a block's fixed-time run returns: section points (M, K, n; SI units), a
+    blow-up flag (M,) and the final state (M, n) at step ``steps``."""
+
+    sections: np.ndarray
+    diverged: np.ndarray
+    final: np.ndarray
+    steps: int
+
+
+Recorder = Callable[[StroboscopicMap, np.ndarray, FeatureOptions], Record]
+
+
+def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
+    """The member kernel's ``Schedule`` of a block: ``transient`` periods, then
+    ``sections`` section points one period apart (N steps of h = T/N, as
+    ``StroboscopicMap.advance``)."""
+    from analysis.integrate.kernels import Schedule
+
+    return Schedule(options.transient * smap.steps, smap.steps, options.sections,
+                    keep_sections=True)
+
+
+def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
+                  device: str = "cpu") -> Record:
+    """The fixed-time run of ``states`` (M, n; t = 0) on the member kernel
+    (``analysis.integrate.kernels.run_members`` on ``device``)."""
+    from analysis.integrate.kernels import run_members
+
+    out = run_members(smap.system, states, None, smap.dt, schedule_of(smap, options),
+                      device=device)
+    sections = np.asarray(out.sections, dtype=float)
+    bad = (np.asarray(out.diverged_at) >= 0) | smap.diverged(sections)
+    steps = (options.transient + options.sections) * smap.steps
+    return Record(sections, bad, np.asarray(out.final, dtype=float), steps)
+
+
+def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions) -> Record:
+    """The same run through ``StroboscopicMap.advance`` (the lane kernel or the RK4 blocks,
+    one process): the path of a model whose member kernel cannot be built on the CPU."""
+    s = np.ascontiguousarray(np.column_stack([states, np.zeros(len(states))]))
+    bad = np.zeros(len(states), dtype=bool)
+    left = options.transient
+    while left:
+        chunk = min(left, TRANSIENT_CHUNK)
+        bad |= smap.diverged(smap.advance(s, chunk))
+        left -= chunk
+    sections = smap.advance(s, options.sections)
+    bad |= smap.diverged(sections)
+    return Record(sections, bad, s[:, :-1].copy(), int(s[0, -1]) if len(s) else 0)
+
+
+def resolve(device: str, members: int, smap: StroboscopicMap, options: FeatureOptions) -> str:
+    """``cpu`` or ``gpu`` for a featurizing run of ``members`` states
+    (``kernels.resolve_device``: ``InputError`` for an unknown name or a missing GPU)."""
+    from analysis.integrate.kernels import resolve_device
+
+    return resolve_device(device, members, (options.transient + options.sections) * smap.steps)
+
+
+def recorder(smap: StroboscopicMap, device: str, block: int,
+             options: FeatureOptions) -> Recorder:
+    """The recorder of a resolved ``device``, checked before any work: ``block`` members'
+    results must fit (``kernels.check_fits``, ``InputError``) and the model's member kernel
+    must build (a one-step run). On the CPU a model whose kernel cannot be written or built
+    falls back to ``map_record``; on the GPU that is an ``InputError`` with the reason."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels import Schedule, Unsupported, check_fits, run_members
+
+    system = smap.system
+    check_fits(device, block, schedule_of(smap, options), system.n_state,
+               len(system.model.parameter_names))
+    try:
+        run_members(system, system.state[None, :], None, smap.dt, Schedule(0, 1, 1),
+                    device=device)
+    except (Unsupported, CompileError) as exc:
+        if device == "gpu":
+            raise InputError(f"--device gpu: the member kernel of model "
+                             f"'{system.model.name}' cannot be built: {exc}") from None
+        return map_record
+    return lambda smap, states, options: kernel_record(smap, states, options, device)
+
+
+def features(sections: np.ndarray, scale: Scale) -> np.ndarray:
+    """(M, 2n) features of section points (M, K, n; SI): the centroid and the extent
+    (max − min) of each coordinate, in orbit sizes (``scale``)."""
+    z = sections / scale.size
+    return np.concatenate([z.mean(axis=1), np.ptp(z, axis=1)], axis=1)
+
+
+def periods(sections: np.ndarray, scale: Scale, options: FeatureOptions) -> np.ndarray:
+    """(M,) the smallest period p <= ``max_period`` with every recorded point within
+    ``tolerance`` orbit sizes of the point p periods later; 0 where none is."""
+    z = sections / scale.size
+    out = np.zeros(len(z), dtype=np.int64)
+    for p in range(1, options.max_period + 1):
+        close = np.max(np.abs(z[:, p:] - z[:, :-p]), axis=(1, 2)) <= options.tolerance
+        out[(out == 0) & close] = p
+    return out
+
+
+def touching_groups(cells: np.ndarray) -> np.ndarray:
+    """Group of every row of ``cells`` (m, d int64): rows in cells that touch (Chebyshev
+    distance <= 1), directly or through others, share a group; groups numbered 0, 1, … in
+    the order of their first row. Memory: the distinct cells and their touching pairs."""
+    if not len(cells):
+        return np.zeros(0, dtype=np.int64)
+    unique, inverse = np.unique(cells, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    pairs = cKDTree(unique).query_pairs(r=1.0, p=np.inf, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                       shape=(len(unique), len(unique)))
+    _, component = connected_components(graph, directed=False)
+    return by_first(component[inverse])
+
+
+def by_first(groups: np.ndarray) -> np.ndarray:
+    """``groups`` (any ids) renumbered 0, 1, … in the order of their first occurrence."""
+    _, first, inverse = np.unique(groups, return_index=True, return_inverse=True)
+    return np.argsort(np.argsort(first))[inverse.ravel()]
+
+
+def feature_cells(values: np.ndarray, resolution: int) -> np.ndarray:
+    """Feature vectors (m, d; orbit sizes) as int64 cell indices."""
+    index = np.floor(values * resolution)
+    return np.nan_to_num(index, nan=0.0, posinf=0.0, neginf=0.0).astype(np.int64)
+
+
+class FeaturizingMapper:
+    """Labels initial states by clustering features of fixed-time runs (see the module).
+    ``record(smap, states, options)`` runs a block (``kernel_record``, ``map_record``)."""
+
+    def __init__(self, smap: StroboscopicMap, scale: Scale, options: FeatureOptions | None = None,
+                 record: Recorder = map_record):
+        self.smap, self.scale = smap, scale
+        self.options = options or FeatureOptions()
+        self.record = record
+        self.found: dict[int, Found] = {}
+        self.period_of: dict[int, int] = {}
+        """Label -> the most common detected period of its members (0: not periodic)."""
+        self.spent = np.zeros(0, dtype=np.int64)
+        """Periods integrated per initial state in the last ``map`` call."""
+
+    def map(self, states: np.ndarray,
+            progress: Callable[[int, int], None] | None = None) -> np.ndarray:
+        """Labels (M,) of the initial states ``states`` (M, n; SI, t = 0): attractor labels
+        from 1 in the order of their first member, or ``DIVERGED``."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        opts = self.options
+        run = self.record(self.smap, states, opts)
+        labels = np.full(len(states), DIVERGED, dtype=np.int64)
+        ok = np.flatnonzero(~run.diverged)
+        cells = feature_cells(features(run.sections[ok], self.scale), opts.resolution)
+        groups = touching_groups(cells)
+        labels[ok] = groups + 1
+        detected = periods(run.sections[ok], self.scale, opts)
+        self.found, self.period_of = {}, {}
+        for g in range(int(groups.max(initial=-1)) + 1):
+            members = np.flatnonzero(groups == g)
+            i = int(ok[members[0]])
+            label = g + 1
+            self.found[label] = Found(
+                label=label, cells={row.tobytes() for row in np.unique(cells[members], axis=0)},
+                points=list(run.sections[i]), finder=i,
+                finder_state=np.append(states[i], 0.0), found_step=run.steps,
+                last_state=np.append(run.final[i], float(run.steps)))
+            self.period_of[label] = int(np.bincount(detected[members]).argmax())
+        self.spent = np.full(len(states), opts.transient + opts.sections, dtype=np.int64)
+        if progress is not None:
+            progress(len(states), len(states))
+        return labels
+
+
+def merge_groups(cell_sets: Sequence[np.ndarray]) -> np.ndarray:
+    """Group of every cluster given by its cells (a list of (m_i, d) int64 arrays, one per
+    cluster, in block order): clusters whose cells touch are one; groups numbered in the
+    order of their first cluster."""
+    if not cell_sets:
+        return np.zeros(0, dtype=np.int64)
+    rows = touching_groups(np.concatenate(cell_sets))
+    starts = np.concatenate([[0], np.cumsum([len(c) for c in cell_sets])[:-1]])
+    # a cluster's cells are one group already (clustered by the same rule); none is empty
+    return by_first(rows[starts])
+
+
+__all__ = ["FEATURES_FROM", "FEATURE_BLOCK", "MAPPERS", "FeatureOptions", "FeaturizingMapper",
+           "Record", "by_first", "choose", "features", "kernel_record", "map_record",
+           "merge_groups", "periods", "recorder", "resolve", "schedule_of", "touching_groups"]
