@@ -1,0 +1,150 @@
+"""The featurizing mapper (fixed-time runs on the member kernel, features clustered on the
+host) against the recurrence mapper on the same initial states, and its pieces.
+
+- balanced-rotor (50 N, N_b = 8, 8000 rpm): the period-1 orbit and the period-3 orbit,
+  both found, their basin shares within two standard errors of the recurrence mapper's;
+- Duffing (c = 0.1, k1 = 1, k3 = 0.5, F = 0.3) at ω = 1.40 rad/s: two periodic-1
+  attractors (small and large), both mappers agree state by state;
+- blocks merged across (a block size that cuts the ensemble gives the labels of one
+  block), diverged states labelled and kept, the clustering of touching cells, the
+  choice of mapper, a block's arrays read back exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from analysis.errors import InputError
+from analysis.integrate.simulate import blow_up_limit
+from analysis.model import System
+from analysis.stability.attractors import DIVERGED, Box, basin_fractions, study_json
+from analysis.stability.attractors.featurizing import (
+    FEATURES_FROM,
+    FeatureOptions,
+    FeaturizingMapper,
+    choose,
+    merge_groups,
+    periods,
+    touching_groups,
+)
+from analysis.stability.attractors.study import Block, Blocks, make_study
+
+RPM = 30 / np.pi  # rpm per rad/s
+DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
+ROTOR_BOX = Box.parse(["x:-20e-6:30e-6", "y:-20e-6:20e-6"])
+DUFFING_BOX = Box.parse(["x:-3:3", "vx:-3:3"])
+
+
+@pytest.fixture(scope="module")
+def rotor() -> System:
+    return System.make("balanced-rotor", n_balls=8, radial_load=50.0, speed_rpm=8000.0)
+
+
+def both(system: System, box: Box, samples: int, seed: int, **features):
+    """The same initial states mapped by each mapper (on the CPU)."""
+    return [basin_fractions(system, box, samples, seed=seed, mapper=m, device="cpu",
+                            **features) for m in ("recurrence", "features")]
+
+
+def by_class(ds) -> dict[str, tuple[float, float]]:
+    return {a["class"]: (a["fraction"], a["fraction_stderr"])
+            for a in study_json(ds)["attractors"] if a["id"] > 0}
+
+
+def test_balanced_rotor_period1_and_period3_shares_agree_with_the_recurrence_mapper(rotor):
+    recurrence, features = both(rotor, ROTOR_BOX, 200, seed=1)
+    assert features.attrs["mapper"] == "features" and features.attrs["device"] == "cpu"
+    ours, theirs = by_class(features), by_class(recurrence)
+    assert set(ours) == set(theirs) == {"periodic-1", "periodic-3"}
+    for name, (f, se) in ours.items():
+        g, se_g = theirs[name]
+        assert 0.1 < f < 0.9  # both basins are wide here
+        assert abs(f - g) <= 2 * np.hypot(se, se_g), (name, f, g)
+    # the same states: the same partition (labels may be numbered differently)
+    pairs = set(zip(recurrence.label.values.tolist(), features.label.values.tolist(),
+                    strict=True))
+    assert len(pairs) == 2
+
+
+def test_duffing_two_attractors_both_mappers_agree():
+    system = System.make("duffing", speed_rpm=1.40 * RPM, **DUFFING)
+    recurrence, features = both(system, DUFFING_BOX, 120, seed=11)
+    found = [a for a in study_json(features)["attractors"] if a["id"] > 0]
+    assert len(found) == 2 and all(a["class"] == "periodic-1" for a in found)
+    small, large = sorted(a["amplitude"]["x"] for a in found)
+    assert small < 0.5 < 1.5 < large  # the two orbits of the resonance
+    a, b = recurrence.label.values, features.label.values
+    same = max(np.mean(a == b), np.mean(a == 3 - b))  # ids 1, 2 in either order
+    assert same >= 0.98
+
+
+def test_blocks_are_merged_as_one(rotor):
+    states = ROTOR_BOX.sample(rotor, 90, np.random.default_rng(5))
+    whole = make_study(rotor, 90, mapper="features", device="cpu")
+    cut = make_study(rotor, 90, mapper="features", device="cpu", block=25,
+                     scale=whole.scale)
+    one = whole.find(states)
+    four = cut.find(states, blocks=Blocks(25))
+    assert len(one.attractors) == len(four.attractors) == 2
+    np.testing.assert_array_equal(one.labels, four.labels)
+
+
+def test_a_diverged_state_is_labelled_and_kept(rotor):
+    limit = blow_up_limit(rotor.model, dict(rotor.parameters))
+    states = np.tile(rotor.state, (3, 1))
+    states[1, 0] = 3 * limit  # beyond the blow-up bound
+    study = make_study(rotor, 3, mapper="features", device="cpu")
+    mapper = FeaturizingMapper(study.map, study.scale, FeatureOptions(transient=20,
+                                                                       sections=24))
+    labels = mapper.map(states)
+    assert labels[1] == DIVERGED
+    assert labels[0] == labels[2] == 1
+
+
+def test_touching_cells_are_one_cluster_far_ones_are_not():
+    rng = np.random.default_rng(0)
+    a = rng.integers(0, 3, size=(200, 4))  # a blob of touching cells
+    b = rng.integers(0, 3, size=(200, 4)) + np.array([10, 0, 0, 0])  # another, far
+    chain = np.array([[3, 1, 1, 1], [4, 1, 1, 1]])  # joined to a, not to b
+    groups = touching_groups(np.concatenate([b, a, chain]))
+    assert groups[0] == 0  # numbered in the order of first appearance
+    assert set(groups[:200]) == {0} and set(groups[200:]) == {1}
+    # clusters of different blocks: merged when their cells touch
+    assert merge_groups([a[:5], b[:5], a[5:9] + np.array([1, 0, 0, 0]), b[:3] + 5]).tolist() == \
+        [0, 1, 0, 2]
+
+
+def test_periods_of_section_points():
+    k = np.arange(48)
+    one = np.zeros((48, 2))
+    three = np.stack([np.cos(2 * np.pi * k / 3), np.sin(2 * np.pi * k / 3)], axis=1)
+    drift = np.stack([np.cos(0.3 * k), np.sin(0.3 * k)], axis=1)  # not periodic
+    scale = type("S", (), {"size": np.ones(2)})()
+    assert periods(np.stack([one, three, drift]), scale, FeatureOptions()).tolist() == \
+        [1, 3, 0]
+
+
+def test_the_mapper_is_chosen_by_size_and_device():
+    assert choose("auto", "cpu", FEATURES_FROM - 1) == "recurrence"
+    assert choose("auto", "cpu", FEATURES_FROM) == "features"
+    assert choose("auto", "gpu", 10) == "features"
+    assert choose("recurrence", "cpu", 10**7) == "recurrence"
+    with pytest.raises(InputError, match=r"^mapper: the recurrence mapper runs on the CPU"):
+        choose("recurrence", "gpu", 10)
+    with pytest.raises(InputError, match=r"^mapper: must be one of"):
+        choose("kmeans", "cpu", 10)
+    with pytest.raises(InputError, match=r"^sections: "):
+        FeatureOptions(sections=10, max_period=12)
+
+
+def test_a_feature_block_reads_back_exactly(rotor):
+    study = make_study(rotor, 30, mapper="features", device="cpu")
+    states = ROTOR_BOX.sample(rotor, 30, np.random.default_rng(2))
+    block = study.map_block(states)
+    again = Block.from_arrays(block.arrays())
+    assert again.cell_width == 2 * rotor.n_state
+    np.testing.assert_array_equal(again.labels, block.labels)
+    assert [f.cells for f in again.found] == [f.cells for f in block.found]
+    np.testing.assert_array_equal(np.array(again.found[0].points),
+                                  np.array(block.found[0].points))
