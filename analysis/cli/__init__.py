@@ -12,6 +12,7 @@ from analysis.cli import models, runs, stability, continuation, sweeps, reports,
 from analysis.cli import stiffness  # noqa: F401  (statics: static equilibrium, K and C)
 from analysis.cli import explore, cite  # noqa: F401
 from analysis.cli import attractors  # noqa: F401  (global dynamics: basins, attractors)
+from analysis.cli import devices  # noqa: F401  (devices: cores, GPU, --device)
 from analysis.cli import frequency  # noqa: F401  (harmonic balance: hb)
 from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
 from analysis.cli import calibrate  # noqa: F401  (inference: calibrate)
