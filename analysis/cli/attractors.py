@@ -29,6 +29,7 @@ from analysis.cli.common import (
     reports_errors,
     write_figure,
 )
+from analysis.cli.devices import DeviceOption
 
 DtOption = Annotated[float | None, typer.Option(
     help="Largest RK4 step, s (default: the spec's); the map takes N = ceil(T/dt) steps "
@@ -47,10 +48,22 @@ PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Figure to write (PNG, PDF, SVG).", callback=figure_output)]
 OutputOption = Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
                                             callback=netcdf_output)]
-BlockOption = Annotated[int, typer.Option(
+BlockOption = Annotated[int | None, typer.Option(
     "--block", help="Initial states per block: each block is mapped by its own mapper on one "
                     "worker and stored in OUTPUT.parts as it finishes (an interrupted run "
-                    "resumes); the result depends on it, not on the executor.")]
+                    "resumes); the result depends on it, not on the executor (default: 256 "
+                    "for the recurrence mapper, 65536 on the CPU and 1048576 on a GPU for "
+                    "the featurizing one).")]
+MapperOption = Annotated[str, typer.Option(
+    "--mapper", help="recurrence (each trajectory until its cells recur; stops early), "
+                     "features (every state run a fixed time on the member kernel, then "
+                     "clustered by section-point features) or auto (features from 100000 "
+                     "states or on a GPU).")]
+TransientPeriodsOption = Annotated[int, typer.Option(
+    "--transient-periods", help="Featurizing mapper: forcing periods run before the "
+                                "section points are recorded.")]
+SectionsOption = Annotated[int, typer.Option(
+    "--sections", help="Featurizing mapper: section points recorded per state.")]
 
 
 def _system(model: str, n_balls, speed_rpm, sets):
@@ -64,6 +77,14 @@ def _options(resolution: int, revisits: int, record: int, hits: int, max_periods
 
     return MapperOptions(resolution=resolution, revisits=revisits, record=record, hits=hits,
                          max_periods=max_periods)
+
+
+def _mapping(mapper: str, device: str, transient_periods: int, sections: int) -> dict:
+    """The mapper's settings as keywords of the studies."""
+    from analysis.stability.attractors.featurizing import FeatureOptions
+
+    return dict(mapper=mapper, device=device,
+                feature_options=FeatureOptions(transient=transient_periods, sections=sections))
 
 
 def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> None:
@@ -141,7 +162,11 @@ def basins(
     record: RecordOption = 100,
     hits: HitsOption = 5,
     max_periods: MaxPeriodsOption = 3000,
-    block: BlockOption = 256,
+    block: BlockOption = None,
+    mapper: MapperOption = "auto",
+    device: DeviceOption = "auto",
+    transient_periods: TransientPeriodsOption = 200,
+    sections: SectionsOption = 48,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -160,7 +185,8 @@ def basins(
     y_range = Range.parse(y, "--y", with_num=True)
     options = _options(resolution, revisits, record, hits, max_periods)
     system = _system(model, n_balls, speed_rpm, sets)
-    settings = dict(period=period, dt=dt, options=options, block=block)
+    settings = dict(period=period, dt=dt, options=options, block=block,
+                    **_mapping(mapper, device, transient_periods, sections))
     check_basins(system, x_range, y_range, **settings)  # before any work or file
     ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
         system, x_range, y_range, output, **settings, executor=ex,
@@ -195,7 +221,11 @@ def attractors(
     record: RecordOption = 100,
     hits: HitsOption = 5,
     max_periods: MaxPeriodsOption = 3000,
-    block: BlockOption = 256,
+    block: BlockOption = None,
+    mapper: MapperOption = "auto",
+    device: DeviceOption = "auto",
+    transient_periods: TransientPeriodsOption = 200,
+    sections: SectionsOption = 48,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -223,7 +253,8 @@ def attractors(
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
     system = _system(model, n_balls, speed_rpm, sets)
-    settings = dict(seed=seed, period=period, dt=dt, options=options, block=block)
+    settings = dict(seed=seed, period=period, dt=dt, options=options, block=block,
+                    **_mapping(mapper, device, transient_periods, sections))
 
     def executor_made():
         return executor_of(executor, workers, scheduler)
