@@ -52,6 +52,21 @@ from modelgen.locations import (
 )
 
 Structure = tuple[int, ...]
+
+
+class Balls(tuple):
+    """Balls per bearing as ``Model.structure`` returns them: checked against the ranges of
+    the model named by ``checked_by`` (its name and spec SHA-256). Handed back to that
+    model, they are not checked again: a run checks its balls once, where its System is
+    made, however many internals ask the model for its functions or frequencies."""
+
+    checked_by: tuple[str, str] = ("", "")
+
+    @classmethod
+    def of(cls, model: Model, counts) -> Balls:
+        balls = cls(int(n) for n in counts)
+        balls.checked_by = (model.name, model.spec_sha256)
+        return balls
 """Number of rolling elements of each bearing, in the order of the model's bearings."""
 BallCounts = int | Mapping[str, int] | Sequence[int] | None
 """What a caller may give as ``n_balls``: one number (a model with one bearing), a mapping
@@ -294,7 +309,7 @@ class Model:
 
     @property
     def default_structure(self) -> Structure:
-        return tuple(int(n) for n in self.module.DEFAULT_N_BALLS)
+        return Balls.of(self, self.module.DEFAULT_N_BALLS)
 
     @property
     def default_n_balls(self) -> int:
@@ -314,6 +329,8 @@ class Model:
     def structure(self, n_balls: BallCounts = None) -> Structure:
         """Balls per bearing from what a caller gave (see ``BallCounts``), each checked
         against the bearing's range."""
+        if type(n_balls) is Balls and n_balls.checked_by == (self.name, self.spec_sha256):
+            return n_balls  # checked by this model already: once per run
         bearings = self.bearings
         if n_balls is None:
             return self.default_structure
@@ -347,7 +364,7 @@ class Model:
                 label = "n_balls" if len(bearings) == 1 else f"n_balls[{b.name}]"
                 raise InputError(f"{label}: must be an integer in [{b.fewest}, {b.most}] "
                                  f"(at most {b.most} balls fit the geometry), got {n!r}")
-        return tuple(int(n) for n in counts)
+        return Balls.of(self, counts)
 
     def structure_attrs(self, structure: Structure) -> dict[str, int]:
         """Result-file attributes: ``n_balls`` and ``bearing_name`` with one bearing (``n_balls``
@@ -428,6 +445,36 @@ class Model:
             y = f"y{suffix}"
             pairs.append((names.index(f"x{suffix}"), names.index(y) if y in names else None))
         return pairs
+
+    def support_resonances(self, values: Mapping[str, float] | None = None
+                           ) -> tuple[float, ...]:
+        """√(k/m)/2π (Hz), ascending, of each body that carries a bearing (its inner or
+        outer body) and is sprung to ground: k = −∂F/∂x of the model's external force on the
+        body's first coordinate at rest (its supports and springs; the ball loads, and so
+        the bearing's coupling, left out), m its mass (``mass(p)``), at the parameter
+        ``values`` (default the spec's). Found by the model's structure, not by parameter
+        names: e.g. the housing of the 6205 defect models (8 kHz).
+
+        >>> [round(f) for f in load_model("model_6205_outer_defect").support_resonances()]
+        [8000]
+        >>> load_model("vakharia2015").support_resonances()
+        ()
+        """
+        import casadi as ca
+
+        p = self.parameter_vector({**self.defaults, **(values or {})})
+        z = ca.SX.sym("z", self.n_state)
+        force = ca.vertcat(*self.module.external_force(z, 0.0, list(p)))
+        stiffness = ca.Function("k", [z], [-ca.jacobian(force, z)])(np.zeros(self.n_state))
+        stiffness, mass = np.array(stiffness), [float(m) for m in self.module.mass(list(p))]
+        carried = {body for bearing in self.bearings for body in (bearing.inner, bearing.outer)}
+        found = []
+        for (body, _, _), (ix, _) in zip(self.module.BODIES, self.centre_indices(),
+                                         strict=True):
+            k, m = float(stiffness[ix, ix]), mass[ix]
+            if body in carried and k > 0 and m > 0:
+                found.append(math.sqrt(k / m) / (2 * math.pi))
+        return tuple(sorted(found))
 
     def _repr_html_(self) -> str:
         """The model card in a notebook: title, spec path and SHA-256, state, bearings and

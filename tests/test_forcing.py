@@ -16,7 +16,7 @@ from analysis.forcing import PERIOD, SECTION, ForcingName, period_parameter
 from analysis.integrate.checks import fastest_forcing
 from analysis.integrate.flow import Period
 from analysis.integrate.simulate import simulate
-from analysis.model import load_model
+from analysis.model import System, load_model
 from analysis.signal.poincare import parse_section, section_period
 from analysis.stability.classify import default_section
 from analysis.stability.periodic import default_period
@@ -85,7 +85,7 @@ def test_a_renamed_forcing_period_is_found_by_its_role(tau_model):
     assert tau_model.role("forcing_period") == ("tau",)
     assert period_parameter(tau_model) == "tau"
     assert str(default_period(tau_model)) == "param:tau"
-    name, freq = fastest_forcing(tau_model, (), tau_model.defaults)
+    name, freq = fastest_forcing(System.make(tau_model))
     assert name == "F = 1/tau" and freq == pytest.approx(1 / (2 * 3.141592653589793))
     run = simulate(tau_model, duration=20.0, transient=0.0)
     assert run.attrs["forcing_parameter"] == "tau"

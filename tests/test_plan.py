@@ -46,7 +46,7 @@ def test_a_plan_defaults_to_the_specs_times():
 
 
 def test_a_step_only_plan_refuses_an_unstable_step(rotor):
-    limit, _ = stable_step(rotor.model, rotor.structure, dict(rotor.parameters))
+    limit, _ = stable_step(rotor)
     warnings.simplefilter("ignore", RuntimeWarning)  # 13 steps per VC period: coarse
     assert RunPlan.step(rotor, limit * 0.99).dt == limit * 0.99
     with pytest.raises(InputError, match=r"^dt: must be in \(0, .*\] s for RK4"):

@@ -13,7 +13,7 @@ import tomli_w
 
 from analysis.integrate.checks import probe_states, stable_step
 from analysis.integrate.simulate import blow_up_limit
-from analysis.model import LEGACY_ROLES, Model, load_model
+from analysis.model import LEGACY_ROLES, Model, System, load_model
 from modelgen.errors import SpecError
 from modelgen.spec import load_spec
 from modelgen.terms.base import ROLE_NAMES
@@ -54,9 +54,9 @@ def test_a_renamed_clearance_keeps_the_blow_up_bound_and_the_rk4_probe(user_cach
     reference = load_model("balanced-rotor")
     values, ref_values = model.defaults, reference.defaults
     assert blow_up_limit(model, values) == blow_up_limit(reference, ref_values) == 1000 * 10e-6
-    assert len(probe_states(model, (8,), values)) == len(probe_states(reference, (8,),
-                                                                      ref_values)) > 1
-    assert stable_step(model, (8,), values) == stable_step(reference, (8,), ref_values)
+    system, ref_system = System.make(model, 8), System.make(reference, 8)
+    assert len(probe_states(system)) == len(probe_states(ref_system)) > 1
+    assert stable_step(system) == stable_step(ref_system)
 
 
 def test_a_binding_names_a_parameter_the_term_reads(tmp_path):

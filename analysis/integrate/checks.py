@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from analysis.errors import InputError
-from analysis.model import Model
+from analysis.model import Model, System
 
 PROBE_SECTORS = 8
 """Directions around the bearing in which the rotor is displaced..."""
@@ -54,15 +54,14 @@ def rk4_radius(angle: float) -> float:
     return low
 
 
-def probe_states(model: Model, structure: tuple[int, ...],
-                 values: dict[str, float]) -> list[np.ndarray]:
-    """States where the linearised model is at its stiffest: every body at rest at the
-    centre and, with a Hertz contact, the first body displaced into the balls (see the
-    module). The contact's stiffness k, clearance, radial load and unbalance are the
-    parameters that play those roles (``Model.role``; the first bearing's)."""
+def probe_states(system: System) -> list[np.ndarray]:
+    """States where the linearised model of ``system`` is at its stiffest: every body at
+    rest at the centre and, with a Hertz contact, the first body displaced into the balls
+    (see the module). The contact's stiffness k, clearance, radial load and unbalance are
+    the parameters that play those roles (``Model.role``; the first bearing's)."""
+    model, values = system.model, dict(system.parameters)
     states = [np.zeros(model.n_state)]
-    structure = model.structure(structure)
-    n_balls = structure[0] if structure else 1
+    n_balls = system.structure[0] if system.structure else 1
     (ix, iy), *_ = model.centre_indices()
     k = model.role_value("contact_stiffness", values)
     clearance = model.role_value("clearance", values)
@@ -83,20 +82,20 @@ def probe_states(model: Model, structure: tuple[int, ...],
     return states
 
 
-def stable_step(model: Model, n_balls: tuple[int, ...],
-                values: dict[str, float]) -> tuple[float, float]:
-    """(largest stable RK4 step in s, largest |λ| in 1/s) over the probe states; memoised
-    per model, number of balls and parameter values (sweeps ask again and again)."""
-    return _stable_step(model, model.structure(n_balls), tuple(sorted(values.items())))
+def stable_step(system: System) -> tuple[float, float]:
+    """(largest stable RK4 step in s, largest |λ| in 1/s) of ``system`` over the probe
+    states; memoised per model, balls and parameter values (sweeps ask again and again)."""
+    return _stable_step(system.model, system.structure,
+                        tuple(sorted(system.parameters.items())))
 
 
 @functools.lru_cache(maxsize=4096)
-def _stable_step(model: Model, n_balls: tuple[int, ...], items: tuple) -> tuple[float, float]:
-    values = dict(items)
-    jac = model.functions(n_balls).jac
-    p = model.parameter_vector(values)
+def _stable_step(model: Model, structure: tuple[int, ...], items: tuple) -> tuple[float, float]:
+    system = System(model, structure, dict(items), model.initial_state)
+    jac = system.functions.jac
+    p = system.p
     limit, largest = math.inf, 0.0
-    for z in probe_states(model, n_balls, values):
+    for z in probe_states(system):
         for lam in np.linalg.eigvals(np.asarray(jac(0.0, z, p), dtype=float)):
             size = abs(lam)
             if not math.isfinite(size):
@@ -115,13 +114,12 @@ def nice_step(limit: float) -> float:
     return max(m * scale for m in (1, 2, 5) if m * scale <= target)
 
 
-def check_rk4_step(model: Model, n_balls: tuple[int, ...], values: dict[str, float], dt: float,
-                   method: str) -> None:
+def check_rk4_step(system: System, dt: float, method: str = "rk4") -> None:
     """Raise ``InputError`` when the RK4 step ``dt`` (s) is above the stability limit of
-    the model's stiffest linearisation with these parameter ``values``."""
+    the stiffest linearisation of ``system`` (its model, balls and parameter values)."""
     if method != "rk4":
         return
-    limit, largest = stable_step(model, n_balls, values)
+    limit, largest = stable_step(system)
     if dt <= limit:
         return
     raise InputError(
@@ -139,11 +137,12 @@ MAX_STEPS = 10**10
 """Most RK4 steps one run may take (about an hour compiled at 4 states)."""
 
 
-def fastest_forcing(model: Model, structure, values: dict[str, float]) -> tuple[str, float]:
-    """(name, frequency in Hz) of the fastest periodic forcing: the shaft (X), each
-    bearing's varying compliance (VC, VC[name]) and each parameter that plays the
+def fastest_forcing(system: System) -> tuple[str, float]:
+    """(name, frequency in Hz) of the fastest periodic forcing of ``system``: the shaft (X),
+    each bearing's varying compliance (VC, VC[name]) and each parameter that plays the
     ``forcing_period`` role (F = 1/period); ("", 0.0) for an autonomous model."""
-    freqs = model.frequencies(structure, values)
+    model, values = system.model, dict(system.parameters)
+    freqs = system.frequencies()
     named = [("X", freqs.shaft_hz)]
     named += [(f"VC[{b}]" if len(freqs.vc) > 1 else "VC", f) for b, f in freqs.vc.items()]
     for name in model.role("forcing_period"):
@@ -153,9 +152,9 @@ def fastest_forcing(model: Model, structure, values: dict[str, float]) -> tuple[
     return max(named, key=lambda item: item[1], default=("", 0.0))
 
 
-def check_resolution(model: Model, structure, values: dict[str, float], dt: float,
-                     duration: float | None = None, warn=None) -> float:
-    """Steps per period of the fastest forcing at step ``dt`` (s): refused below
+def check_resolution(system: System, dt: float, duration: float | None = None,
+                     warn=None) -> float:
+    """Steps per period of the fastest forcing of ``system`` at step ``dt`` (s): refused below
     ``RESOLUTION_REFUSE``, ``warn(message)`` below ``RESOLUTION_WARN`` (default: a Python
     warning). Also refuses runs of more than ``MAX_STEPS`` steps. Returns the steps per
     period (inf without forcing)."""
@@ -163,7 +162,7 @@ def check_resolution(model: Model, structure, values: dict[str, float], dt: floa
         raise InputError(f"duration / dt: {duration:g} s at dt = {dt:g} s is "
                          f"{duration / dt:.3g} RK4 steps; at most {MAX_STEPS:.0e} per run "
                          "(shorten the run or raise dt)")
-    name, freq = fastest_forcing(model, structure, values)
+    name, freq = fastest_forcing(system)
     if not freq > 0:
         return math.inf
     steps = 1.0 / (freq * dt)

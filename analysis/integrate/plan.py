@@ -116,14 +116,13 @@ class RunPlan:
         if isinstance(save_every, bool) or not (isinstance(save_every, int)
                                                  and save_every >= 1):
             raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
-        model, values = system.model, dict(system.parameters)
-        check_resolution(model, system.structure, values, dt, duration, warn=warn)
+        check_resolution(system, dt, duration, warn=warn)
         plan = cls(system, dt, duration, transient, method, save_every,
                    None if t0 is None else float(t0), rtol, atol)
         plan.check_kept()
         if in_memory:
-            check_memory(model.n_state, plan.n_saved, save_every)
-        check_rk4_step(model, system.structure, values, dt, method)
+            check_memory(system.n_state, plan.n_saved, save_every)
+        check_rk4_step(system, dt, method)
         return plan
 
     @classmethod
@@ -134,9 +133,8 @@ class RunPlan:
         finite and > 0, resolving the fastest forcing, RK4-stable."""
         dt = float(system.model.simulation_defaults["dt"] if dt is None else dt)
         check_seconds("dt", dt)
-        values = dict(system.parameters)
-        check_resolution(system.model, system.structure, values, dt, warn=warn)
-        check_rk4_step(system.model, system.structure, values, dt, "rk4")
+        check_resolution(system, dt, warn=warn)
+        check_rk4_step(system, dt)
         return cls(system, dt)
 
     @property

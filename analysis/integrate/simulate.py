@@ -158,9 +158,9 @@ def check_profile(plan: RunPlan, profile: SpeedProfile) -> None:
     check_model(system.model, system.structure, dict(system.parameters))
     profile.check_covers(plan.duration)
     for speed in sorted(set(profile.rpm)):
-        values = system.model.parameters({**system.parameters, "speed_rpm": speed})
-        check_resolution(system.model, system.structure, values, plan.dt)
-        check_rk4_step(system.model, system.structure, values, plan.dt, plan.method)
+        at_speed = system.replace(speed_rpm=speed)
+        check_resolution(at_speed, plan.dt)
+        check_rk4_step(at_speed, plan.dt, plan.method)
 
 
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,

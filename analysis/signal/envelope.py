@@ -117,11 +117,6 @@ def check_band(band: tuple[float, float], fs: float, n_samples: int) -> tuple[fl
     return low, min(high, nyquist)  # the Nyquist frequency within rounding: as given
 
 
-def spectral_kurtosis(analytic: np.ndarray) -> float:
-    """K = ⟨|a|⁴⟩/⟨|a|²⟩² − 2 of a complex envelope ``a`` (0 for Gaussian noise)."""
-    return float(kg.kurtosis_of_power(np.abs(np.asarray(analytic)) ** 2))
-
-
 def _signal(ds: xr.Dataset, var: str) -> tuple[np.ndarray, float]:
     if var not in ds.data_vars:
         raise InputError(f"var: no variable '{var}' in the dataset; "
@@ -138,18 +133,17 @@ def default_min_width(ds: xr.Dataset, fs: float) -> float:
 
 
 def structural_resonances(attrs: dict) -> tuple[float, ...]:
-    """√(k/m)/2π (Hz) of each sprung body of a run: every parameter pair ``<body>_stiffness``
-    (N/m) and ``<body>_mass`` (kg) in its attrs, e.g. the housing of the 6205 defect models
-    (the body alone on its support, the bearing's coupling left out)."""
-    found = []
-    for key, value in attrs.items():
-        head, sep, tail = str(key).rpartition("_stiffness")
-        mass = attrs.get(f"{head}_mass")
-        if sep and head and not tail and mass is not None:
-            k, m = float(value), float(mass)
-            if k > 0 and m > 0:
-                found.append(math.sqrt(k / m) / (2 * math.pi))
-    return tuple(sorted(found))
+    """√(k/m)/2π (Hz) of each sprung body of a run that carries a bearing
+    (``Model.support_resonances`` of the run's model at its parameters: found by the
+    model's structure, not by parameter names), e.g. the housing of the 6205 defect models
+    (the body alone on its support, the bearing's coupling left out). A record that names
+    no model (a synthetic signal) has none."""
+    if "model" not in attrs:
+        return ()
+    from analysis.provenance import system_of_attrs
+
+    system = system_of_attrs(attrs)
+    return system.model.support_resonances(dict(system.parameters))
 
 
 def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], str]:
@@ -284,23 +278,3 @@ def envelope_peaks(ds: xr.Dataset, var: str | None = None,
     peaks = find_peaks(env, name, max_peaks=max_peaks,
                        min_relative_height=min_relative_height, vocabulary="fault")
     return peaks, chosen
-
-
-def reference_band(ds: xr.Dataset, var: str, min_width_hz: float | None = None,
-                   third_levels: bool = False) -> Band:
-    """The slow search the fast kurtogram replaced, kept as its reference: every band of
-    ``kurtogram.candidate_bands`` (without the 1/3 levels: the bands searched before)
-    band-passed by ``sosfiltfilt`` and Hilbert-transformed over the whole record, the same
-    edges left out (``kurtogram.reference_kurtosis``). Minutes on a long record."""
-    values, fs = _signal(ds, var)
-    floor = default_min_width(ds, fs) if min_width_hz is None else float(min_width_hz)
-    best: Band | None = None
-    for low, high, _ in kg.candidate_bands(fs, floor, third_levels=third_levels):
-        if 2 * kg.edge_seconds(low, high) > (len(values) - 1) / fs / 2:
-            continue
-        k = kg.reference_kurtosis(values, fs, low, high)
-        if best is None or k > best.kurtosis:
-            best = Band(low, high, k, "kurtosis")
-    if best is None:
-        raise InputError(f"--band: no band of at least {floor:g} Hz fits this record")
-    return _with_note(best, ds.attrs)

@@ -29,9 +29,9 @@ forward-backward Butterworth decays as exp(−1.2·W·t), so 30/W leaves exp(−
 start-up transient (and of the wrap-around of the FFT's circular convolution). A band whose
 edges would leave less than half of the record is not searched.
 
-``reference_kurtosis`` is the slow search this one replaced, kept as the reference the
-tests hold the fast one to: per band ``sosfiltfilt`` and ``scipy.signal.hilbert`` of the
-whole record, the same edges dropped.
+The slow search this one replaced is kept in the tests, as the reference the fast one is
+held to (``tests/signal/references.py``: per band ``sosfiltfilt`` and
+``scipy.signal.hilbert`` of the whole record, the same edges dropped).
 """
 
 from __future__ import annotations
@@ -171,8 +171,16 @@ def _support(fs: float, low: float, high: float) -> tuple[float, float]:
     return to_hz((root - limit * bw) / 2), min(nyquist, to_hz((root + limit * bw) / 2))
 
 
-def kurtosis_of_power(power: np.ndarray) -> np.ndarray:
-    """K = ⟨p²⟩/⟨p⟩² − 2 along the last axis of |a|² (0 where the power is 0)."""
+def spectral_kurtosis(power: np.ndarray) -> np.ndarray:
+    """The spectral kurtosis K = ⟨|a|⁴⟩/⟨|a|²⟩² − 2 of a complex envelope a, from its power
+    p = |a|² along the last axis: K = ⟨p²⟩/⟨p⟩² − 2 (0 for Gaussian noise, −1 for a
+    constant envelope, large for impacts; 0 where the power is 0). Scale-free.
+
+    >>> float(spectral_kurtosis(np.full(100, 4.0)))
+    -1.0
+    >>> float(spectral_kurtosis(np.r_[np.zeros(99), 1.0]))
+    98.0
+    """
     mean = power.mean(axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         k = (power * power).mean(axis=-1) / (mean * mean) - 2.0
@@ -257,7 +265,7 @@ class Spectrum:
                 first, last = math.ceil(edge / step), math.floor((span - edge) / step)
                 z = envelope[row, first:last + 1]
                 power = z.real.astype(float) ** 2 + z.imag.astype(float) ** 2
-                out[i] = float(kurtosis_of_power(power))
+                out[i] = float(spectral_kurtosis(power))
         return out
 
     def analytic(self, low: float, high: float) -> np.ndarray:
@@ -283,13 +291,3 @@ def kurtogram(values: np.ndarray, fs: float, min_width_hz: float,
     keep = np.isfinite(k)
     lows, highs, lvls = (np.array(c)[keep] for c in zip(*bands, strict=True))
     return Kurtogram(lows, highs, lvls, k[keep])
-
-
-def reference_kurtosis(values: np.ndarray, fs: float, low: float, high: float) -> float:
-    """The slow reference of one band: ``sosfiltfilt`` of the band's Butterworth filter,
-    ``scipy.signal.hilbert`` of the whole record, the same edges left out, then K."""
-    sos = butterworth_sos(fs, low, high)
-    passed = values if sos is None else scipy.signal.sosfiltfilt(sos, values)
-    power = np.abs(scipy.signal.hilbert(passed)) ** 2
-    edge = round(edge_seconds(low, high) * fs)
-    return float(kurtosis_of_power(power[edge:values.size - edge]))

@@ -1,6 +1,6 @@
 """The fast kurtogram against the slow search it replaced.
 
-The reference (``analysis.signal.envelope.reference_band``, ``kurtogram.reference_kurtosis``)
+The reference (``tests/signal/references.py``: ``reference_band``, ``reference_kurtosis``)
 filters the whole record once per band with ``scipy.signal.sosfiltfilt`` and takes
 ``scipy.signal.hilbert`` of it, the same filter edges left out: the search as it was, judging
 the signal instead of the filter's start-up. The fast search must choose the band the
@@ -24,9 +24,9 @@ from analysis.signal.envelope import (
     default_min_width,
     envelope,
     kurtogram_of,
-    reference_band,
 )
 from analysis.signal.noise import add_noise
+from tests.signal.references import reference_band, reference_kurtosis
 
 TOLERANCE = 0.01
 """Relative agreement of the fast and the reference kurtosis of one band (the reference's
@@ -62,7 +62,7 @@ def _same_or_better(ds: xr.Dataset, var: str) -> None:
     fast = choose_band(ds, var)
     slow = reference_band(ds, var)
     values, fs = _values(ds, var)
-    fast_by_reference = kg.reference_kurtosis(values, fs, fast.low_hz, fast.high_hz)
+    fast_by_reference = reference_kurtosis(values, fs, fast.low_hz, fast.high_hz)
     assert fast.kurtosis == pytest.approx(fast_by_reference, rel=TOLERANCE, abs=1e-3)
     same = (fast.low_hz, fast.high_hz) == pytest.approx((slow.low_hz, slow.high_hz))
     assert same or fast_by_reference >= slow.kurtosis * (1 - TOLERANCE), (fast, slow)
@@ -121,7 +121,7 @@ def test_fast_and_reference_agree_band_by_band_on_the_long_record(long_noisy):
     picks = [*np.argsort(-found.kurtosis)[:3],
              *np.random.default_rng(3).choice(len(found), 5, replace=False)]
     for i in picks:
-        ref = kg.reference_kurtosis(values, fs, found.low_hz[i], found.high_hz[i])
+        ref = reference_kurtosis(values, fs, found.low_hz[i], found.high_hz[i])
         assert found.kurtosis[i] == pytest.approx(ref, rel=TOLERANCE, abs=1e-3), \
             (found.low_hz[i], found.high_hz[i])
     assert len(found) == len(kg.candidate_bands(fs, default_min_width(long_noisy, fs)))
@@ -144,5 +144,5 @@ def test_the_envelope_is_not_the_filters_start_up():
     raw = np.abs(scipy.signal.hilbert(scipy.signal.sosfiltfilt(
         kg.butterworth_sos(fs, *top), values))) ** 2
     assert raw[:raw.size // 100].sum() > 0.5 * raw.sum()  # the start-up, before
-    assert kg.kurtosis_of_power(raw) > 10 * band.kurtosis
-    assert band.kurtosis == pytest.approx(kg.reference_kurtosis(values, fs, *top), rel=0.1)
+    assert kg.spectral_kurtosis(raw) > 10 * band.kurtosis
+    assert band.kurtosis == pytest.approx(reference_kurtosis(values, fs, *top), rel=0.1)
