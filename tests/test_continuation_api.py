@@ -1,6 +1,6 @@
 """Continuation as a public problem: ``ContinuationOptions`` refuses each bad field with its
 message, ``switch_and_continue`` gives the branch of ``continue --switch-pd``, and a
-``BranchProblem`` built by hand continues like ``continue_orbits``."""
+``ShootingProblem`` built by hand continues like ``continue_orbits``."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from analysis.integrate.flow import steps_per_period
 from analysis.io import open_result
 from analysis.model import as_system
 from analysis.stability.continuation import (
-    BranchProblem,
     ContinuationOptions,
+    ShootingProblem,
     StepGuards,
     continue_orbits,
     continue_problem,
@@ -158,9 +158,9 @@ def test_a_problem_built_by_hand_continues_like_continue_orbits():
     n_steps = max(steps_per_period(model, orbit.structure, period,
                                    {**orbit.values, "speed_rpm": end}, dt)
                   for end in (start, stop))
-    prob = BranchProblem(model, orbit.structure, period,
-                         model.parameter_names.index("speed_rpm"), dict(orbit.values),
-                         orbit.t0, n_steps, np.ones(model.n_state), abs(stop - start))
+    prob = ShootingProblem(model, orbit.structure, period,
+                           model.parameter_names.index("speed_rpm"), dict(orbit.values),
+                           orbit.t0, n_steps, np.ones(model.n_state), abs(stop - start))
     prob.s_z = orbit_scale(prob, orbit.z0)
     branch = continue_problem(prob, orbit.z0, stop, ContinuationOptions(max_points=12))
     _same(expected, branch)

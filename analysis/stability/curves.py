@@ -28,7 +28,9 @@ differences. Keller's pseudo-arclength condition closes the system (``continuati
 
 Codimension-two points, located by bisection on the arclength where their test function
 changes sign (Kuznetsov Sec. 9.2 and Ch. 9 for maps; the MatCont manual's LPC/PD/NS
-curves):
+curves), are the curve family's ``found_between`` hook of the one engine
+(``continuation.trace``), the borders' update its ``after_accept`` and the end solved on
+the bound its ``past_end``:
 
 * on LP curves: CP (cusp: the fold's normal-form coefficient a = ½ pᵀB(q, q) vanishes),
   R1 (1:1 resonance: the +1 multiplier becomes a Jordan block, pᵀq = 0 with the null
@@ -48,6 +50,7 @@ the two points.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Callable, Sequence
@@ -65,12 +68,17 @@ from analysis.integrate.tangent import Carry, tangent_step
 from analysis.model import Model, Structure
 from analysis.provenance import run_attrs, system_of_attrs
 from analysis.stability.continuation import (
-    BranchProblem,
     ContinuationOptions,
+    ContinuedRange,
+    Hooks,
+    Newton,
+    ShootingProblem,
+    StepGuards,
     correct,
     options_with,
     orbit_scale,
     tangent,
+    trace,
 )
 
 KINDS = ("LP", "PD", "NS")
@@ -145,11 +153,16 @@ class CurvePoint:
     special: str = ""
     newton_iterations: int = 0
     marked: bool = False
+    ds: float = 0.0
+    angle: float = 0.0
+    contraction: float = 0.0
 
 
 @dataclass
-class _CurveProblem(BranchProblem):
-    """``continuation.BranchProblem`` with a second parameter and the augmented equations."""
+class _CurveProblem(ShootingProblem):
+    """``continuation.ShootingProblem`` with a second parameter and the augmented equations:
+    the curve family of the engine, bounded by the second parameter (``param_name``; the
+    branch's is ``param1``)."""
 
     kind: str = "LP"
     index2: int = 0
@@ -163,6 +176,36 @@ class _CurveProblem(BranchProblem):
         self.r = 2 if self.kind == "NS" else 1
         self.grad = bilinear_gradients(self.model, self.structure, self.period, self.n_steps,
                                        8 if self.kind == "NS" else 1)
+
+    @property
+    def param1(self) -> str:
+        """The branch's parameter."""
+        return self.model.parameter_names[self.param_index]
+
+    @property
+    def param_name(self) -> str:
+        """The second parameter, whose range bounds the curve."""
+        return self.model.parameter_names[self.index2]
+
+    def point(self, corrected: Newton, tau: np.ndarray) -> CurvePoint:
+        """The ``CurvePoint`` of a converged corrector with unit tangent ``tau``."""
+        w = corrected.w
+        e = self.evaluate_all(w)
+        z, kappa, lam1, lam2 = self.split(w)
+        return CurvePoint(w=w.copy(), lam1=lam1, lam2=lam2, kappa=kappa, z0=z,
+                          multipliers=np.linalg.eigvals(e["mono"]), tangent=tau,
+                          right=e["v"].copy(), left=e["wl"].copy(),
+                          tests=_tests(self, e, kappa), amplitude=self.amplitude(w),
+                          newton_iterations=corrected.iterations)
+
+    def unknowns(self, point: CurvePoint) -> np.ndarray:
+        return point.w
+
+    def value(self, point: CurvePoint) -> float:
+        return point.lam2
+
+    def describe(self, point: CurvePoint) -> str:
+        return f"{self.param1} = {point.lam1:.6g}, {self.param_name} = {point.lam2:.6g}"
 
     @property
     def n_extra(self) -> int:
@@ -320,13 +363,10 @@ def _complex_outside(ms: np.ndarray) -> float:
 
 def _make_point(prob: _CurveProblem, w: np.ndarray, jac: np.ndarray, previous, direction,
                 iterations: int) -> CurvePoint:
-    e = prob.evaluate_all(w)
-    z, kappa, lam1, lam2 = prob.split(w)
-    return CurvePoint(w=w.copy(), lam1=lam1, lam2=lam2, kappa=kappa, z0=z,
-                      multipliers=np.linalg.eigvals(e["mono"]),
-                      tangent=tangent(jac, previous, direction), right=e["v"].copy(),
-                      left=e["wl"].copy(), tests=_tests(prob, e, kappa),
-                      amplitude=prob.amplitude(w), newton_iterations=iterations)
+    """The point at the converged ``w``, its tangent by SVD along ``previous`` (None: by
+    ``direction``)."""
+    return prob.point(Newton(w, jac, None, iterations, 0.0, 0.0),
+                      tangent(jac, previous, direction))
 
 
 def _locate(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, label: str,
@@ -449,8 +489,6 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     options = options_with(options, CURVE_OPTIONS, ds=ds, ds_min=ds_min, ds_max=ds_max,
                            max_points=max_points, tol=tol)
     tol = options.tol
-    if not math.isfinite(stop):
-        raise InputError(f"stop: must be a finite number, got {stop!r}")
     source = "" if isinstance(branch, xr.Dataset) else str(branch)
     if not isinstance(branch, xr.Dataset):
         from analysis.io import open_result
@@ -467,17 +505,18 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     _initial_borders(prob, w)
     out = correct(prob, w, np.eye(len(w))[-1], tol)  # solve at the start value of param
     if out is None:
-        raise InputError(f"point: the {kind} point at {prob.param_name} = "
+        raise InputError(f"point: the {kind} point at {prob.param1} = "
                          f"{float(w[-2] * prob.s_lam):g} does not converge as a {kind} "
                          f"point of the augmented system")
     prob.choose_entries(out[0])
     out = correct(prob, out[0], np.eye(len(w))[-1], tol)
     first = _make_point(prob, out[0], out[1], None, direction, out[3])
     prob.update_borders(first)
-    curve, status = _follow(prob, first, (min(start, stop), max(start, stop)),
-                            options.first_ds, options.ds_min, options.ds_max,
-                            options.max_points, tol, marks, progress)
-    return curve_dataset(prob, curve, param, status, kind,
+    first.ds = options.first_ds
+    out = trace(prob, first, stop, dataclasses.replace(options, guards=StepGuards(active=False)),
+                hooks=_curve_hooks(prob, marks, tol, (min(start, stop), max(start, stop))),
+                progress=progress)
+    return curve_dataset(prob, out.points, param, out.status, kind,
                          source or str(branch.encoding.get("source", "")))
 
 
@@ -488,16 +527,10 @@ def _start_problem(branch: xr.Dataset, index: int, kind: str, param: str, stop: 
     lam1 = float(branch[p1].values[index])
     system = system_of_attrs({**attrs, p1: lam1})
     model = system.model
-    if param not in model.parameter_names:
-        raise InputError(f"param: '{param}' is not a parameter of '{model.name}'; choose "
-                         f"one of {', '.join(n for n in model.parameter_names if n != p1)}")
-    if param == p1:
-        raise InputError(f"param: '{param}' is the branch's own parameter; choose another")
-    model.parameters({param: stop})  # range check of the end value
+    ContinuedRange.check(model, param, system.parameters.get(param, math.nan), stop,
+                         exclude=p1)
     values = dict(system.parameters)
     start = values[param]
-    if start == stop:
-        raise InputError(f"stop: must differ from the branch's {param} = {start:g}")
     n = model.n_state
     lam_range = float(np.ptp(branch[p1].values)) or abs(lam1) or 1.0
     prob = _CurveProblem(model, system.structure, Period.parse(str(attrs["period"])),
@@ -518,44 +551,29 @@ def branch_multipliers(branch: xr.Dataset, index: int) -> np.ndarray:
     return branch.multiplier_real.values[index] + 1j * branch.multiplier_imag.values[index]
 
 
-def _follow(prob: _CurveProblem, first: CurvePoint, box: tuple[float, float], ds: float,
-            ds_min: float, ds_max: float, max_points: int, tol: float,
-            marks: Sequence[float], progress: Callable[[str], None] | None
-            ) -> tuple[list[CurvePoint], str]:
-    """Pseudo-arclength steps until ``param`` leaves ``box`` (the end solved on the bound)."""
-    curve, status = [first], f"stopped after max_points = {max_points}"
+def _curve_hooks(prob: _CurveProblem, marks: Sequence[float], tol: float,
+                 box: tuple[float, float]) -> Hooks:
+    """The curve family's plug-ins of the engine: the codimension-two points and the marks
+    between two points (``found_between``), the end solved on the bound of ``box``
+    (``past_end``) and the borders and NS entries updated after each point
+    (``after_accept``)."""
     lo, hi = box
-    while len(curve) < max_points:
-        prev = curve[-1]
-        out = correct(prob, prev.w + ds * prev.tangent, prev.tangent, tol)
-        if out is None:
-            ds /= 2
-            if ds < ds_min:
-                status = f"step fell below ds_min = {ds_min:g} (no convergence)"
-                break
-            continue
-        point = _make_point(prob, out[0], out[1], prev.tangent, 1.0, out[3])
+
+    def found_between(prev: CurvePoint, point: CurvePoint) -> list[CurvePoint]:
         found = _codim2(prob, prev, point, tol) + _marks(prob, prev, point, marks, tol)
-        end = None
-        if not lo <= point.lam2 <= hi:
-            bound = lo if point.lam2 < lo else hi
-            end = _at_value(prob, prev, point, len(point.w) - 1, bound / prob.s_lam2, tol)
-            found = [f for f in found if lo <= f.lam2 <= hi]
-        found.sort(key=lambda f: float(np.dot(f.w - prev.w, prev.tangent)))
-        curve.extend(found)
-        if end is not None or not lo <= point.lam2 <= hi:
-            curve.append(end or point)
-            status = (f"reached {prob.model.parameter_names[prob.index2]} = "
-                      f"{curve[-1].lam2:.6g}")
-            break
-        curve.append(point)
+        return sorted(found, key=lambda f: float(np.dot(f.w - prev.w, prev.tangent)))
+
+    def past_end(prev: CurvePoint, point: CurvePoint, found: list
+                 ) -> tuple[list, CurvePoint]:
+        bound = lo if point.lam2 < lo else hi
+        end = _at_value(prob, prev, point, len(point.w) - 1, bound / prob.s_lam2, tol)
+        return [f for f in found if lo <= f.lam2 <= hi], end or point
+
+    def after_accept(point: CurvePoint) -> None:
         prob.update_borders(point)
         prob.choose_entries(point.w)
-        ds = min(ds * 1.5, ds_max) if out[3] <= 3 else max(ds / 1.5, ds_min)
-        if progress and len(curve) % 10 == 0:
-            progress(f"{len(curve)} points, {prob.param_name} = {point.lam1:.6g}, "
-                     f"{prob.model.parameter_names[prob.index2]} = {point.lam2:.6g}")
-    return curve, status
+
+    return Hooks(found_between=found_between, past_end=past_end, after_accept=after_accept)
 
 
 def _marks(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, marks: Sequence[float],
@@ -580,7 +598,7 @@ def curve_dataset(prob: _CurveProblem, curve: list[CurvePoint], param: str, stat
     NS), ``param1`` (the branch's), ``param2``, ``period``, ``steps_per_period``, ``t0``,
     ``status``, ``branch_file``."""
     model = prob.model
-    p1 = prob.param_name
+    p1 = prob.param1
     mult = np.array([p.multipliers for p in curve])
     attrs = run_attrs(model, prob.structure, prob.values)
     for name in (p1, param):

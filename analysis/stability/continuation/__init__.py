@@ -1,16 +1,20 @@
-"""Pseudo-arclength continuation of periodic orbits, with bifurcation detection.
+"""Pseudo-arclength continuation: one engine, any branch family, bifurcation detection.
 
-A branch is a ``BranchProblem`` (``problem``: the model, period, parameter and scales, the
-shooting equations G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 in the scaled unknowns
-w = (z0 / s_z, λ / s_λ), and Keller's bordered Newton corrector) traced with
-``ContinuationOptions`` (``options``: the scaled arclength steps, the point budget, the
-tolerance and the ``StepGuards`` every step must pass), in the manner of BifurcationKit.jl's
-``continuation(prob, alg, opts)``:
+A branch family is a ``BranchProblem`` (``problem``: the Protocol of scaled unknowns
+w = (…, λ / s_λ), equations G(w) and the points they make; ``ContinuedRange``, the checked
+parameter and ends; Keller's bordered Newton corrector) traced with ``ContinuationOptions``
+(``options``: the scaled arclength steps, the point budget, the tolerance, the
+``StepGuards`` every step must pass and the tangent method), in the manner of
+BifurcationKit.jl's ``continuation(prob, alg, opts)``:
 
-* ``trace``: the guarded stepping loop and its starts, ``continue_orbits`` (a model and a
-  parameter range), ``continue_from_orbit`` (a solved orbit), ``continue_from_branch`` (a
-  point of a stored branch, either direction) and ``continue_problem`` (a problem built by
-  hand);
+* ``step``: the one predictor–corrector step and the guards' refusal;
+* ``trace``: the one engine, ``trace(problem, first, stop, options, hooks=Hooks(…))`` ->
+  ``Trace`` (points, status, refused steps, last predictor tried), the one set of status
+  texts and the stop report built from a ``Trace``;
+* ``shooting``: the periodic orbits' family (``ShootingProblem``) and its starts,
+  ``continue_orbits`` (a model and a parameter range), ``continue_from_orbit`` (a solved
+  orbit), ``continue_from_branch`` (a point of a stored branch, either direction) and
+  ``continue_problem`` (a problem built by hand);
 * ``detect``: the special points located by bisection on the arclength: LP (fold: the
   tangent's parameter component changes sign), PD (det(M + I) changes sign), BP (det(M − I)
   changes sign without a fold), NS (the number of complex multipliers outside the unit
@@ -34,6 +38,7 @@ from analysis.stability.continuation.dataset import (
 from analysis.stability.continuation.options import (
     DEFAULT_DS,
     MAX_BRANCH_POINTS,
+    TANGENTS,
     ContinuationOptions,
     StepGuards,
     options_with,
@@ -41,14 +46,26 @@ from analysis.stability.continuation.options import (
 from analysis.stability.continuation.problem import (
     BranchPoint,
     BranchProblem,
+    ContinuedParameter,
+    ContinuedRange,
     Newton,
     branch_point,
     correct,
     newton,
-    orbit_scale,
     scaled,
     tangent,
 )
+from analysis.stability.continuation.shooting import (
+    ShootingProblem,
+    continue_from_branch,
+    continue_from_orbit,
+    continue_orbits,
+    continue_problem,
+    orbit_scale,
+    start_point,
+    trace_branch,
+)
+from analysis.stability.continuation.step import refusal, step, step_tangent
 from analysis.stability.continuation.switching import (
     SWITCHES,
     Switched,
@@ -57,21 +74,16 @@ from analysis.stability.continuation.switching import (
     switch_branch_point,
     switch_period_doubling,
 )
-from analysis.stability.continuation.trace import (
-    continue_from_branch,
-    continue_from_orbit,
-    continue_orbits,
-    continue_problem,
-    start_point,
-    trace_branch,
-)
+from analysis.stability.continuation.trace import STATUS, Hooks, Trace, stop_report, trace
 
 __all__ = [
-    "DEFAULT_DS", "MAX_BRANCH_POINTS", "SWITCHES", "BranchPoint", "BranchProblem",
-    "ContinuationOptions", "Newton", "StepGuards", "Switched", "branch_dataset",
+    "DEFAULT_DS", "MAX_BRANCH_POINTS", "STATUS", "SWITCHES", "TANGENTS", "BranchPoint",
+    "BranchProblem", "ContinuationOptions", "ContinuedParameter", "ContinuedRange", "Hooks",
+    "Newton", "ShootingProblem", "StepGuards", "Switched", "Trace", "branch_dataset",
     "branch_point", "branch_summary", "continue_from_branch", "continue_from_orbit",
     "continue_orbits", "continue_problem", "correct", "first_point", "newton",
-    "options_with", "orbit_scale", "scaled", "special_point_lines", "special_points",
-    "start_point", "switch_and_continue", "switch_branch", "switch_branch_point",
-    "switch_period_doubling", "tangent", "trace_branch",
+    "options_with", "orbit_scale", "refusal", "scaled", "special_point_lines",
+    "special_points", "start_point", "step", "step_tangent", "stop_report",
+    "switch_and_continue", "switch_branch", "switch_branch_point", "switch_period_doubling",
+    "tangent", "trace", "trace_branch",
 ]

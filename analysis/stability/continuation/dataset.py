@@ -7,10 +7,10 @@ import xarray as xr
 
 from analysis.model import Model
 from analysis.provenance import run_attrs
-from analysis.stability.continuation.problem import BranchPoint, BranchProblem
+from analysis.stability.continuation.problem import BranchPoint, ContinuedParameter
 
 
-def branch_dataset(model: Model, prob: BranchProblem, branch: list[BranchPoint], param: str,
+def branch_dataset(model: Model, prob: ContinuedParameter, branch: list[BranchPoint], param: str,
                    status: str, label: str = "", **extra: object) -> xr.Dataset:
     """The branch as a Dataset: ``param`` value, amplitude (of the first state variable),
     z0 (dims ``point`` × ``state``, the model's state names), the n multipliers (real and

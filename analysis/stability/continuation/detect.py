@@ -15,10 +15,12 @@ LP/PD/NS test function sign change).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
+from analysis.stability.continuation.options import StepGuards
 from analysis.stability.continuation.problem import (
     BranchPoint,
     BranchProblem,
@@ -116,3 +118,17 @@ def points_between(prob: BranchProblem, a: BranchPoint, b: BranchPoint, tol: flo
     if not found and a.n_unstable != b.n_unstable:
         b.special = "grazing?"
     return sorted(found, key=lambda p: np.dot(scaled(prob, p) - scaled(prob, a), a.tangent))
+
+
+def special_between(prob: BranchProblem, a: BranchPoint, b: BranchPoint, tol: float,
+                    guards: StepGuards) -> list[BranchPoint] | str:
+    """The special points between two accepted points of a one-parameter branch (the
+    engine's default ``found_between``): a fold where the tangent's λ component flips
+    (with active ``guards``, the step is refused when none is located), then PD, BP, NS."""
+    direction = math.copysign(1.0, a.tangent[-1])
+    lp = None
+    if lp_test(a) != 0 and np.sign(lp_test(a)) != np.sign(lp_test(b)):
+        lp = fold_between(prob, a, b, tol, direction)
+        if lp is None and guards.active:
+            return "the parameter component of the tangent changed sign but no fold was found"
+    return points_between(prob, a, b, tol, direction, lp=lp)

@@ -19,6 +19,9 @@ from analysis.errors import InputError
 MAX_BRANCH_POINTS = 100_000
 """Most points one branch or curve may have."""
 
+TANGENTS = ("svd", "bordered")
+"""How a step's tangent may be found (``ContinuationOptions.tangent``)."""
+
 DEFAULT_DS = 0.01
 """First scaled arclength step of a new branch or curve (``ContinuationOptions.ds`` None)."""
 
@@ -72,7 +75,11 @@ class ContinuationOptions:
     * ``ds_min``, ``ds_max``: the smallest and largest step (0 < ds_min <= ds_max);
     * ``max_points``: most points on the branch, in [2, ``MAX_BRANCH_POINTS``];
     * ``tol``: Newton tolerance on the scaled step and residual, in (0, 1);
-    * ``guards``: the ``StepGuards`` every branch step must pass (curves do not use them).
+    * ``guards``: the ``StepGuards`` every branch step must pass (curves do not use them);
+    * ``tangent``: how a step's tangent is found, ``"svd"`` (the null vector of the
+      Jacobian) or ``"bordered"`` (one solve of [∂G/∂w; τ_prev] τ = e_last: the same
+      vector, a tenth of the work at a few hundred unknowns); None: the problem's own
+      (``BranchProblem.tangent_method``).
 
     Raises ``InputError`` naming the first bad field, e.g. ``ds_max: must be a finite number
     > 0, got 0.0``.
@@ -84,6 +91,7 @@ class ContinuationOptions:
     max_points: int = 200
     tol: float = 1e-9
     guards: StepGuards = field(default_factory=StepGuards)
+    tangent: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("ds_min", "ds_max", "tol"):
@@ -104,6 +112,9 @@ class ContinuationOptions:
                              f"got {self.max_points!r}")
         if not isinstance(self.guards, StepGuards):
             raise InputError(f"guards: must be a StepGuards, got {self.guards!r}")
+        if self.tangent is not None and self.tangent not in TANGENTS:
+            raise InputError(f"tangent: must be one of {', '.join(TANGENTS)} or None, got "
+                             f"{self.tangent!r}")
 
     @property
     def first_ds(self) -> float:

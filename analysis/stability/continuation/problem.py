@@ -1,33 +1,36 @@
-"""The continuation problem of a branch of periodic orbits, and its Newton corrector.
+"""The contract of a branch family, the checked parameter range, and the Newton corrector.
 
-Unknowns w = (z0 / s_z, λ / s_λ), n + 1 of them for a model of n states: the orbit's state at
-the section (scaled per component by ``periodic.state_scale``) and the continuation
-parameter (scaled by the requested range). Equations: G(w) = (Φ_T(z0; λ) − z0) / s_z = 0
-(shooting, ``analysis.integrate.flow``) plus the arclength condition τ·(w − w_pred) = 0 of
-Keller's method; the bordered Newton matrix is built from the monodromy matrix and ∂Φ/∂λ,
-both by AD (the period's own dependence on λ, e.g. on the speed, included).
+A branch family is a ``BranchProblem`` (in the manner of BifurcationKit.jl's
+``BifurcationProblem``): scaled unknowns w whose last entry is the continued parameter,
+equations G(w) with their Jacobian (``residual``), and the points it makes of a converged w
+(``point``, ``unknowns``, ``value``, ``describe``). The one engine (``step``, ``trace``)
+steps any of them: Keller's pseudo-arclength predictor–corrector (``newton``: the bordered
+system [G(w); τ·(w − w_pred)] = 0), the tangent by SVD (``tangent``) or a bordered solve.
 
-``BranchProblem`` (in the manner of BifurcationKit.jl's ``BifurcationProblem``) holds the
-model, the period, the parameter and the scales; ``newton``/``correct`` solve the bordered
-system from a predictor, ``tangent`` orients the null vector, ``branch_point`` makes a
-``BranchPoint`` of a converged w. The problem of ``curves`` extends it with a
-second parameter and the augmented equations of a codimension-one point.
+``ContinuedParameter`` is what the one-parameter families share (the parameter vector with
+λ put in, the ``BranchPoint`` of a converged w); ``ContinuedRange`` checks a parameter and
+the ends of its range once, for every family. The shooting problem is
+``shooting.ShootingProblem``; the harmonic-balance, torus and circle problems live in
+``analysis.frequency``, the codimension-one curve problem in ``analysis.stability.curves``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
-from analysis.integrate.flow import Period, evaluate, flow_map, orbit_states, period_seconds
-from analysis.model import Model, Structure
-from analysis.stability.periodic import state_scale
+from analysis.errors import InputError
+from analysis.model import Model
 
 
 @dataclass
 class BranchPoint:
-    """One converged orbit on the branch (λ in the parameter's own unit)."""
+    """One converged point of a one-parameter branch (λ in the parameter's own unit; z0
+    the unknowns besides λ in their units: an orbit's state at the section, Fourier
+    coefficients, a circle)."""
 
     lam: float
     z0: np.ndarray
@@ -54,88 +57,6 @@ class BranchPoint:
         return self.n_unstable == 0
 
 
-class ContinuedParameter:
-    """What every branch problem shares (periodic orbits here, harmonic balance, tori and
-    circles in analysis.frequency): the runtime parameter number
-    ``param_index`` of ``model`` varies, the others stay at ``values`` (their units)."""
-
-    model: Model
-    param_index: int
-    values: dict[str, float]
-
-    @property
-    def param_name(self) -> str:
-        return self.model.parameter_names[self.param_index]
-
-    def p(self, lam: float) -> np.ndarray:
-        """The parameter vector with the continued parameter at ``lam``."""
-        p = self.model.parameter_vector(self.values)
-        p[self.param_index] = lam
-        return p
-
-
-@dataclass
-class BranchProblem(ContinuedParameter):
-    """Periodic orbits of ``model`` (with ``structure``) of period ``period`` as the runtime
-    parameter number ``param_index`` varies, the others at ``values`` (their units): the
-    section at ``t0`` (s), ``n_steps`` RK4 steps per period, the unknowns scaled by ``s_z``
-    (per state, its unit) and ``s_lam`` (the parameter's unit). The flow map and the orbit
-    sampler are built on construction."""
-
-    model: Model
-    structure: Structure
-    period: Period
-    param_index: int
-    values: dict[str, float]
-    t0: float
-    n_steps: int
-    s_z: np.ndarray
-    s_lam: float
-    flow: object = field(default=None)
-
-    def __post_init__(self):
-        self.flow = flow_map(self.model, self.structure, self.period, self.n_steps)
-        self.orbit = orbit_states(self.model, self.structure, self.period, self.n_steps)
-
-    @property
-    def n(self) -> int:
-        return self.model.n_state
-
-    def residual(self, w: np.ndarray):
-        """G(w) (n), its Jacobian (n × (n + 1)) and the monodromy matrix."""
-        n = self.n
-        z, lam = w[:n] * self.s_z, w[n] * self.s_lam
-        z_end, mono, dp = evaluate(self.flow, z, self.t0, self.p(lam))
-        g = (z_end - z) / self.s_z
-        jz = (mono - np.eye(n)) * self.s_z[None, :] / self.s_z[:, None]
-        jl = dp[:, self.param_index] * self.s_lam / self.s_z
-        return g, np.column_stack([jz, jl]), mono
-
-    def amplitude(self, w: np.ndarray) -> float:
-        """Half the peak-to-peak of the first state variable (x, x_rotor …; m) over one
-        period."""
-        n = self.n
-        states = np.asarray(self.orbit(w[:n] * self.s_z, self.t0, self.p(w[n] * self.s_lam)))
-        return float(np.ptp(states[0])) / 2
-
-
-def orbit_scale(prob: BranchProblem, z0: np.ndarray) -> np.ndarray:
-    """Per-component scales (``periodic.state_scale``) from the largest |z_i| over one period
-    of the orbit through z0 (velocities at least size·2π/T)."""
-    states = np.asarray(prob.orbit(z0, prob.t0, prob.p(prob.values[prob.param_name])))
-    return state_scale(np.abs(states).max(axis=1),
-                       period_seconds(prob.model, prob.structure, prob.period, prob.values),
-                       prob.model.module.STATE_UNITS)
-
-
-def tangent(jac: np.ndarray, previous: np.ndarray | None, direction: float) -> np.ndarray:
-    """Unit null vector of the n × (n + 1) Jacobian, oriented along ``previous`` (or by the
-    sign of ``direction`` in λ at the start)."""
-    tau = np.linalg.svd(jac)[2][-1]
-    ref = np.dot(tau, previous) if previous is not None else tau[-1] * direction
-    return -tau if ref < 0 else tau
-
-
 @dataclass
 class Newton:
     """A converged corrector: the point, its Jacobian and monodromy matrix, the iterations,
@@ -148,6 +69,134 @@ class Newton:
     iterations: int
     contraction: float
     distance: float
+
+
+class BranchProblem(Protocol):
+    """What the engine (``step.step``, ``trace.trace``) needs of a branch family.
+
+    * ``param_name``: the parameter whose range bounds the branch;
+    * ``tangent_method``: ``"svd"`` or ``"bordered"``, the tangent the family prefers
+      (``ContinuationOptions.tangent`` overrides it);
+    * ``residual(w)``: G(w) (m), its Jacobian (m × (m + 1)) and a matrix whose eigenvalues
+      are the point's multipliers (empty when it has none);
+    * ``point(corrected, tangent)``: the point of a converged ``Newton`` with that unit
+      tangent; ``unknowns(point)``: its scaled w again;
+    * ``value(point)``: the parameter value checked against the range (its unit);
+    * ``describe(point)``: a few words for a progress line.
+
+    A point has at least ``tangent``, ``newton_iterations``, ``special``, ``ds``, ``angle``
+    and ``contraction`` (``BranchPoint``, ``curves.CurvePoint``).
+    """
+
+    param_name: str
+    tangent_method: str
+
+    def residual(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]: ...
+
+    def point(self, corrected: Newton, tangent: np.ndarray) -> Any: ...
+
+    def unknowns(self, point: Any) -> np.ndarray: ...
+
+    def value(self, point: Any) -> float: ...
+
+    def describe(self, point: Any) -> str: ...
+
+
+@dataclass(frozen=True)
+class ContinuedRange:
+    """A runtime parameter ``param`` of ``model`` continued from ``start`` towards ``stop``
+    (its unit), checked once for every family (``check``): the parameter exists, both ends
+    are finite and differ, and ``stop`` is in the parameter's allowed range."""
+
+    model: Model
+    param: str
+    start: float
+    stop: float
+
+    @classmethod
+    def check(cls, model: Model, param: str, start: float, stop: float,
+              exclude: str = "") -> ContinuedRange:
+        """The range, or ``InputError`` naming the first bad field (``exclude``: a
+        parameter that may not be continued here, e.g. a curve's branch parameter)."""
+        if param not in model.parameter_names or param == exclude:
+            why = "is the branch's own parameter" if param == exclude else \
+                f"is not a parameter of '{model.name}'"
+            choices = ", ".join(n for n in model.parameter_names if n != exclude)
+            raise InputError(f"param: '{param}' {why}; choose one of {choices}")
+        if not math.isfinite(stop):
+            raise InputError(f"stop: must be a finite number, got {stop!r}")
+        if start == stop:
+            raise InputError("stop: must differ from start")
+        model.parameters({param: stop})  # the range check of the end value
+        return cls(model, param, float(start), float(stop))
+
+    @property
+    def index(self) -> int:
+        """The parameter's place in the runtime parameter vector."""
+        return self.model.parameter_names.index(self.param)
+
+    @property
+    def scale(self) -> float:
+        """|stop − start|: the parameter's scale in the unknowns (its unit)."""
+        return abs(self.stop - self.start)
+
+    @property
+    def direction(self) -> float:
+        """+1 when the parameter grows towards ``stop``, else −1."""
+        return math.copysign(1.0, self.stop - self.start)
+
+
+class ContinuedParameter:
+    """What the one-parameter families share (shooting here, harmonic balance, tori and
+    circles in analysis.frequency): the runtime parameter number ``param_index`` of
+    ``model`` varies, the others stay at ``values`` (their units); unknowns
+    w = (z / s_z, λ / s_λ) and ``BranchPoint`` points. A family adds ``residual(w)`` and
+    ``amplitude(w)`` (of the first state, its unit)."""
+
+    model: Model
+    param_index: int
+    values: dict[str, float]
+    s_z: np.ndarray
+    s_lam: float
+    tangent_method = "svd"
+
+    @property
+    def param_name(self) -> str:
+        return self.model.parameter_names[self.param_index]
+
+    def p(self, lam: float) -> np.ndarray:
+        """The parameter vector with the continued parameter at ``lam``."""
+        p = self.model.parameter_vector(self.values)
+        p[self.param_index] = lam
+        return p
+
+    def point(self, corrected: Newton, tangent: np.ndarray) -> BranchPoint:
+        """The ``BranchPoint`` of a converged corrector with unit tangent ``tangent``."""
+        w = corrected.w
+        return BranchPoint(lam=w[-1] * self.s_lam, z0=w[:-1] * self.s_z,
+                           multipliers=np.linalg.eigvals(corrected.mono),
+                           monodromy=corrected.mono, tangent=tangent,
+                           amplitude=self.amplitude(w),
+                           newton_iterations=corrected.iterations)
+
+    def unknowns(self, point: BranchPoint) -> np.ndarray:
+        """The scaled unknowns w = (z0 / s_z, λ / s_λ) of ``point``."""
+        return np.concatenate([point.z0 / self.s_z, [point.lam / self.s_lam]])
+
+    def value(self, point: BranchPoint) -> float:
+        return point.lam
+
+    def describe(self, point: BranchPoint) -> str:
+        return f"{self.param_name} = {point.lam:.6g}, " + \
+            ("stable" if point.stable else "unstable")
+
+
+def tangent(jac: np.ndarray, previous: np.ndarray | None, direction: float) -> np.ndarray:
+    """Unit null vector of the n × (n + 1) Jacobian, oriented along ``previous`` (or by the
+    sign of ``direction`` in λ at the start)."""
+    tau = np.linalg.svd(jac)[2][-1]
+    ref = np.dot(tau, previous) if previous is not None else tau[-1] * direction
+    return -tau if ref < 0 else tau
 
 
 def newton(prob: BranchProblem, w_pred: np.ndarray, tau: np.ndarray, tol: float,
@@ -185,17 +234,15 @@ def correct(prob: BranchProblem, w_pred: np.ndarray, tau: np.ndarray, tol: float
     return None if out is None else (out.w, out.jac, out.mono, out.iterations)
 
 
-def branch_point(prob: BranchProblem, w: np.ndarray, jac: np.ndarray, mono: np.ndarray,
+def branch_point(prob: ContinuedParameter, w: np.ndarray, jac: np.ndarray, mono: np.ndarray,
                  previous: np.ndarray | None, direction: float, iterations: int
                  ) -> BranchPoint:
     """The ``BranchPoint`` of the converged unknowns ``w`` (Jacobian ``jac``, monodromy
-    ``mono``), its tangent oriented along ``previous`` (None: by ``direction``)."""
-    return BranchPoint(lam=w[-1] * prob.s_lam, z0=w[:-1] * prob.s_z,
-                       multipliers=np.linalg.eigvals(mono), monodromy=mono,
-                       tangent=tangent(jac, previous, direction),
-                       amplitude=prob.amplitude(w), newton_iterations=iterations)
+    ``mono``), its tangent by SVD oriented along ``previous`` (None: by ``direction``)."""
+    return prob.point(Newton(w, jac, mono, iterations, 0.0, 0.0),
+                      tangent(jac, previous, direction))
 
 
-def scaled(prob: BranchProblem, point: BranchPoint) -> np.ndarray:
+def scaled(prob: ContinuedParameter, point: BranchPoint) -> np.ndarray:
     """The scaled unknowns w = (z0 / s_z, λ / s_λ) of ``point``."""
-    return np.concatenate([point.z0 / prob.s_z, [point.lam / prob.s_lam]])
+    return prob.unknowns(point)

@@ -1,36 +1,42 @@
-"""Tracing a branch: the guarded predictor-corrector loop, and the ways to start one.
+"""The shooting family: periodic orbits continued by the engine, and the ways to start one.
 
-The step adapts to the Newton iterations, and every step must pass the ``StepGuards``
-(Newton contraction, distance from the predictor, angles between the tangents and the
-secant, the direction of λ, a located fold where the tangent's λ component flips): a
-refused step is retried at half the step, so that a corrector landing on a neighbouring
-branch (the period-1 orbit beside a period-3 one, say) is refused, not accepted silently.
-The guards are tests with thresholds in the scaled variables, not a proof of connectedness.
-Special points between accepted points are located by ``detect``.
+``ShootingProblem``: unknowns w = (z0 / s_z, λ / s_λ), n + 1 of them for a model of n states
+(the orbit's state at the section, scaled per component by ``periodic.state_scale``, and
+the continuation parameter scaled by the requested range); equations
+G(w) = (Φ_T(z0; λ) − z0) / s_z = 0 (shooting, ``analysis.integrate.flow``), the monodromy
+matrix and ∂Φ/∂λ by AD (the period's own dependence on λ, e.g. on the speed, included).
+Its points carry the Floquet multipliers; LP, PD, BP and NS are located by ``detect``.
 
 Starts: ``continue_orbits`` (a model and a parameter range: the first orbit by shooting),
 ``continue_from_orbit`` (an orbit of ``periodic.shoot``, e.g. after branch switching),
 ``continue_from_branch`` (a point of a stored branch, either direction) and
-``continue_problem`` (a ``BranchProblem`` built by hand). Each takes its settings as a
-``ContinuationOptions`` (``options=``) or as keyword arguments, which build one.
+``continue_problem`` (a ``ShootingProblem`` built by hand). Each takes its settings as a
+``ContinuationOptions`` (``options=``) or as keyword arguments, which build one, and is
+traced by the one engine (``trace.trace``) into a branch Dataset (``trace_branch``).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.integrate.flow import Period, steps_per_period
+from analysis.integrate.flow import (
+    Period,
+    evaluate,
+    flow_map,
+    orbit_states,
+    period_seconds,
+    steps_per_period,
+)
 from analysis.integrate.plan import RunPlan
-from analysis.model import BallCounts, Model, System, as_system
+from analysis.model import BallCounts, Model, Structure, System, as_system
 from analysis.provenance import system_of_attrs
 from analysis.stability.continuation.dataset import branch_dataset
-from analysis.stability.continuation.detect import fold_between, lp_test, points_between
 from analysis.stability.continuation.options import (
     DEFAULT_DS,
     ContinuationOptions,
@@ -39,17 +45,69 @@ from analysis.stability.continuation.options import (
 )
 from analysis.stability.continuation.problem import (
     BranchPoint,
-    BranchProblem,
-    Newton,
+    ContinuedParameter,
+    ContinuedRange,
     branch_point,
     newton,
-    orbit_scale,
-    scaled,
 )
-from analysis.stability.periodic import PeriodicOrbit, as_period, shoot
+from analysis.stability.continuation.trace import Progress, trace
+from analysis.stability.periodic import PeriodicOrbit, as_period, shoot, state_scale
 
-Progress = Callable[[str], None] | None
-"""Where progress lines go (None: nowhere)."""
+
+@dataclass
+class ShootingProblem(ContinuedParameter):
+    """Periodic orbits of ``model`` (with ``structure``) of period ``period`` as the runtime
+    parameter number ``param_index`` varies, the others at ``values`` (their units): the
+    section at ``t0`` (s), ``n_steps`` RK4 steps per period, the unknowns scaled by ``s_z``
+    (per state, its unit) and ``s_lam`` (the parameter's unit). The flow map and the orbit
+    sampler are built on construction. The shooting family of the engine (``trace.trace``):
+    its points are ``BranchPoint`` with the Floquet multipliers."""
+
+    model: Model
+    structure: Structure
+    period: Period
+    param_index: int
+    values: dict[str, float]
+    t0: float
+    n_steps: int
+    s_z: np.ndarray
+    s_lam: float
+    flow: object = field(default=None)
+
+    def __post_init__(self):
+        self.flow = flow_map(self.model, self.structure, self.period, self.n_steps)
+        self.orbit = orbit_states(self.model, self.structure, self.period, self.n_steps)
+
+    @property
+    def n(self) -> int:
+        return self.model.n_state
+
+    def residual(self, w: np.ndarray):
+        """G(w) (n), its Jacobian (n × (n + 1)) and the monodromy matrix."""
+        n = self.n
+        z, lam = w[:n] * self.s_z, w[n] * self.s_lam
+        z_end, mono, dp = evaluate(self.flow, z, self.t0, self.p(lam))
+        g = (z_end - z) / self.s_z
+        jz = (mono - np.eye(n)) * self.s_z[None, :] / self.s_z[:, None]
+        jl = dp[:, self.param_index] * self.s_lam / self.s_z
+        return g, np.column_stack([jz, jl]), mono
+
+    def amplitude(self, w: np.ndarray) -> float:
+        """Half the peak-to-peak of the first state variable (x, x_rotor …; m) over one
+        period."""
+        n = self.n
+        states = np.asarray(self.orbit(w[:n] * self.s_z, self.t0, self.p(w[n] * self.s_lam)))
+        return float(np.ptp(states[0])) / 2
+
+
+def orbit_scale(prob: ShootingProblem, z0: np.ndarray) -> np.ndarray:
+    """Per-component scales (``periodic.state_scale``) from the largest |z_i| over one period
+    of the orbit through z0 (velocities at least size·2π/T)."""
+    states = np.asarray(prob.orbit(z0, prob.t0, prob.model.parameter_vector(prob.values)))
+    return state_scale(np.abs(states).max(axis=1),
+                       period_seconds(prob.model, prob.structure, prob.period, prob.values),
+                       prob.model.module.STATE_UNITS)
+
 
 
 def continue_orbits(
@@ -92,14 +150,8 @@ def continue_orbits(
     options = options_with(options, ds=ds, ds_min=ds_min, ds_max=ds_max,
                            max_points=max_points, tol=tol, guards=guards)
     system = as_system(system, n_balls, **parameters)
-    mdl = system.model
-    if param not in mdl.parameter_names:
-        raise InputError(f"param: '{param}' is not a parameter of '{mdl.name}'; "
-                         f"choose one of {', '.join(mdl.parameter_names)}")
-    if start == stop:
-        raise InputError("stop: must differ from start")
+    ContinuedRange.check(system.model, param, start, stop)
     system = system.replace(**{param: start})
-    mdl.parameters({param: stop})  # range check of the end value
     first = shoot(system, None, period, guess, t0, dt=dt, settle=settle)
     if not first.converged:
         raise InputError(f"start: no periodic orbit found at {param} = {start:g} "
@@ -127,7 +179,7 @@ def continue_from_orbit(orbit: PeriodicOrbit, *, param: str, stop: float,
 def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
                    dt: float | None, options: ContinuationOptions, progress: Progress,
                    label: str = "") -> xr.Dataset:
-    """The ``BranchProblem`` of the orbit ``first`` over [start, stop] (scales from the
+    """The ``ShootingProblem`` of the orbit ``first`` over [start, stop] (scales from the
     orbit), continued by ``continue_problem``."""
     if first.system is None:
         raise InputError("orbit: no System attached (continue from an orbit of shoot)")
@@ -136,13 +188,13 @@ def _continue_from(first: PeriodicOrbit, param: str, start: float, stop: float,
     # the step must stay below dt along the whole range (the period depends on λ)
     n_steps = _steps_for_range(first.system, per, param, (start, stop), dt)
     n = model.n_state
-    prob = BranchProblem(model, first.structure, per, model.parameter_names.index(param),
+    prob = ShootingProblem(model, first.structure, per, model.parameter_names.index(param),
                          dict(first.values), first.t0, n_steps, np.ones(n), abs(stop - start))
     prob.s_z = orbit_scale(prob, first.z0)
     return continue_problem(prob, first.z0, stop, options, progress=progress, label=label)
 
 
-def continue_problem(prob: BranchProblem, z0: np.ndarray, stop: float,
+def continue_problem(prob: ShootingProblem, z0: np.ndarray, stop: float,
                      options: ContinuationOptions | None = None, *,
                      progress: Progress = None, label: str = "") -> xr.Dataset:
     """Continue the branch of ``prob`` from the orbit through ``z0`` (the state at the
@@ -161,7 +213,7 @@ def continue_problem(prob: BranchProblem, z0: np.ndarray, stop: float,
     return trace_branch(prob, first, stop, options, progress=progress, label=label)
 
 
-def start_point(prob: BranchProblem, z0: np.ndarray, lam: float, stop: float, tol: float,
+def start_point(prob: ShootingProblem, z0: np.ndarray, lam: float, stop: float, tol: float,
                 tangent: np.ndarray | None = None) -> BranchPoint | None:
     """The first point of a branch: the orbit through ``z0`` at ``lam`` corrected by Newton
     (λ held fixed, or along ``tangent`` when given, which then is the point's tangent; else
@@ -192,107 +244,15 @@ def _steps_for_range(system: System, per: Period, param: str, ends: tuple[float,
     return max(steps)
 
 
-def _angle(u: np.ndarray, v: np.ndarray) -> float:
-    """Angle between two vectors (deg)."""
-    cos = np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v))
-    return math.degrees(math.acos(float(np.clip(cos, -1.0, 1.0))))
-
-
-def _step_refusal(prob: BranchProblem, a: BranchPoint, b: BranchPoint, newton: Newton,
-                  ds: float, guards: StepGuards) -> str:
-    """Why the step from ``a`` to ``b`` (corrected by ``newton`` from a predictor ds away)
-    is refused by ``guards``; '' when it passes (the fold test is ``detect.fold_between``)."""
-    if not guards.active:
-        return ""
-    if newton.contraction > guards.max_contraction:
-        return (f"Newton contraction {newton.contraction:.2f} > "
-                f"{guards.max_contraction:g}")
-    if newton.distance > guards.max_correction * ds:
-        return (f"the corrector moved {newton.distance / ds:.2f} ds > "
-                f"{guards.max_correction:g} ds from the predictor")
-    if b.angle > guards.max_angle:
-        return f"the tangent turned {b.angle:.1f}° > {guards.max_angle:g}°"
-    secant = scaled(prob, b) - scaled(prob, a)
-    worst = max(_angle(secant, a.tangent), _angle(secant, b.tangent))
-    if worst > guards.max_angle:
-        return f"the secant is {worst:.1f}° > {guards.max_angle:g}° off a tangent"
-    same_side = np.sign(a.tangent[-1]) == np.sign(b.tangent[-1])
-    if same_side and secant[-1] * a.tangent[-1] < 0 and abs(secant[-1]) > 1e-9 * ds:
-        return "the parameter moved against both tangents"
-    return ""
-
-
-def _step(prob: BranchProblem, prev: BranchPoint, ds: float, tol: float, direction: float,
-          guards: StepGuards) -> tuple[list[BranchPoint], BranchPoint] | str:
-    """One predictor-corrector step of ``ds`` from ``prev``: (special points located between,
-    the new point), or the reason it is refused (no convergence, or a guard)."""
-    corrected = newton(prob, scaled(prob, prev) + ds * prev.tangent, prev.tangent, tol)
-    if corrected is None:
-        return "no convergence"
-    point = branch_point(prob, corrected.w, corrected.jac, corrected.mono, prev.tangent,
-                         direction, corrected.iterations)
-    point.angle = _angle(prev.tangent, point.tangent)
-    point.contraction = corrected.contraction
-    reason = _step_refusal(prob, prev, point, corrected, ds, guards)
-    if reason:
-        return reason
-    lp = None
-    if lp_test(prev) != 0 and np.sign(lp_test(prev)) != np.sign(lp_test(point)):
-        lp = fold_between(prob, prev, point, tol, direction)
-        if lp is None and guards.active:
-            return "the parameter component of the tangent changed sign but no fold was found"
-    return points_between(prob, prev, point, tol, direction, lp=lp), point
-
-
-def trace_branch(prob: BranchProblem, first: BranchPoint, stop: float,
+def trace_branch(prob: ShootingProblem, first: BranchPoint, stop: float,
                  options: ContinuationOptions, *, progress: Progress = None, label: str = "",
                  attrs: dict | None = None) -> xr.Dataset:
-    """Continue from ``first`` (its tangent oriented the way to go, its ``ds`` the first
-    step) until λ leaves the range between ``first.lam`` and ``stop``, ``max_points``
-    points, or a step refused even at ``ds_min`` (``options``); ``attrs``: more attributes
-    of the branch Dataset."""
-    param = prob.param_name
-    ds_min, ds_max, max_points = options.ds_min, options.ds_max, options.max_points
-    branch, ds = [first], first.ds
-    lo, hi = min(first.lam, stop), max(first.lam, stop)
-    status, refused = "reached the end of the range", 0
-    while len(branch) < max_points:
-        prev = branch[-1]
-        result = _step(prob, prev, ds, options.tol, _direction(prev), options.guards)
-        if isinstance(result, str):
-            refused += result != "no convergence"
-            ds /= 2
-            if ds < ds_min:
-                status = _refused_status(result, ds_min, param, prev.lam)
-                break
-            continue
-        found, point = result
-        branch.extend(found)
-        branch.append(point)
-        ds = min(ds * 1.5, ds_max) if point.newton_iterations <= 3 else max(ds / 1.5, ds_min)
-        point.ds = ds
-        if progress and len(branch) % 10 == 0:
-            progress(f"{len(branch)} points, {param} = {point.lam:.6g}, "
-                     f"{'stable' if point.stable else 'unstable'}")
-        if not lo <= point.lam <= hi:
-            break
-    else:
-        status = f"stopped after max_points = {max_points}"
-    return branch_dataset(prob.model, prob, branch, param, status, label,
-                          refused_steps=refused, **(attrs or {}))
-
-
-def _direction(point: BranchPoint) -> float:
-    """The sign of λ along the tangent (the start-up orientation of ``problem.tangent``)."""
-    return math.copysign(1.0, point.tangent[-1])
-
-
-def _refused_status(reason: str, ds_min: float, param: str, lam: float) -> str:
-    """The status of a run stopped because no step down to ``ds_min`` was accepted."""
-    if reason == "no convergence":
-        return f"step fell below ds_min = {ds_min:g} (no convergence)"
-    return (f"refused every step down to ds_min = {ds_min:g} from {param} = {lam:.8g} "
-            f"({reason}): possibly a jump to another branch")
+    """The branch of ``prob`` traced by the engine from ``first`` (its tangent oriented the
+    way to go, its ``ds`` the first step) towards ``stop`` (``options``), as a Dataset
+    (``branch_dataset``; ``attrs``: more attributes)."""
+    out = trace(prob, first, stop, options, progress=progress)
+    return branch_dataset(prob.model, prob, out.points, prob.param_name, out.status, label,
+                          refused_steps=out.refused, **(attrs or {}))
 
 
 def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, stop: float,
@@ -332,10 +292,8 @@ def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, st
                          f"points), got {point}")
     k = point % size
     lam = float(branch[param][k])
-    if not math.isfinite(stop) or stop == lam:
-        raise InputError(f"stop: must be finite and differ from {param} = {lam:g} at point {k}")
+    ContinuedRange.check(system_of_attrs({**attrs, param: lam}).model, param, lam, stop)
     prob = _problem_of_branch(branch, lam, stop, dt)
-    prob.model.parameters({param: stop})  # range check of the end value
     z0 = branch.z0.values[k]
     if prob.s_z is None:
         prob.s_z = orbit_scale(prob, z0)
@@ -357,8 +315,8 @@ def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, st
 
 
 def _problem_of_branch(branch: xr.Dataset, lam: float, stop: float,
-                       dt: float | None) -> BranchProblem:
-    """The ``BranchProblem`` of a stored branch at ``param = lam``, with enough steps per
+                       dt: float | None) -> ShootingProblem:
+    """The ``ShootingProblem`` of a stored branch at ``param = lam``, with enough steps per
     period for the range to ``stop`` (at least the branch's own) and its scales (``s_z``
     None when the file has none: an older file)."""
     attrs = branch.attrs
@@ -370,7 +328,7 @@ def _problem_of_branch(branch: xr.Dataset, lam: float, stop: float,
     n_steps = max(int(attrs["steps_per_period"]),
                   _steps_for_range(system, per, param, (lam, stop), dt))
     s_lam = float(attrs.get("param_scale", abs(stop - lam)))
-    prob = BranchProblem(model, system.structure, per, model.parameter_names.index(param),
+    prob = ShootingProblem(model, system.structure, per, model.parameter_names.index(param),
                          values, float(attrs["t0"]), n_steps, np.ones(model.n_state), s_lam)
     prob.s_z = np.asarray(branch.state_scale.values, dtype=float) \
         if "state_scale" in branch else None

@@ -20,7 +20,8 @@ from analysis.integrate.flow import Period, evaluate, flow_map, period_seconds
 from analysis.provenance import system_of_attrs
 from analysis.stability.continuation.dataset import first_point
 from analysis.stability.continuation.options import ContinuationOptions
-from analysis.stability.continuation.trace import Progress, continue_from_orbit
+from analysis.stability.continuation.shooting import continue_from_orbit
+from analysis.stability.continuation.trace import Progress
 from analysis.stability.periodic import (
     PeriodicOrbit,
     as_period,
