@@ -148,3 +148,21 @@ def test_a_feature_block_reads_back_exactly(rotor):
     assert [f.cells for f in again.found] == [f.cells for f in block.found]
     np.testing.assert_array_equal(np.array(again.found[0].points),
                                   np.array(block.found[0].points))
+
+
+def test_a_kernel_that_cannot_be_built_is_refused_on_the_gpu_and_replaced_on_the_cpu(
+        rotor, monkeypatch):
+    import analysis.integrate.kernels as kernels
+    from analysis.stability.attractors import featurizing
+
+    def unbuildable(*args, **kwargs):
+        raise kernels.Unsupported("operation 'erf' has no C form")
+
+    monkeypatch.setattr(kernels, "run_members", unbuildable)
+    monkeypatch.setattr(kernels, "check_fits", lambda *args, **kwargs: None)
+    study = make_study(rotor, 10, mapper="recurrence", device="cpu")
+    with pytest.raises(InputError, match=r"^--device gpu: the member kernel of model "
+                                         r"'balanced-rotor' cannot be built: operation"):
+        featurizing.recorder(study.map, "gpu", 10, FeatureOptions())
+    assert featurizing.recorder(study.map, "cpu", 10, FeatureOptions()) is \
+        featurizing.map_record
