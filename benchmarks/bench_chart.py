@@ -5,8 +5,8 @@ pass), on all cores. Prints the wall time and the points per second per core.
 
 In the same run, a serial reference: for ``--reference-points`` points of the grid, each
 with its neighbour on the speed axis (same N_b), the pair computed in this process as the
-chart computes it (``chart_points``: the two tangents in the vector lanes of
-``analysis.integrate.lanes``), each point also alone (``chart_point``: the scalar CasADi
+chart computes it (``chart_points``: the two points as members of one call of the member
+kernels, ``analysis.integrate.kernels``), each point also alone (``chart_point``: the scalar CasADi
 blocks), against the model's compiled RK4 blocks (``analysis.integrate.compiled.library`` /
 ``Runner``: states only, no tangent, no classification) over the same simulated time from
 the same initial states; the ratio of the summed times is the chart's cost per point in
@@ -87,7 +87,7 @@ def rk4_pair(n_balls: int, pair: list[dict], durations: list[float]) -> None:
 
 
 def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
-    """Chart points (a pair in lanes, and each alone) against compiled RK4 at ``count``
+    """Chart points (a pair in one kernel call, and each alone) against compiled RK4 at ``count``
     grid points spread over both axes, each with its neighbour on x; median of ``repeat``
     interleaved runs each (the first call, which loads the libraries, not timed). Times in
     s, per point."""
@@ -138,7 +138,7 @@ def main() -> None:
     ref = serial_reference(full_x, y, args.reference_points, args.repeat)
     print(f"serial reference, {len(ref['rows'])} pairs of neighbouring points of the "
           f"1600-point grid (median of {args.repeat} each; times per point):")
-    print("| N_b | speed_rpm | simulated (s) | chart point, lanes (s) | alone (s) | "
+    print("| N_b | speed_rpm | simulated (s) | chart point, kernel (s) | alone (s) | "
           "compiled RK4, states only (s) | ratio | ratio alone |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|")
     for n_balls, speed, duration, chart_s, alone_s, rk4_s in ref["rows"]:

@@ -1,19 +1,20 @@
 """Throughput of an ensemble (``analysis.integrate.ensemble``) against one run at a time.
 
 Both paths integrate the same members (initial states near the spec's) for the same steps of
-a stroboscopic map, interleaved in one process, one core:
+a stroboscopic map, interleaved in one process:
 
 - one trajectory at a time: each member's whole duration in one ``compiled.run_rk4`` call
   through the model's compiled RK4 blocks, keeping the state after every period (the
   strongest single-trajectory path: at most a few dozen block calls per member);
-- the ensemble: ``StroboscopicMap.advance`` on all members, ``LANES`` per call of the state
-  lane kernel (``lanes.state_kernel``).
+- the ensemble: ``StroboscopicMap.advance`` on all members in one call of the member
+  kernels' CPU build (``analysis.integrate.kernels``: one member per OpenMP iteration, every
+  core, or ``BEARINGDYN_THREADS``).
 
     python benchmarks/bench_ensemble.py [--model balanced-rotor] [--n-balls 8]
         [--speed-rpm 8000] [--members 64] [--periods 200] [--repeat 5]
 
 Prints the trajectory-steps per second of each path (medians and best of the repeats), the
-ratio of the medians, and the first-use time of the state kernel (C written, compiled into
+ratio of the medians, and the first-use time of the member kernel (C written, compiled into
 an empty cache, loaded and self-tested). The two paths' section points are checked equal
 bit for bit before anything is timed.
 """
@@ -30,7 +31,8 @@ import numpy as np
 
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.ensemble import StroboscopicMap
-from analysis.integrate.lanes import LANES, state_kernel
+from analysis.integrate.kernels import members
+from analysis.integrate.kernels.cpu import cores, cpu_library
 from analysis.model import System
 
 
@@ -39,19 +41,19 @@ def first_use(system: System) -> float:
     saved = os.environ.get("BEARINGDYN_CACHE")
     with tempfile.TemporaryDirectory(prefix="bench-ensemble-") as cache:
         os.environ["BEARINGDYN_CACHE"] = cache
-        state_kernel.cache_clear()
+        cpu_library.cache_clear()
+        members._self_test.cache_clear()
         try:
             start = time.perf_counter()
-            kern = state_kernel(system.model, system.structure)
+            members._kernel(system, False, "cpu")
             seconds = time.perf_counter() - start
         finally:
             if saved is None:
                 del os.environ["BEARINGDYN_CACHE"]
             else:
                 os.environ["BEARINGDYN_CACHE"] = saved
-            state_kernel.cache_clear()
-    if kern is None:
-        raise SystemExit("no state lane kernel for this model (see analysis/integrate/lanes.py)")
+            cpu_library.cache_clear()
+            members._self_test.cache_clear()
     return seconds
 
 
@@ -73,8 +75,6 @@ def main() -> None:
     rng = np.random.default_rng(1)
     z = system.state * (1 + 0.5 * rng.standard_normal((k, n))) + 1e-7 * rng.standard_normal((k, n))
     lib, p = library(system.model, system.structure), system.p
-    if state_kernel(system.model, system.structure) is None:
-        raise SystemExit("no state lane kernel for this model")
 
     def one_at_a_time() -> np.ndarray:
         return np.stack([run_rk4(lib, p, z[i], smap.dt, args.periods * big_n, big_n)[:, 1:].T
@@ -87,7 +87,7 @@ def main() -> None:
         raise SystemExit("the ensemble's section points differ from the single runs'")
     steps = k * args.periods * big_n
     rates: dict[str, list[float]] = {"one trajectory at a time (run_rk4)": [],
-                                     f"ensemble ({LANES} lanes per call)": []}
+                                     f"ensemble (member kernel, {cores()} threads)": []}
     for _ in range(args.repeat):
         for key, path in zip(rates, (one_at_a_time, together), strict=True):
             start = time.perf_counter()
@@ -96,15 +96,15 @@ def main() -> None:
     print(f"{system.model.name}, N_b = {args.n_balls}, {args.speed_rpm:g} rpm, period "
           f"{args.period}: T = {smap.period_s:.6g} s, N = {big_n} steps of h = {smap.dt:.6g} s; "
           f"{k} members x {args.periods} periods = {steps} trajectory-steps per path, "
-          f"{args.repeat} interleaved repeats, one core")
+          f"{args.repeat} interleaved repeats; load average {os.getloadavg()[0]:.2f}")
     print("| path | median (trajectory-steps/s) | best | µs per step (median) |")
     print("|---|---:|---:|---:|")
     for key, values in rates.items():
         med = statistics.median(values)
         print(f"| {key} | {med:.4g} | {max(values):.4g} | {1e6 / med:.3f} |")
-    base, lanes = (statistics.median(v) for v in rates.values())
-    print(f"ratio of medians (ensemble / one at a time): {lanes / base:.2f}x")
-    print(f"first use of the state kernel (write C, compile, load, self-test): {compile_s:.2f} s")
+    base, kernel = (statistics.median(v) for v in rates.values())
+    print(f"ratio of medians (ensemble / one at a time): {kernel / base:.2f}x")
+    print(f"first use of the member kernel (write C, compile, load, self-test): {compile_s:.2f} s")
 
 
 if __name__ == "__main__":

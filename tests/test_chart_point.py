@@ -20,7 +20,7 @@ from analysis.stability.classify import default_section
 from analysis.stability.lyapunov import lyapunov
 from analysis.sweeps.chart import chart_point_two_pass, stability_chart
 from analysis.sweeps.grid import Axis, Setting, record
-from analysis.sweeps.points import chart_point, one_pass
+from analysis.sweeps.points import chart_point, chart_points, one_pass
 
 CALM = {"radial_load": 50.0}
 """Radial load 50 N: a periodic orbit for the balanced rotor, a two-frequency torus with
@@ -114,11 +114,11 @@ def test_chart_without_lyapunov_runs_the_states_only():
     assert one["amplitude_x"] == two["amplitude_x"]
 
 
-def test_chart_uses_the_one_pass_point(tmp_path):
+def test_chart_uses_the_kernel_points(tmp_path):
     setting = Setting("balanced-rotor", 8, {}, transient=0.5, samples=40)
     chart = stability_chart(setting, Axis.parse("speed_rpm:3000:5000:2"),
                             Axis.parse("radial_load:50:50:1"), tmp_path / "c.nc")
     for ix, speed in enumerate((3000.0, 5000.0)):
-        want = chart_point(setting, _system(setting, 8, {"speed_rpm": speed,
-                                                         "radial_load": 50.0}))
+        want = chart_points(setting, [_system(setting, 8, {"speed_rpm": speed,
+                                                           "radial_load": 50.0})])[0]
         assert float(chart.lyapunov.values[0, ix]) == want["lyapunov"]

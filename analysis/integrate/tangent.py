@@ -21,7 +21,7 @@ rides along is described by ``Carry``:
 the next smaller size (one step in the C code, however many a block runs), and
 ``chain_blocks`` covers any number of steps with such blocks;
 ``tangent_block`` renormalises r tangent vectors by QR every ``renorm_every`` steps
-(``qr_logs``, shared with the lane kernel of ``analysis.integrate.lanes``). Every builder is
+(``qr_logs``). Every builder is
 memoised per process, so one model, structure and set of options yields one Function
 object, hence one compiled library (``analysis.integrate.compiled``).
 """

@@ -3,9 +3,10 @@
 Lyapunov exponent and amplitude.
 
 Each point is computed in one pass (``analysis.sweeps.points``: states and tangent together,
-neighbouring points of the same balls in lockstep lanes); ``chart_point_two_pass`` is the
-former two-pass point, kept for comparison. A chart runs through one executor
-(``analysis.sweeps.executors``) and stores each finished point at once
+neighbouring points of the same balls as members of one call of the member kernels,
+``analysis.integrate.kernels``, on every core or the GPU: ``device``);
+``chart_point_two_pass`` is the former two-pass point, kept for comparison. A chart runs
+through one executor (``analysis.sweeps.executors``) and stores each finished point at once
 (``analysis.sweeps.store``, written by the calling process as points arrive): re-running an
 interrupted command computes only the missing points.
 
@@ -20,13 +21,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from analysis.errors import SimulationError
-from analysis.integrate.lanes import LANES
+from analysis.integrate.kernels import resolve_device
 from analysis.io import save_dataset
 from analysis.model import System, as_system
 from analysis.provenance import run_attrs, state_at
@@ -94,14 +96,21 @@ def _task_system(task: tuple) -> System:
     return setting.system_at(**{xname: xval, yname: yval})
 
 
-def _chart_group_task(group: list[tuple]) -> list[tuple[str, dict]]:
-    """Chart points of one model and balls together (``points.chart_points``: their
-    tangents in lockstep, each result ``points.chart_point``'s bit for bit); with ``Ics``
-    (a task's last item) also each point's attractors among K initial states."""
+GROUP_POINTS = {"cpu": 32, "gpu": 1 << 15}
+"""Neighbouring points of the same balls per call of the member kernels (and per store
+write): on the CPU enough to keep every core busy while an interrupted chart loses little;
+on a GPU enough to fill it."""
+
+
+def _chart_group_task(group: list[tuple], device: str = "cpu") -> list[tuple[str, dict]]:
+    """Chart points of one model and balls together (``points.chart_points``: one call of
+    the member kernels on ``device``); with ``Ics`` (a task's last item) also each point's
+    attractors among K initial states."""
     setting = group[0][0]
     systems = [_task_system(task) for task in group]
     out = [(task[-2], point if isinstance(point, dict) else _failed_point(setting, point))
-           for task, point in zip(group, chart_points(setting, systems), strict=True)]
+           for task, point in zip(group, chart_points(setting, systems, device),
+                                  strict=True)]
     ics = group[0][-1]
     if ics is not None:
         for (key, point), system in zip(out, systems, strict=True):
@@ -121,16 +130,17 @@ def _ics_point(setting: Setting, ics: Ics, system: System, key: str) -> dict:
                 "diverged_share": np.nan, "multistable": 0}
 
 
-def _chart_groups(setting: Setting, tasks: list[tuple]) -> list[list[tuple]]:
-    """Neighbouring pending points of the same balls in groups of ``LANES`` (one group per
-    point without a tangent: lanes only speed up the tangent)."""
+def _chart_groups(setting: Setting, tasks: list[tuple],
+                  size: int = GROUP_POINTS["cpu"]) -> list[list[tuple]]:
+    """Neighbouring pending points of the same balls in groups of ``size`` (one group per
+    point without a tangent: the kernels run the tangent's points)."""
     if not setting.lyapunov:
         return [[task] for task in tasks]
     groups: list[list[tuple]] = []
     previous = None
     for task in tasks:
         balls = _task_system(task).structure
-        if groups and balls == previous and len(groups[-1]) < LANES:
+        if groups and balls == previous and len(groups[-1]) < size:
             groups[-1].append(task)
         else:
             groups.append([task])
@@ -142,14 +152,17 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                     executor: Executor | None = None,
                     progress: Callable[[int, int], None] | None = None,
                     on_damaged: Callable[[str], None] | None = None,
-                    ics: Ics | None = None) -> xr.Dataset:
+                    ics: Ics | None = None, device: str = "cpu") -> xr.Dataset:
     """Classify every point of the grid y × x; writes and returns the netCDF Dataset.
 
     Resumable as ``analysis.sweeps.diagram.bifurcation_diagram``; a point whose run fails is
     classed ``failed: …`` (``nature_code`` 0) and the chart goes on. ``ics``: also map K
     initial states per point (``multistability``: ``n_attractors``, ``multistable``,
-    ``attractor_codes``, ``diverged_share``)."""
+    ``attractor_codes``, ``diverged_share``). ``device``: where the points with λ1 run
+    (``cpu``, ``gpu`` or ``auto``: ``kernels.resolve_device``, checked before any point)."""
     check_grid(setting, x, y)
+    device = resolve_device(device, len(x.values) * len(y.values),
+                            max(1, round(setting.transient / setting.step())))
     if ics is not None:  # its box fits the model, before any point runs
         ics.box_of(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
     definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
@@ -164,8 +177,10 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
-        run_with_progress(executor or SerialExecutor(), _chart_group_task,
-                          _chart_groups(setting, tasks), lambda: len(store.done()),
+        run_with_progress(executor or SerialExecutor(), partial(_chart_group_task,
+                                                                device=device),
+                          _chart_groups(setting, tasks, GROUP_POINTS[device]),
+                          lambda: len(store.done()),
                           len(x.values) * len(y.values), progress,
                           lambda group, results: [store.save(*r) for r in results])
         ds = _assemble_chart(store, setting, x, y, ics)

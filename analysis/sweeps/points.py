@@ -1,12 +1,19 @@
 """Stability-chart points in one pass: the states and the tangent of λ1 integrated together.
 
-``chart_point`` takes the place of the two-pass point of ``analysis.sweeps.chart`` (simulate
-and keep every state, then integrate the states again with a tangent vector for λ1), with
-the same signature and result. One run covers the setting's transient and record:
+``chart_points`` (the chart's) runs the points of one model and balls with λ1 as members of
+one call of the member kernels (``analysis.integrate.kernels``, the tangent variant, on every
+core or the GPU: ``kernel_points``): each point's step is the largest h <= dt dividing its
+section period (``kernels.section_step``), so its section points are states at steps, its
+tangent is renormalised once per section, and only the sections, the logs and the extremes
+leave the kernel. Non-chaotic points keep their class and λ1 within its interval against
+``one_pass`` (``tests/integrate/test_kernel_chart.py``).
 
-1. the states alone (the model's compiled RK4 blocks, ``compiled.library``; for points in
-   lanes, the state lane kernel of ``analysis.integrate.lanes``, the same steps bit for bit)
-   up to the start of the tangent transient;
+``one_pass`` (``chart_point``) is the former point, kept as the reference and for points
+without λ1, with the same signature and result as the two-pass point of
+``analysis.sweeps.chart``. One run covers the setting's transient and record:
+
+1. the states alone (the model's compiled RK4 blocks, ``compiled.library``) up to the start
+   of the tangent transient;
 2. the states with one tangent vector, renormalised every ``RENORM_EVERY`` steps, in
    compiled blocks (``lyapunov.tangent_block`` with its states, one library per model and
    balls in the cache of ``analysis.integrate.compiled``); the logs of the first
@@ -20,7 +27,6 @@ few states around each section time kept: the section points are then those of
 are the same RK4 steps at the same times k·dt as ``simulate``'s, so the states are the
 two-pass run's bit for bit and non-chaotic points classify alike.
 """
-
 from __future__ import annotations
 
 import math
@@ -32,9 +38,20 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.compiled import Runner, compiled_functions, library, test_state
-from analysis.integrate.lanes import LANES, Kernel, StateKernel, state_kernel
-from analysis.integrate.lanes import kernel as lane_kernel
+from analysis.integrate.compiled import (
+    CompileError,
+    Runner,
+    compiled_functions,
+    library,
+    test_state,
+)
+from analysis.integrate.kernels import (
+    Schedule,
+    Unsupported,
+    resolve_device,
+    run_members,
+    section_step,
+)
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import (
     blow_up_limit,
@@ -71,14 +88,6 @@ in the lanes and the scalar blocks alike). Off: it changes quasi-periodic points
 benchmark chart by up to 1e-7 relative in λ1 (1.6e-3 at a point of λ1 ≈ 20 ± 11 1/s below
 the chaos floor), beyond the 1e-12 that a speed-up may change a non-chaotic result
 (docs/performance.md, "Two points per vector register")."""
-STATE_CHUNK = 10_000
-"""RK4 steps per call of the state lane kernel in a chart point's states-alone part (as the
-largest compiled block)."""
-LANE_RENORMS = 100
-"""Renormalisations per call of the lane kernel at most (10⁴ steps, as the largest scalar
-block: in benchmarks/bench_lanes.py calls of 30 were 5 % slower)."""
-
-
 @cache
 def chart_blocks(model: Model, structure: Structure,
                  compiled: bool = True) -> dict[int, ca.Function]:
@@ -309,119 +318,137 @@ def _scalar_tangent(point: _Point, compiled: bool) -> np.ndarray:
                         point.z, point.attrs["dt"], point.schedule, point.record)
 
 
-def _run_lanes(kern: Kernel, points: list[_Point], dt: float) -> list:
-    """The tangent part of up to ``LANES`` points (same model and balls) in lockstep: each
-    lane from its own start over its own renormalisations, fed to its own record. Returns
-    per point the logs of every renormalisation, or the ``SimulationError`` of its
-    blow-up (the other lanes go on)."""
-    n, lanes = kern.n, len(points)
-    s = np.empty((2 * n + 1, LANES))
-    p = np.empty((kern.n_par, LANES))
-    for k in range(LANES):  # lanes beyond the points repeat the first (results unused)
-        point = points[min(k, lanes - 1)]
-        s[:, k] = np.concatenate([point.z, [point.schedule.start], np.eye(n)[:, 0]])
-        p[:, k] = point.system.p
-    left = [point.schedule.renorms for point in points]
-    logs: list[list[np.ndarray]] = [[] for _ in points]
-    outcome: list = [None] * lanes
-    while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):
-        count = min(LANE_RENORMS, max(left[k] for k in range(lanes) if outcome[k] is None))
-        call_logs, states = kern.run(s, p, np.full(LANES, dt), np.zeros(LANES), count,
-                                     RENORM_EVERY)
-        for k, point in enumerate(points):
-            used = min(count, left[k])
-            if outcome[k] is not None or used == 0:
-                continue
-            try:
-                point.record.take(states[k, :used * RENORM_EVERY])
-            except SimulationError as exc:
-                outcome[k] = exc
-                continue
-            logs[k].append(call_logs[:used, k].copy())
-            left[k] -= used
-    return [outcome[k] if outcome[k] is not None else
-            (np.concatenate(logs[k]) if logs[k] else np.empty(0)) for k in range(lanes)]
+@dataclass(frozen=True)
+class _KernelPoint:
+    """A chart point's run on the member kernels: its attrs, section and period T (s),
+    step h = T/N (s, ``kernels.section_step``), the record's ``count`` sections from
+    ``first`` (t = k·T), the tangent's ``skip`` sections before them and the ``averaged``
+    last logs of λ1 (a multiple of ``BLOCKS``)."""
+
+    system: System
+    attrs: dict
+    section: str
+    period: float
+    h: float
+    every: int
+    first: int
+    count: int
+    skip: int
+    averaged: int
 
 
-def _run_states_lanes(kern: StateKernel, points: list[_Point], dt: float) -> list:
-    """The states-alone part of up to ``LANES`` points (same model and balls) in lockstep in
-    the state lane kernel (each lane ``simulate``'s steps bit for bit): steps 1 … its
-    ``schedule.start`` fed to its record, and its ``z`` set to the state at that step.
-    Returns per point None, or the ``SimulationError`` of its blow-up (the other lanes go
-    on)."""
-    n, lanes = kern.n, len(points)
-    s = np.empty((n + 1, LANES))
-    p = np.empty((kern.n_par, LANES))
-    for k in range(LANES):  # lanes beyond the points repeat the first (results unused)
-        point = points[min(k, lanes - 1)]
-        s[:, k] = np.append(point.z, 0.0)
-        p[:, k] = point.system.p
-    left = [point.schedule.start for point in points]
-    outcome: list = [None] * lanes
-    done = 0
-    while any(left[k] > 0 and outcome[k] is None for k in range(lanes)):
-        count = min(STATE_CHUNK, max(left[k] for k in range(lanes) if outcome[k] is None))
-        states = kern.run(s, p, np.full(LANES, dt), np.zeros(LANES), count, 1)
-        steps = np.arange(done + 1, done + count + 1, dtype=float)
-        for k, point in enumerate(points):
-            used = min(count, left[k])
-            if outcome[k] is not None or used == 0:
-                continue
-            rows = np.column_stack([states[k, :used], steps[:used]])
-            try:
-                point.record.take(rows)
-            except SimulationError as exc:
-                outcome[k] = exc
-                continue
-            left[k] -= used
-            if left[k] == 0:
-                point.z = rows[-1, :n].copy()
-        done += count
-    return outcome
+def _kernel_point(system: System, duration: float, transient: float, dt: float,
+                  section: str | None) -> _KernelPoint:
+    """Plan one point on the kernels: the run checked with the step ``dt`` (``RunPlan``),
+    then its step made the largest h <= dt dividing the section period, so the section
+    points fall on steps; the record's sections are those of t = k·T in [transient,
+    duration], the tangent's transient (``lyapunov.default_lengths``) whole sections before
+    them."""
+    model = system.model
+    checked = RunPlan.make(system, duration=duration, transient=transient, dt=dt,
+                           warn=lambda message: None)
+    section = section or default_section(completed_attrs(system, **checked.settings()))
+    period = period_of(completed_attrs(system, **checked.settings()), section)
+    h, every = section_step(period, dt)
+    run = RunPlan.make(system, duration=duration, transient=transient, dt=h,
+                       warn=lambda message: None)
+    attrs = completed_attrs(system, **run.settings())
+    first = -(-run.first // every)
+    count = run.n_steps // every - first + 1
+    averaged = count - count % BLOCKS
+    if averaged < BLOCKS:
+        raise InputError(f"chart point: the record ({(run.n_steps - run.first) * h:.3g} s) "
+                         f"holds fewer than {BLOCKS} sections of {period:.3g} s")
+    skip = min(math.ceil(default_lengths(model)[2] / period - 1e-9), first - 1)
+    return _KernelPoint(system, attrs, section, period, h, every, first, count, max(skip, 0),
+                        averaged)
 
 
-def one_pass_lanes(systems: list[System], durations: list[float], transient: float,
-                   dt: float, section: str | None, compiled: bool = True) -> list:
-    """``one_pass`` with every system (all of one model and balls) run ``LANES`` at a time
-    in the vector kernels of ``analysis.integrate.lanes``: the states alone in the state
-    kernel (``_run_states_lanes``), then the tangent in the tangent kernel (each result is
-    ``one_pass``'s bit for bit); per system its ``PointResult`` or its
-    ``SimulationError``. Without a kernel (an operation it does not write, no compiler) the
-    points run one by one."""
-    first = systems[0]
-    kern = lane_kernel(first.model, first.structure, RENORM_EVERY, ANGLE_ADDITION) \
-        if compiled else None
-    skern = state_kernel(first.model, first.structure) if kern is not None else None
+def _blow_up(point: _KernelPoint, step: int, final: np.ndarray) -> SimulationError:
+    """The ``SimulationError`` ``simulate`` raises for a blow-up at ``step`` (its message,
+    from ``check_bounded``)."""
+    model = point.system.model
+    try:
+        check_bounded(final[:, None], np.array([step * point.h]),
+                      blow_up_limit(model, dict(point.system.parameters)),
+                      model.centre_indices())
+    except SimulationError as exc:
+        return exc
+    return SimulationError(f"the motion blew up at t = {step * point.h:.6g} s")
+
+
+def kernel_points(systems: list[System], durations: list[float], transient: float,
+                  dt: float, section: str | None, device: str = "cpu") -> list:
+    """Chart points with λ1 on the member kernels (``analysis.integrate.kernels``, the
+    tangent variant): the points of each model and balls in one ``run_members`` call on
+    ``device`` (``cpu``: every core; ``gpu``; ``auto``). Each point's step is the largest
+    h <= ``dt`` dividing its section period (``section_step``), so its section points are
+    states at steps; its amplitudes are the extremes over the record (from the section
+    before the transient's end), λ1 and its interval the batch means of the last
+    ``averaged`` section logs (renormalised once per section). Per system its
+    ``PointResult`` or the ``SimulationError`` of its blow-up.
+
+    Against ``one_pass`` (interpolated sections, h = dt, renormalised every
+    ``RENORM_EVERY`` steps) non-chaotic points keep their class, and λ1 stays within its
+    interval (``tests/integrate/test_kernel_chart.py``). Without a CPU build (an operation
+    the writer does not know, no compiler) the points run one by one (``one_pass``); on the
+    GPU that is an error (``Unsupported``, ``CompileError``)."""
     results: list = [None] * len(systems)
-    prepared: list[tuple[int, _Point]] = []
+    groups: dict[tuple, list[tuple[int, _KernelPoint]]] = {}
     for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):
+        point = _kernel_point(system, duration, transient, dt, section)
+        groups.setdefault((id(system.model), system.structure), []).append((i, point))
+    for group in groups.values():
+        points = [point for _, point in group]
+        schedule = Schedule(
+            [(p.first - p.skip - 1) * p.every for p in points], [p.every for p in points],
+            [p.skip + p.count for p in points], tangent=True,
+            lyapunov_skip=[p.skip for p in points])
         try:
-            prepared.append((i, _prepare(system, duration, transient, dt, section, True,
-                                         compiled, states_alone=skern is None)))
-        except SimulationError as exc:
-            results[i] = exc
-    size = LANES if kern is not None else 1
-    for g in range(0, len(prepared), size):
-        group = prepared[g:g + size]
-        if skern is not None:
-            failed = _run_states_lanes(skern, [point for _, point in group], dt)
-            for (i, _), outcome in zip(group, failed, strict=True):
-                results[i] = outcome
-            group = [item for item, outcome in zip(group, failed, strict=True)
-                     if outcome is None]
-            if not group:
+            out = run_members(points[0].system,
+                              np.array([np.asarray(p.system.state, float) for p in points]),
+                              np.array([p.system.p for p in points]),
+                              np.array([p.h for p in points]), schedule, device=device)
+        except (Unsupported, CompileError):
+            if resolve_device(device, len(points), schedule.total_steps) == "gpu":
+                raise
+            for i, _ in group:  # no CPU build: the scalar blocks, point by point
+                results[i] = _scalar_point(systems[i], durations[i], transient, dt, section)
+            continue
+        for j, (i, point) in enumerate(group):
+            if out.diverged_at[j] >= 0:
+                results[i] = _blow_up(point, int(out.diverged_at[j]), out.final[j])
                 continue
-        if kern is not None:
-            outcomes = _run_lanes(kern, [point for _, point in group], dt)
-        else:
-            try:
-                outcomes = [_scalar_tangent(group[0][1], compiled)]
-            except SimulationError as exc:
-                outcomes = [exc]
-        for (i, point), outcome in zip(group, outcomes, strict=True):
-            results[i] = outcome if isinstance(outcome, SimulationError) else \
-                _finish(point, outcome)
+            total = point.skip + point.count
+            results[i] = _kernel_result(point, out.sections[j, point.skip:total],
+                                        out.logs[j, total - point.averaged:total],
+                                        out.high[j] - out.low[j])
     return results
+
+
+def _scalar_point(system: System, duration: float, transient: float, dt: float,
+                  section: str | None) -> PointResult | SimulationError:
+    """``one_pass`` with its tangent, or the ``SimulationError`` of its blow-up."""
+    try:
+        return one_pass(system, duration, transient, dt, section)
+    except SimulationError as exc:
+        return exc
+
+
+def _kernel_result(point: _KernelPoint, sections: np.ndarray, logs: np.ndarray,
+                   ptp_values: np.ndarray) -> PointResult:
+    """A kernel point's verdict: its section points (states at t = k·T, taken exactly by
+    ``poincare_section``), amplitudes and λ1 from the section logs."""
+    model = point.system.model
+    times = (0.0 + np.arange(point.first, point.first + point.count)) * point.period
+    run = to_dataset(times, sections.T, point.attrs, model)
+    interval = point.every * point.h
+    lam = float(running_mean(logs[None, :], interval)[0, -1])
+    ci = float(batch_ci95(logs[None, :], interval)[0])
+    ptp = dict(zip(model.state_names, ptp_values.tolist(), strict=True))
+    points = poincare_section(run, point.section)
+    return PointResult(classify_section(points, ptp, lambda: (lam, ci)), lam, ci, ptp,
+                       displacement_names(run), points)
 
 
 def _chart_result(out: PointResult) -> dict:
@@ -441,10 +468,12 @@ def chart_point(setting: Setting, system: System) -> dict:
                                   setting.step(), setting.section, tangent=setting.lyapunov))
 
 
-def chart_points(setting: Setting, systems: list[System]) -> list[dict | SimulationError]:
-    """``chart_point`` of several points of one model and balls, their tangents in lockstep
-    (``one_pass_lanes``): per point its result, bit for bit ``chart_point``'s, or the
-    ``SimulationError`` of its blow-up."""
+def chart_points(setting: Setting, systems: list[System],
+                 device: str = "cpu") -> list[dict | SimulationError]:
+    """Chart points of one model and balls: with λ1 (``setting.lyapunov``) all in one call
+    of the member kernels on ``device`` (``kernel_points``: sections on steps, see there),
+    else one by one (``one_pass`` without a tangent, bit for bit ``chart_point``'s); per
+    point its result or the ``SimulationError`` of its blow-up."""
     durations = [setting.seconds(system) for system in systems]
     dt = setting.step()
     if not setting.lyapunov:
@@ -456,5 +485,6 @@ def chart_points(setting: Setting, systems: list[System]) -> list[dict | Simulat
             except SimulationError as exc:
                 outs.append(exc)
     else:
-        outs = one_pass_lanes(systems, durations, setting.transient, dt, setting.section)
+        outs = kernel_points(systems, durations, setting.transient, dt, setting.section,
+                             device)
     return [out if isinstance(out, SimulationError) else _chart_result(out) for out in outs]

@@ -15,8 +15,9 @@ from analysis.integrate.kernels.members import (
     Schedule,
     check_fits,
     run_members,
+    section_step,
 )
 from analysis.integrate.kernels.source import Unsupported
 
 __all__ = ["DeviceInfo", "MemberResult", "Schedule", "Unsupported", "check_fits",
-           "cuda_source", "device_info", "resolve_device", "run_members"]
+           "cuda_source", "device_info", "resolve_device", "run_members", "section_step"]

@@ -16,6 +16,7 @@ bit; the CUDA build agrees with it to the last bits of CUDA's libm.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -37,6 +38,18 @@ GPU_BLOCK_SHARE = 0.5
 """Share of the GPU's free memory one block of members may take."""
 SELF_TEST_TOL = 1e-12
 """Relative agreement of the tangent variant with its stage RK4 in CasADi (self-test)."""
+
+
+def section_step(period_s: float, dt: float) -> tuple[float, int]:
+    """(h, N): the largest RK4 step h <= ``dt`` (s) that divides the section period
+    ``period_s`` (s) into N whole steps, N = ceil(T/dt − 1e-9), h = T/N: sections then fall
+    on steps (no interpolation between samples)."""
+    if not (math.isfinite(period_s) and period_s > 0):
+        raise InputError(f"period_s: a finite period > 0 s, got {period_s!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt: a finite step > 0 s, got {dt!r}")
+    steps = max(1, math.ceil(period_s / dt - 1e-9))
+    return period_s / steps, steps
 
 
 @dataclass(frozen=True)

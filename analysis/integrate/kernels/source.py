@@ -16,8 +16,9 @@ Two variants:
 - **states** (``model_source``): the RK4 step of the compiled blocks
   (``tangent.tangent_step(rk4_step, Carry(constants=True))``: ``rk4_steps1(s, p, h, t0, c)``
   with ``s = [z; k]``, step k from ``t0 + k·h``) and its parameter-only constants;
-- **tangent** (``model_source(…, tangent=True)``): the same steps over the transient, then RK4 of the state
-  and of the variational equation stage by stage: ``stage(t, z, p, v, c) -> (f(t, z),
+- **tangent** (``model_source(…, tangent=True)``): the same steps over the transient, then
+  RK4 of the state and of the variational equation stage by stage:
+  ``stage(t, z, p, v, c) -> (f(t, z),
   J(t, z)·v)`` (the model's ``rhs`` and its Jacobian–vector product, ``casadi.jtimes``), so
   v' is the exact derivative of the discrete RK4 map the member follows
   (v' = v + h/6 (V1 + 2 V2 + 2 V3 + V4), V_i = J(t_i, z_i)(v + a_i h V_{i−1})): a working
@@ -27,7 +28,7 @@ Two variants:
   stages by rotation). The tangent is renormalised at every section and the log of its
   growth kept.
 
-The blow-up predicate is written from ``simulate.BLOW_UP`` (``blow_up_c``): a state not
+The blow-up predicate is written from ``simulate.bad_states`` (``blow_up_c``): a state not
 finite, or a body's centre displacement (``hypot(x, y)``, ``|x|``) beyond the member's
 limit (m), the rule of ``simulate.bad_states``.
 """
