@@ -28,7 +28,11 @@ from analysis.stability.attractors.featurizing import (
     periods,
     touching_groups,
 )
+from analysis.stability.attractors.sampling import Range
 from analysis.stability.attractors.study import Block, Blocks, make_study
+from analysis.sweeps.attractor_blocks import basins_to_file
+from analysis.sweeps.executors import make_executor
+from analysis.sweeps.store import PointStore
 
 RPM = 30 / np.pi  # rpm per rad/s
 DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_amplitude=0.3)
@@ -166,3 +170,45 @@ def test_a_kernel_that_cannot_be_built_is_refused_on_the_gpu_and_replaced_on_the
         featurizing.recorder(study.map, "gpu", 10, FeatureOptions())
     assert featurizing.recorder(study.map, "cpu", 10, FeatureOptions()) is \
         featurizing.map_record
+
+
+class Interrupted(Exception):
+    pass
+
+
+def test_feature_blocks_stream_into_the_store_and_resume(monkeypatch, tmp_path):
+    """Blocks go to the store one by one (the executor's workers are not used: the kernel
+    takes the cores); a run stopped after the first block resumes to the same file."""
+    import xarray as xr
+
+    system = System.make("duffing", speed_rpm=1.40 * RPM, **DUFFING)
+    x, y = Range("x", -3.0, 3.0, 8), Range("vx", -3.0, 3.0, 8)
+    how = dict(block=20, mapper="features", device="cpu",
+               feature_options=FeatureOptions(transient=100, sections=24))
+    reference = basins_to_file(system, x, y, tmp_path / "r.nc", **how)
+    assert reference.attrs["mapper"] == "features" and reference.sizes["attractor"] == 2
+    save, saved = PointStore.save, []
+
+    def stop(self, key, values):
+        save(self, key, values)
+        saved.append(key)
+        raise Interrupted(key)
+
+    with monkeypatch.context() as patch:
+        patch.setattr(PointStore, "save", stop)
+        with pytest.raises(Interrupted):
+            basins_to_file(system, x, y, tmp_path / "b.nc", **how,
+                           executor=make_executor("processes", 2))
+    assert len(list((tmp_path / "b.nc.parts").glob("*.npz"))) == 1
+    mapped = []
+    real = FeaturizingMapper.map
+
+    def count(self, states, *args, **kwargs):
+        mapped.append(len(states))
+        return real(self, states, *args, **kwargs)
+
+    monkeypatch.setattr(FeaturizingMapper, "map", count)
+    again = basins_to_file(system, x, y, tmp_path / "b.nc", **how)
+    assert mapped == [20, 20, 4]  # the stored block was not mapped again
+    xr.testing.assert_identical(again.drop_attrs(), reference.drop_attrs())
+    np.testing.assert_array_equal(again.basin.values, reference.basin.values)
