@@ -28,7 +28,7 @@ import pkgutil
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, cached_property
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
@@ -270,16 +270,35 @@ class Model:
         ``ROLES`` existed falls back to the names the analysis layer used to assume
         (``LEGACY_ROLES``): the parameters so named that the model has."""
         written = getattr(self.module, "ROLES", None)
-        if written is not None:
-            return {role: tuple(names) for role, names in written.items()}
         names = self.parameter_names
-        return {role: tuple(n for n in names if n == base or (prefix and n.startswith(base)))
-                for role, (base, prefix) in LEGACY_ROLES.items()}
+        if written is not None:
+            roles = {role: tuple(names) for role, names in written.items()}
+        else:
+            roles = {role: tuple(n for n in names if n == base or (prefix and n.startswith(base)))
+                     for role, (base, prefix) in LEGACY_ROLES.items()}
+        roles.setdefault("speed", self.speed_parameters)
+        return roles
+
+    @cached_property
+    def speed_parameters(self) -> tuple[str, ...]:
+        """The parameters the shaft's angular speed ``shaft_speed(p)`` reads (``speed_rpm``
+        in every shipped model): the ``speed`` role, found in the model's equations as the
+        other roles are found in its terms; () for a model without a turning shaft."""
+        import casadi as ca
+
+        p = ca.SX.sym("p", len(self.parameter_names))
+        omega = ca.SX(self.module.shaft_speed(p))
+        return tuple(name for i, name in enumerate(self.parameter_names)
+                     if ca.depends_on(omega, p[i]))
 
     def role(self, role: str) -> tuple[str, ...]:
         """The parameters that play ``role`` (``clearance``, ``ball_diameter``,
-        ``contact_stiffness``, ``radial_load``, ``unbalance_force``, ``forcing_period``), in
-        the order of the bodies and bearings; () when none does."""
+        ``contact_stiffness``, ``radial_load``, ``unbalance_force``, ``forcing_period``,
+        ``speed``), in the order of the bodies and bearings; () when none does.
+
+        >>> load_model("vakharia2015").role("speed"), load_model("mathieu").role("speed")
+        (('speed_rpm',), ())
+        """
         roles = self.roles
         if role not in roles:
             raise ValueError(f"role: must be one of {', '.join(roles)}, got {role!r}")

@@ -50,8 +50,6 @@ import numpy as np
 
 from analysis.errors import InputError
 
-SPEED = "speed_rpm"
-"""The parameter a profile drives."""
 MAX_ROWS = 257
 """Most rows of a profile table (256 segments): each row beyond two adds a few operations
 to every RK4 stage."""
@@ -360,7 +358,7 @@ def time_dependence(rhs: ca.Function, p: np.ndarray, speed_index: int) -> str:
 def check_model(model: Any, structure: tuple[int, ...], values: Mapping[str, float]) -> None:
     """``InputError`` unless ``model`` can follow a speed profile: it has a ``speed_rpm``
     parameter and its time dependence is the rotation of the shaft (``time_dependence``)."""
-    if SPEED not in model.parameter_names:
+    if not model.role("speed"):  # the parameter shaft_speed reads, found by role
         raise InputError(f"--speed-rpm: model '{model.name}' has no parameter speed_rpm; a "
                          "speed profile needs a rotor")
     reason = _reason(model, structure, tuple(sorted(values.items())))
@@ -373,7 +371,7 @@ def check_model(model: Any, structure: tuple[int, ...], values: Mapping[str, flo
 def _reason(model: Any, structure: tuple[int, ...], items: tuple) -> str:
     rhs = model.functions(structure).rhs
     return time_dependence(rhs, model.parameter_vector(dict(items)),
-                           model.parameter_names.index(SPEED))
+                           model.parameter_names.index(model.role("speed")[0]))
 
 
 class ProfileFunctions:
@@ -391,7 +389,7 @@ class ProfileFunctions:
         n, n_par = base.size1_in(1), base.size1_in(2)
         t, h = ca.SX.sym("t"), ca.SX.sym("h")
         z, q = ca.SX.sym("z", n), ca.SX.sym("q", n_par + 2 + 2 * hinges)
-        index = model.parameter_names.index(SPEED)
+        index = model.parameter_names.index(model.role("speed")[0])
         p, n0, s0 = q[:n_par], q[n_par], q[n_par + 1]
         knots = q[n_par + 2:n_par + 2 + hinges]
         changes = q[n_par + 2 + hinges:]
