@@ -23,6 +23,7 @@ from analysis.cli.common import (
     parse_sets,
     reports_errors,
 )
+from analysis.cli.devices import DeviceOption
 from analysis.errors import InputError
 
 
@@ -115,6 +116,7 @@ def chart(
                           "(repeatable; default: every position within ± the radial "
                           "clearance).")] = None,
     ics_seed: Annotated[int, typer.Option(help="Seed of the --ics states.")] = 0,
+    device: DeviceOption = "auto",
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
@@ -134,7 +136,7 @@ def chart(
     try:
         ds = stability_chart(setting, *axes, output, executor=ex,
                              progress=ProgressReporter("chart", quiet),
-                             on_damaged=_recomputing, ics=several)
+                             on_damaged=_recomputing, ics=several, device=device)
     finally:
         ex.close()
     typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "

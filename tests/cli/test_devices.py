@@ -74,3 +74,10 @@ def test_attractors_with_the_featurizing_mapper_on_the_cores(cli, tmp_path):
     found = [a for a in out["attractors"] if a["id"] > 0]
     assert len(found) == 2  # the two orbits of the resonance
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc"]  # the store removed
+
+
+def test_chart_takes_the_device_option(cli, tmp_path):
+    res = cli("chart", "balanced-rotor", "--x", "speed_rpm:7000:8000:2", "--y", "n_balls:8:8",
+              "--device", "tpu", "-o", "c.nc", cwd=tmp_path)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--device" in res.stderr
+    assert nothing_written(tmp_path)
