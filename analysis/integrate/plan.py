@@ -17,7 +17,9 @@ Checks, in this order (the first that fails is the one reported):
    ``analysis.integrate.checks.check_resolution``);
 5. the memory of the samples a run keeps (``in_memory`` runs only);
 6. the RK4 stability of the step at the model's stiffest linearisation
-   (``analysis.integrate.checks.check_rk4_step``).
+   (``analysis.integrate.checks.check_rk4_step``);
+7. a speed profile, the run's own field (``RunPlan.profile``): the model follows it, a table
+   covers the run, and 4 and 6 hold at each of its speeds (``check_profile``).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 
 from analysis.errors import InputError
 from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
+from analysis.integrate.speed_profile import SpeedProfile
 from analysis.model import System
 
 Method = Literal["rk4", "cvodes"]
@@ -91,16 +94,25 @@ class RunPlan:
     t0: float | None = None
     rtol: float = 1e-10
     atol: float = 1e-16
+    profile: SpeedProfile | None = None
+    """The run's speed profile (a run-up or coast-down; ``system`` is at its speed at
+    t = 0), None at the constant speed of ``system``."""
 
     @classmethod
     def make(cls, system: System, *, duration: float | None = None,
              transient: float | None = None, dt: float | None = None, method: Method = "rk4",
              save_every: int = 1, rtol: float = 1e-10, atol: float = 1e-16, t0: float | None = None,
-             in_memory: bool = False, warn: Callable[[str], None] | None = None) -> RunPlan:
+             in_memory: bool = False, warn: Callable[[str], None] | None = None,
+             profile: SpeedProfile | None = None) -> RunPlan:
         """The plan of a whole run: every check of the module's list, in its order. None
         times are the spec's. ``in_memory``: the run keeps its samples in memory (checked
         against ``MEMORY_BUDGET``). ``warn(message)``: how a coarse step is reported
-        (default: a Python warning)."""
+        (default: a Python warning). ``profile``: the speed the run follows (``system``
+        taken at its speed at t = 0; a constant profile is that speed, no profile), checked
+        last (``check_profile``)."""
+        if profile is not None:
+            system = system.replace(**{_speed(system): profile.start_rpm})
+            profile = None if profile.is_constant else profile
         sim = system.model.simulation_defaults
         duration = float(sim["duration"] if duration is None else duration)
         transient = float(sim["transient"] if transient is None else transient)
@@ -118,11 +130,13 @@ class RunPlan:
             raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
         check_resolution(system, dt, duration, warn=warn)
         plan = cls(system, dt, duration, transient, method, save_every,
-                   None if t0 is None else float(t0), rtol, atol)
+                   None if t0 is None else float(t0), rtol, atol, profile)
         plan.check_kept()
         if in_memory:
             check_memory(system.n_state, plan.n_saved, save_every)
         check_rk4_step(system, dt, method)
+        if profile is not None:
+            check_profile(plan)
         return plan
 
     @classmethod
@@ -193,3 +207,29 @@ class RunPlan:
         if self.duration is None:
             raise InputError("duration: a step-only plan has no duration")
         return self.duration
+
+
+def _speed(system: System) -> str:
+    """The parameter that sets the shaft speed (its ``speed`` role); ``InputError`` for a
+    model without one: a speed profile needs a rotor."""
+    speed = system.model.role("speed")
+    if not speed:
+        raise InputError(f"--speed-rpm: model '{system.model.name}' has no parameter "
+                         "speed_rpm; a speed profile needs a rotor")
+    return speed[0]
+
+
+def check_profile(plan: RunPlan) -> None:
+    """The checks of a run's speed profile, on its ``plan``: the model can follow it
+    (``speed_profile.check_model``), a table reaches the end of the run, and the plan's
+    checks of the speed (its range, the resolution of the fastest forcing, the RK4
+    stability of the step) hold at every speed of the profile's rows."""
+    from analysis.integrate.speed_profile import check_model
+
+    system, profile = plan.system, plan.profile
+    check_model(system.model, system.structure, dict(system.parameters))
+    profile.check_covers(plan.duration)
+    for speed in sorted(set(profile.rpm)):
+        at_speed = system.replace(**{_speed(system): speed})
+        check_resolution(at_speed, plan.dt)
+        check_rk4_step(at_speed, plan.dt, plan.method)

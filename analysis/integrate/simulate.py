@@ -88,13 +88,16 @@ def simulate(
 
 @dataclass(frozen=True)
 class _Run:
-    """A checked run: its plan, provenance and blow-up limit (m); with a speed profile,
-    the profile's Functions and their parameter vector."""
+    """A checked run: its plan, provenance and blow-up limit (m); with a speed profile
+    (the plan's), the profile's Functions and their parameter vector."""
 
     plan: RunPlan
     attrs: dict
     limit: float
-    profile: SpeedProfile | None = None
+
+    @property
+    def profile(self) -> SpeedProfile | None:
+        return self.plan.profile
 
     @property
     def functions(self):
@@ -126,41 +129,21 @@ class _Run:
 def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt, method,
              save_every, rtol, atol, in_memory: bool) -> _Run:
     """Every check of a run (``RunPlan.make``), before any step is taken; a speed
-    profile's (``check_profile``) after the plan's."""
+    profile's (``plan.check_profile``) after the plan's. A ``SpeedProfile`` given as
+    ``speed_rpm`` is taken off the parameters: the profile is a field of the run plan."""
     parameters = dict(parameters)
-    profile = parameters.get("speed_rpm")
-    if isinstance(profile, SpeedProfile):
-        parameters["speed_rpm"] = profile.start_rpm  # a constant profile: today's run
-        profile = None if profile.is_constant else profile
-    else:
-        profile = None
+    profile = parameters.pop("speed_rpm") if isinstance(parameters.get("speed_rpm"),
+                                                        SpeedProfile) else None
     system = as_system(system, n_balls, initial_state, **parameters)
     plan = RunPlan.make(system, duration=duration, transient=transient, dt=dt, method=method,
-                        save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory)
-    if profile is not None:
-        check_profile(plan, profile)
+                        save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory,
+                        profile=profile)
+    system, profile = plan.system, plan.profile
     attrs = completed_attrs(system, **plan.settings(), initial_state=True,
                             tolerances=(rtol, atol) if method == "cvodes" else None,
                             speed_profile=None if profile is None
                             else profile.attrs(plan.duration))
-    return _Run(plan, attrs, blow_up_limit(system.model, dict(system.parameters)), profile)
-
-
-def check_profile(plan: RunPlan, profile: SpeedProfile) -> None:
-    """A speed profile's checks, on a run's ``plan``: the model can follow it
-    (``speed_profile.check_model``), a table reaches the end of the run, and the plan's
-    checks of the speed (its range, the resolution of the fastest forcing, the RK4
-    stability of the step) hold at every speed of the profile's rows."""
-    from analysis.integrate.checks import check_resolution, check_rk4_step
-    from analysis.integrate.speed_profile import check_model
-
-    system = plan.system
-    check_model(system.model, system.structure, dict(system.parameters))
-    profile.check_covers(plan.duration)
-    for speed in sorted(set(profile.rpm)):
-        at_speed = system.replace(speed_rpm=speed)
-        check_resolution(at_speed, plan.dt)
-        check_rk4_step(at_speed, plan.dt, plan.method)
+    return _Run(plan, attrs, blow_up_limit(system.model, dict(system.parameters)))
 
 
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
