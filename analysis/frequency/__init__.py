@@ -33,7 +33,6 @@ from analysis.frequency.continuation import (
     HarmonicBranchProblem,
     continue_harmonic,
     harmonic_branch_dataset,
-    trace_harmonic_branch,
 )
 from analysis.frequency.harmonic import (
     MAX_UNKNOWNS,
@@ -64,5 +63,5 @@ __all__ = [
     "continue_circle", "continue_harmonic", "continue_torus", "fast_samples", "harmonic_balance",
     "harmonic_branch_dataset", "harmonic_convergence", "hill_of", "hill_stability",
     "parse_frequencies", "solve_circle", "solve_torus", "torus_dataset", "torus_of",
-    "torus_run", "trace_harmonic_branch",
+    "torus_run",
 ]

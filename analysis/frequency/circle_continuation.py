@@ -1,21 +1,20 @@
 """Continuation of the invariant circle of the shaft map (``invariant_circle``) in a runtime
-parameter, with the torus branch's step and an honest report of where it stops.
+parameter: the circle family of the one engine (``analysis.stability.continuation.trace``),
+with an honest report of where it stops.
 
-``CircleBranchProblem`` is the branch problem of ``torus_continuation``: unknowns
-w = (U / s_U, λ / s_λ) (U the circle, point-major), equations G = F(U, λ) / s_U with
-F = P(U) − (R_ρ(λ) ⊗ I) U. Its Jacobian is exact: ∂P/∂U and ∂P/∂λ are carried through the
-RK4 (``ShaftMap.along``: the step h = T1(λ)/steps and the phases' dependence included), and
-∂R_ρ/∂λ = ∂R/∂ρ · ∂ρ/∂λ (``shift_derivative``, ρ by AD). Its monodromy is empty, so
-``continuation.branch_step`` (Keller's bordered Newton, the ``StepGuards``, folds) runs as for
-the HB torus (``torus_continuation.trace_torus_branch``). The branch also stops when the
-circle's Fourier tail (``invariant_circle.TAIL_FRACTION``) grows beyond ``tail_limit``: the
-circle is no longer resolved by its N points (it loses smoothness).
+``CircleBranchProblem``: unknowns w = (U / s_U, λ / s_λ) (U the circle, point-major),
+equations G = F(U, λ) / s_U with F = P(U) − (R_ρ(λ) ⊗ I) U. Its Jacobian is exact: ∂P/∂U
+and ∂P/∂λ are carried through the RK4 (``ShaftMap.along``: the step h = T1(λ)/steps and
+the phases' dependence included), and ∂R_ρ/∂λ = ∂R/∂ρ · ∂ρ/∂λ (``shift_derivative``, ρ by
+AD). Its monodromy is empty, so the engine's step (Keller's bordered Newton, the
+``StepGuards``, folds) runs as for the HB torus. Its ``accept`` hook stops the branch when a
+corrected circle's Fourier tail (``invariant_circle.TAIL_FRACTION``) grows beyond
+``tail_limit``: the circle is no longer resolved by its N points (it loses smoothness).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -35,13 +34,16 @@ from analysis.frequency.invariant_circle import (
     shift_matrix,
     solve_circle,
 )
-from analysis.frequency.torus_continuation import stop_report, trace_torus_branch
+from analysis.frequency.torus_continuation import trace_from, tried_residual
 from analysis.frequency.torus_dataset import tori_dataset
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.stability.continuation.options import ContinuationOptions, options_with
-from analysis.stability.continuation.problem import ContinuedParameter
-
-Progress = Callable[[str], None] | None
+from analysis.stability.continuation.problem import (
+    BranchPoint,
+    ContinuedParameter,
+    ContinuedRange,
+)
+from analysis.stability.continuation.trace import Hooks, Progress, Trace, stop_report
 
 TAIL_LIMIT = 1e-2
 """Largest circle tail (its modes k > 0.4 N over its largest, states scaled) of a point the
@@ -60,6 +62,8 @@ class CircleBranchProblem(ContinuedParameter):
     s_lam: float
     tail_limit: float = TAIL_LIMIT
     s_z: np.ndarray = field(init=False)
+    tangent_method = "bordered"
+    noun = "circle"
 
     def __post_init__(self) -> None:
         self.s_z = np.tile(self.state_scale, self.shaft.points)
@@ -98,6 +102,18 @@ class CircleBranchProblem(ContinuedParameter):
     def amplitude(self, w: np.ndarray) -> float:
         """(max − min)/2 of the first state over the circle (its unit)."""
         return float(np.ptp(self.circle(w)[:, 0]) / 2)
+
+    def describe(self, point: BranchPoint) -> str:
+        return f"{self.param_name} = {point.lam:.6g}"
+
+    def too_rough(self, point: BranchPoint) -> str | None:
+        """The ``accept`` hook: why the circle of ``point`` is not kept (its Fourier tail
+        beyond ``tail_limit``), else None."""
+        tail = self.tail(point.z0.reshape(self.shaft.points, -1))
+        if tail <= self.tail_limit:
+            return None
+        return (f"the circle's Fourier tail {tail:.2e} exceeds {self.tail_limit:g} (the "
+                f"circle is no longer resolved by its {self.shaft.points} points)")
 
     def tail(self, u: np.ndarray) -> float:
         modes = circle_modes(u / self.state_scale[None, :])
@@ -139,13 +155,7 @@ def continue_circle(
                            max_points=max_points, tol=tol)
     system = as_system(system, n_balls, **parameters)
     model = system.model
-    if param not in model.parameter_names:
-        raise InputError(f"param: '{param}' is not a parameter of '{model.name}'; "
-                         f"choose one of {', '.join(model.parameter_names)}")
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise InputError(f"stop: must be finite and differ from start, got {start!r}, "
-                         f"{stop!r}")
-    model.parameters({param: stop})
+    span = ContinuedRange.check(model, param, start, stop)
     system = system.replace(**{param: start})
     first = solve_circle(system, None, frequencies, points, dt=dt, settle=settle,
                          convergence=False, stability=False)
@@ -154,25 +164,18 @@ def continue_circle(
                          f"({first.message})")
     shaft = ShaftMap(first.system, first.frequencies, first.steps, first.samples,
                      first.points)
-    prob = CircleBranchProblem(shaft, model.parameter_names.index(param),
-                               dict(first.system.parameters), first.scale, abs(stop - start),
-                               tail_limit)
+    prob = CircleBranchProblem(shaft, span.index, dict(first.system.parameters), first.scale,
+                               span.scale, tail_limit)
     if prob.tail(first.circle) > tail_limit:
         raise InputError(f"points: the circle at {param} = {start:g} has a Fourier tail "
                          f"{prob.tail(first.circle):.2e} above tail_limit = {tail_limit:g}; "
                          "give more points")
-    guarded = _TailGuard(prob)
     with blas_threads():
-        branch, status, tried = trace_torus_branch(guarded, first.circle.reshape(-1), stop,
-                                                   options, progress)
-    if guarded.stopped:
-        status = guarded.stopped
+        out = trace_from(prob, first.circle.reshape(-1), stop, options,
+                         hooks=Hooks(accept=prob.too_rough), progress=progress)
+    branch = out.points
     tails = np.array([prob.tail(pt.z0.reshape(points, -1)) for pt in branch])
-    fine = np.column_stack([np.full(len(branch), np.nan), tails])
-    report = stop_report(prob, branch, status, fine, np.full(len(branch), np.nan), tried)
-    report = report.replace("Last converged torus", "Last converged circle")
-    report = report.replace("residual on the finer grid nan -> nan (xnan), border harmonics",
-                            "circle tail")
+    report = circle_report(prob, out, tails)
     responses = []
     for pt in branch:
         sys_pt = first.system.replace(**{param: float(pt.lam)})
@@ -187,7 +190,7 @@ def continue_circle(
             steps=first.steps, samples=first.samples,
             grid=regular_grid(states, u, 2 * math.pi * w2 / w1)))
     ts = responses[0].torus
-    residuals = [prob.residual_norm(np.concatenate([pt.z0 / prob.s_z, [pt.lam / prob.s_lam]]))
+    residuals = [prob.residual_norm(prob.unknowns(pt))
                  for pt in branch]
     nan = np.full(len(branch), np.nan)
     values = {k: v for k, v in prob.values.items() if k != param}
@@ -202,7 +205,7 @@ def continue_circle(
                    "newton_iterations": ("point", np.array([pt.newton_iterations
                                                             for pt in branch])),
                    "ds": ("point", np.array([pt.ds for pt in branch]))},
-        param=param, param_scale=prob.s_lam, status=status, stop_report=report,
+        param=param, param_scale=prob.s_lam, status=out.status, stop_report=report,
         last_converged=float(branch[-1].lam), points=points, steps=first.steps)
     data = data.assign_coords(phi=("phi", 2 * np.pi * np.arange(points) / points,
                                    {"units": "rad"}))
@@ -214,28 +217,14 @@ def continue_circle(
     return data
 
 
-class _TailGuard:
-    """The branch problem, whose ``residual`` reports no convergence (non-finite G) once a
-    corrected circle's tail exceeds the limit, so the branch stops there with a status."""
-
-    def __init__(self, prob: CircleBranchProblem) -> None:
-        self._prob = prob
-        self.stopped = ""
-
-    def __getattr__(self, name):
-        return getattr(self._prob, name)
-
-    def residual(self, w):
-        g, jac, mono = self._prob.residual(w)
-        if self.stopped:
-            return g * np.nan, jac, mono
-        if np.max(np.abs(g)) < 1e-6:
-            tail = self._prob.tail(self._prob.circle(w))
-            if tail > self._prob.tail_limit:
-                lam = w[-1] * self._prob.s_lam
-                self.stopped = (f"stopped: the circle's Fourier tail {tail:.2e} exceeds "
-                                f"{self._prob.tail_limit:g} at {self._prob.param_name} = "
-                                f"{lam:.8g} (the circle is no longer resolved by its "
-                                f"{self._prob.shaft.points} points)")
-                return g * np.nan, jac, mono
-        return g, jac, mono
+def circle_report(prob: CircleBranchProblem, out: Trace, tails: np.ndarray) -> str:
+    """Where and why the circle branch stopped, in one paragraph of numbers (``tails``: the
+    circle's Fourier tail per point)."""
+    measures = [f"Truncation: circle tail {tails[0]:.3g} -> {tails[-1]:.3g} of the largest"]
+    why = ("the circle outgrew its points (its tail reached "
+           f"{tails[-1]:.3g} of the largest)" if tails[-1] > 0.3 else
+           "Newton found no circle near the predictor although its points still resolve "
+           "the last one: the torus turns sharply, loses smoothness or ceases to exist "
+           "there")
+    return stop_report(out, prob, prob.noun, prob.model.units[prob.param_name],
+                       measures + tried_residual(prob, out), why)

@@ -1,28 +1,22 @@
-"""Continuation of harmonic-balance responses in a runtime parameter.
+"""Continuation of harmonic-balance responses in a runtime parameter: the periodic HB family
+of the one engine (``analysis.stability.continuation.trace``).
 
 The branch problem ``HarmonicBranchProblem`` has the unknowns w = (X / s_X, λ / s_λ): the
 Fourier coefficients scaled per state (``solve.response_scale`` of the first response,
 the same for every harmonic) and the parameter scaled by the requested range; its equations
-G(w) = R(X, λ) / (ω_0 s_i) (ω_0 of the first response, fixed along the branch). It meets
-the interface of ``analysis.stability.continuation``'s corrector: ``residual(w)`` gives
-(G, [∂G/∂w], "monodromy"), where the monodromy is a matrix whose eigenvalues are Hill's
-multipliers (``hill.hill_stability``), computed only when asked for (its eigenvalues, at a
-branch point), so Keller's bordered Newton (``continuation.newton``), the branch points and
-the location of LP, PD, BP and NS points by bisection (``continuation.detect``) are the
-shooting branch's own, with the same tests.
-
-The stepping loop is written here (``trace_harmonic_branch``) because the shooting loop
-ends in a Dataset of shooting orbits; it applies the same ``StepGuards`` with the same
-words (Newton contraction, distance from the predictor, tangent and secant angles, the
-parameter's direction, a located fold where the tangent's λ component flips) and the same
-step control, and stops the same ways (the end of the range, ``max_points``, a step refused
-down to ``ds_min``).
+G(w) = R(X, λ) / (ω_0 s_i) (ω_0 of the first response, fixed along the branch). Its
+``residual(w)`` gives (G, [∂G/∂w], "monodromy"), where the monodromy is a matrix whose
+eigenvalues are Hill's multipliers (``hill.hill_stability``), computed only when asked for
+(its eigenvalues, at a branch point), so Keller's bordered Newton, the ``StepGuards``, the
+step control, the stop statuses and the location of LP, PD, BP and NS points by bisection
+(``continuation.detect``) are the shooting branch's own. Its tangent is the bordered solve
+(``tangent_method = "bordered"``: the SVD's null vector at a tenth of the work for a few
+hundred unknowns).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +35,6 @@ from analysis.frequency.solve import (
 )
 from analysis.integrate.flow import Period
 from analysis.model import BallCounts, Model, System, as_system
-from analysis.stability.continuation.detect import fold_between, lp_test, points_between
 from analysis.stability.continuation.options import (
     ContinuationOptions,
     StepGuards,
@@ -50,14 +43,10 @@ from analysis.stability.continuation.options import (
 from analysis.stability.continuation.problem import (
     BranchPoint,
     ContinuedParameter,
-    Newton,
-    branch_point,
-    newton,
-    scaled,
+    ContinuedRange,
 )
-
-Progress = Callable[[str], None] | None
-"""Where progress lines go (None: nowhere)."""
+from analysis.stability.continuation.step import start_at
+from analysis.stability.continuation.trace import Progress, trace
 
 
 class HillMonodromy:
@@ -93,6 +82,7 @@ class HarmonicBranchProblem(ContinuedParameter):
     omega_ref: float
     sort: str = "centroid"
     s_z: np.ndarray = field(init=False)
+    tangent_method = "bordered"
 
     def __post_init__(self) -> None:
         self.s_z = np.tile(self.state_scale, 2 * self.hs.harmonics + 1)
@@ -174,14 +164,8 @@ def continue_harmonic(
         raise InputError(f"sort: must be one of {', '.join(SORTS)}, got {sort!r}")
     system = as_system(system, n_balls, **parameters)
     model = system.model
-    if param not in model.parameter_names:
-        raise InputError(f"param: '{param}' is not a parameter of '{model.name}'; "
-                         f"choose one of {', '.join(model.parameter_names)}")
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise InputError(f"stop: must be finite and differ from start, got {start!r}, "
-                         f"{stop!r}")
+    span = ContinuedRange.check(model, param, start, stop)
     check_harmonics(harmonics, model.n_state)
-    model.parameters({param: stop})  # range check of the end value
     system = system.replace(**{param: start})
     system, per = prepare(system, period)
     first = harmonic_balance(system, None, per, harmonics, samples=samples, guess=guess,
@@ -190,140 +174,19 @@ def continue_harmonic(
         raise InputError(f"start: no periodic response found at {param} = {start:g} "
                          f"({first.message})")
     hs = HarmonicSystem(first.system, per, harmonics, samples)
-    prob = HarmonicBranchProblem(hs, model.parameter_names.index(param),
-                                 dict(first.system.parameters),
+    prob = HarmonicBranchProblem(hs, span.index, dict(first.system.parameters),
                                  response_scale(hs, first.coefficients, first.period_s),
-                                 abs(stop - start), 2 * math.pi / first.period_s, sort)
+                                 span.scale, 2 * math.pi / first.period_s, sort)
     with blas_threads():
-        return trace_harmonic_branch(prob, first.coefficients, stop, options,
-                                     progress=progress)
-
-
-def trace_harmonic_branch(prob: HarmonicBranchProblem, coeffs: np.ndarray, stop: float,
-                          options: ContinuationOptions, *, progress: Progress = None
-                          ) -> xr.Dataset:
-    """Continue from the response ``coeffs`` (harmonic-major) at the problem's own
-    parameter value towards ``stop`` until λ leaves the range, ``max_points`` points, or a
-    step refused down to ``ds_min``."""
-    param, lam0 = prob.param_name, prob.values[prob.param_name]
-    direction = math.copysign(1.0, stop - lam0)
-    w = np.concatenate([coeffs / prob.s_z, [lam0 / prob.s_lam]])
-    out = newton(prob, w, np.eye(prob.n + 1)[-1], options.tol)
-    if out is None:
-        raise InputError(f"start: the response at {param} = {lam0:g} does not converge "
-                         "again in the branch's unknowns")
-    first = branch_point(prob, out.w, out.jac, out.mono, None, direction, out.iterations)
-    first.ds = options.first_ds
-    branch, ds = [first], first.ds
-    lo, hi = min(lam0, stop), max(lam0, stop)
-    status, refused = "reached the end of the range", 0
-    while len(branch) < options.max_points:
-        prev = branch[-1]
-        result = _step(prob, prev, ds, options.tol, options.guards)
-        if isinstance(result, str):
-            refused += result != "no convergence"
-            ds /= 2
-            if ds < options.ds_min:
-                status = (f"step fell below ds_min = {options.ds_min:g} (no convergence)"
-                          if result == "no convergence" else
-                          f"refused every step down to ds_min = {options.ds_min:g} from "
-                          f"{param} = {prev.lam:.8g} ({result}): possibly a jump to another "
-                          "branch")
-                break
-            continue
-        found, point = result
-        branch.extend(found)
-        branch.append(point)
-        ds = min(ds * 1.5, options.ds_max) if point.newton_iterations <= 3 else \
-            max(ds / 1.5, options.ds_min)
-        point.ds = ds
-        if progress and len(branch) % 10 == 0:
-            progress(f"{len(branch)} points, {param} = {point.lam:.6g}, "
-                     f"{'stable' if point.stable else 'unstable'}")
-        if not lo <= point.lam <= hi:
-            break
-    else:
-        status = f"stopped after max_points = {options.max_points}"
-    return harmonic_branch_dataset(prob, branch, status, refused_steps=refused)
-
-
-def _angle(u: np.ndarray, v: np.ndarray) -> float:
-    cos = np.dot(u, v) / (np.linalg.norm(u) * np.linalg.norm(v))
-    return math.degrees(math.acos(float(np.clip(cos, -1.0, 1.0))))
-
-
-def _refusal(prob: HarmonicBranchProblem, a: BranchPoint, b: BranchPoint, corrected: Newton,
-             ds: float, guards: StepGuards) -> str:
-    """Why ``guards`` refuse the step from a to b ('' when they pass): the tests of the
-    shooting branch's guards, in its words."""
-    if not guards.active:
-        return ""
-    if corrected.contraction > guards.max_contraction:
-        return (f"Newton contraction {corrected.contraction:.2f} > "
-                f"{guards.max_contraction:g}")
-    if corrected.distance > guards.max_correction * ds:
-        return (f"the corrector moved {corrected.distance / ds:.2f} ds > "
-                f"{guards.max_correction:g} ds from the predictor")
-    if b.angle > guards.max_angle:
-        return f"the tangent turned {b.angle:.1f}° > {guards.max_angle:g}°"
-    secant = scaled(prob, b) - scaled(prob, a)
-    worst = max(_angle(secant, a.tangent), _angle(secant, b.tangent))
-    if worst > guards.max_angle:
-        return f"the secant is {worst:.1f}° > {guards.max_angle:g}° off a tangent"
-    same_side = np.sign(a.tangent[-1]) == np.sign(b.tangent[-1])
-    if same_side and secant[-1] * a.tangent[-1] < 0 and abs(secant[-1]) > 1e-9 * ds:
-        return "the parameter moved against both tangents"
-    return ""
-
-
-def _branch_point(prob: HarmonicBranchProblem, corrected: Newton,
-                  previous: np.ndarray) -> BranchPoint:
-    """``continuation.branch_point`` of a corrected step, its tangent from one bordered
-    solve [∂G/∂w; τ_prev] τ = e_last (normalised, oriented along τ_prev) instead of an SVD:
-    the same null vector, a tenth of the work at a few hundred unknowns."""
-    border = np.vstack([corrected.jac, previous])
-    rhs = np.zeros(border.shape[0])
-    rhs[-1] = 1.0
-    try:
-        tau = np.linalg.solve(border, rhs)
-    except np.linalg.LinAlgError:
-        return branch_point(prob, corrected.w, corrected.jac, corrected.mono, previous,
-                            math.copysign(1.0, previous[-1]), corrected.iterations)
-    tau /= np.linalg.norm(tau)
-    if np.dot(tau, previous) < 0:
-        tau = -tau
-    return BranchPoint(lam=corrected.w[-1] * prob.s_lam, z0=corrected.w[:-1] * prob.s_z,
-                       multipliers=np.linalg.eigvals(corrected.mono), monodromy=corrected.mono,
-                       tangent=tau, amplitude=prob.amplitude(corrected.w),
-                       newton_iterations=corrected.iterations)
-
-
-def _step(prob: HarmonicBranchProblem, prev: BranchPoint, ds: float, tol: float,
-          guards: StepGuards) -> tuple[list[BranchPoint], BranchPoint] | str:
-    direction = math.copysign(1.0, prev.tangent[-1])
-    corrected = newton(prob, scaled(prob, prev) + ds * prev.tangent, prev.tangent, tol)
-    if corrected is None:
-        return "no convergence"
-    point = _branch_point(prob, corrected, prev.tangent)
-    point.angle = _angle(prev.tangent, point.tangent)
-    point.contraction = corrected.contraction
-    reason = _refusal(prob, prev, point, corrected, ds, guards)
-    if reason:
-        return reason
-    lp = None
-    if lp_test(prev) != 0 and np.sign(lp_test(prev)) != np.sign(lp_test(point)):
-        lp = fold_between(prob, prev, point, tol, direction)
-        if lp is None and guards.active:
-            return "the parameter component of the tangent changed sign but no fold was found"
-    return points_between(prob, prev, point, tol, direction, lp=lp), point
-
-
-def branch_step(prob, prev: BranchPoint, ds: float, tol: float, guards: StepGuards
-                ) -> tuple[list[BranchPoint], BranchPoint] | str:
-    """One predictor–corrector step of ``ds`` from ``prev`` with the ``guards``: the special
-    points found on the way and the new point, or why the step failed. Any problem with
-    ``residual``, ``amplitude``, ``n``, ``s_z`` and ``s_lam`` (the torus branch's too)."""
-    return _step(prob, prev, ds, tol, guards)
+        lam0 = prob.values[param]
+        w = np.concatenate([first.coefficients / prob.s_z, [lam0 / prob.s_lam]])
+        point = start_at(prob, w, span.direction, options.tol)
+        if point is None:
+            raise InputError(f"start: the response at {param} = {lam0:g} does not converge "
+                             "again in the branch's unknowns")
+        point.ds = options.first_ds
+        out = trace(prob, point, stop, options, progress=progress)
+    return harmonic_branch_dataset(prob, out.points, out.status, refused_steps=out.refused)
 
 
 def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoint],
@@ -334,7 +197,7 @@ def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoin
     ``param_scale``, ``sort``, ``status``, ``branch`` and ``extra``."""
     model, hs = prob.model, prob.hs
     param = prob.param_name
-    residuals = [prob.residual_norm(np.concatenate([p.z0 / prob.s_z, [p.lam / prob.s_lam]]))
+    residuals = [prob.residual_norm(prob.unknowns(p))
                  for p in branch]
     values = {k: v for k, v in prob.values.items() if k != param}
     system = hs.system.replace(**values)

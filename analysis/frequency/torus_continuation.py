@@ -1,24 +1,25 @@
-"""Continuation of tori in a runtime parameter, and an honest report of where it stops.
+"""Continuation of tori in a runtime parameter, and an honest report of where it stops: the
+2-D HB torus family of the one engine (``analysis.stability.continuation.trace``).
 
 The branch problem ``TorusBranchProblem`` is ``continuation.HarmonicBranchProblem`` for the
 torus equations: unknowns w = (X / s_X, λ / s_λ), equations G = R(X, λ) / (ω1,0 s_i). Its
 monodromy is empty (a torus has no Floquet multipliers; its stability is λ1, computed at
-the converged points only), so the periodic branch's step (``continuation.branch_step``: Keller's
-bordered Newton, the same ``StepGuards`` in the same words, folds where the tangent's λ
-component flips) runs unchanged, and its PD, BP and NS tests never fire.
+the converged points only), so the engine's step (Keller's bordered Newton, the same
+``StepGuards`` in the same words, folds where the tangent's λ component flips) runs
+unchanged, and its PD, BP and NS tests never fire.
 
 The continuation stops at the end of the range, after ``max_points``, or when a step is
-refused or fails down to ``ds_min``. Then ``stop_report`` says why, in numbers: the last
-converged parameter value; the growth of the truncation measures (``torus_solve``:
-``residual_fine``, ``tail``) from the first point to the last; the scaled residual of the
-predictor of the last, smallest step tried (how far the torus moved); and λ1 along the
-branch (a torus whose λ1 approaches 0 loses its attraction: it breaks up or bifurcates).
+refused or fails down to ``ds_min``. Then ``torus_report`` says why, in numbers, from the
+engine's ``Trace``: the last converged parameter value; the growth of the truncation
+measures (``torus_solve``: ``residual_fine``, ``tail``) from the first point to the last;
+the scaled residual of the predictor of the last step tried (how far the torus moved); and
+λ1 along the branch (a torus whose λ1 approaches 0 loses its attraction: it breaks up or
+bifurcates).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,7 +27,6 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import branch_step
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
@@ -44,9 +44,13 @@ from analysis.stability.continuation.options import (
     StepGuards,
     options_with,
 )
-from analysis.stability.continuation.problem import ContinuedParameter, branch_point, newton, scaled
-
-Progress = Callable[[str], None] | None
+from analysis.stability.continuation.problem import (
+    BranchPoint,
+    ContinuedParameter,
+    ContinuedRange,
+)
+from analysis.stability.continuation.step import start_at
+from analysis.stability.continuation.trace import Progress, Trace, stop_report, trace
 
 
 @dataclass
@@ -62,9 +66,15 @@ class TorusBranchProblem(ContinuedParameter):
     s_lam: float
     omega_ref: float
     s_z: np.ndarray = field(init=False)
+    tangent_method = "bordered"
 
     def __post_init__(self) -> None:
         self.s_z = np.tile(self.state_scale, self.ts.basis.size)
+
+    noun = "torus"
+
+    def describe(self, point: BranchPoint) -> str:
+        return f"{self.param_name} = {point.lam:.6g}"
 
     @property
     def model(self) -> Model:
@@ -134,13 +144,7 @@ def continue_torus(
                          f"{stability_every!r}")
     system = as_system(system, n_balls, **parameters)
     model = system.model
-    if param not in model.parameter_names:
-        raise InputError(f"param: '{param}' is not a parameter of '{model.name}'; "
-                         f"choose one of {', '.join(model.parameter_names)}")
-    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise InputError(f"stop: must be finite and differ from start, got {start!r}, "
-                         f"{stop!r}")
-    model.parameters({param: stop})
+    span = ContinuedRange.check(model, param, start, stop)
     system = system.replace(**{param: start})
     system, freqs, pair = prepare_torus(system, frequencies, harmonics)
     check_frequencies(system, freqs, pair, system.replace(**{param: stop}).p)
@@ -149,12 +153,11 @@ def continue_torus(
     if not first.converged:
         raise InputError(f"start: no torus found at {param} = {start:g} ({first.message})")
     ts = first.torus
-    prob = TorusBranchProblem(ts, model.parameter_names.index(param),
-                              dict(first.system.parameters), first.scale,
-                              abs(stop - start), ts.basis_omegas()[0])
+    prob = TorusBranchProblem(ts, span.index, dict(first.system.parameters), first.scale,
+                              span.scale, ts.basis_omegas()[0])
     with blas_threads():
-        branch, status, tried = trace_torus_branch(prob, first.coefficients, stop, options,
-                                                   progress)
+        out = trace_from(prob, first.coefficients, stop, options, progress=progress)
+    branch = out.points
     lam1 = np.full((len(branch), 3), np.nan)
     fine = np.array([truncation(ts, pt.z0, prob.state_scale, prob.p(pt.lam)) for pt in branch])
     if stability:
@@ -166,9 +169,9 @@ def continue_torus(
             if progress:
                 progress(f"lambda1 at {param} = {pt.lam:.6g}: {lam1[j, 0]:.4g} 1/s, drift "
                          f"{lam1[j, 2]:.3g}")
-    residuals = [prob.residual_norm(np.concatenate([pt.z0 / prob.s_z, [pt.lam / prob.s_lam]]))
+    residuals = [prob.residual_norm(prob.unknowns(pt))
                  for pt in branch]
-    report = stop_report(prob, branch, status, fine, lam1[:, 0], tried, lam1[:, 2])
+    report = torus_report(prob, out, fine, lam1[:, 0], lam1[:, 2])
     values = {k: v for k, v in prob.values.items() if k != param}
     data = tori_dataset(
         ts, np.array([pt.z0 for pt in branch]), [prob.p(pt.lam) for pt in branch],
@@ -179,86 +182,61 @@ def continue_torus(
                    "newton_iterations": ("point", np.array([pt.newton_iterations
                                                             for pt in branch])),
                    "ds": ("point", np.array([pt.ds for pt in branch]))},
-        param=param, param_scale=prob.s_lam, status=status, stop_report=report,
+        param=param, param_scale=prob.s_lam, status=out.status, stop_report=report,
         last_converged=float(branch[-1].lam))
     data.attrs.update({k: v for k, v in values.items()})
     data.attrs.pop(param, None)
     return data
 
 
-def trace_torus_branch(prob: TorusBranchProblem, coeffs: np.ndarray, stop: float,
-                       options: ContinuationOptions, progress: Progress = None):
-    """The branch points from ``coeffs`` towards ``stop``, the status, and the scaled
-    residual of the last predictor tried (NaN when no step failed)."""
+def trace_from(prob: ContinuedParameter, coeffs: np.ndarray, stop: float,
+               options: ContinuationOptions, **engine: object) -> Trace:
+    """The engine's trace of ``prob`` (a torus or circle problem) from the unknowns
+    ``coeffs`` at the problem's own parameter value towards ``stop``; ``engine``: the
+    ``hooks`` and ``progress`` of ``trace``."""
     param, lam0 = prob.param_name, prob.values[prob.param_name]
-    direction = math.copysign(1.0, stop - lam0)
     w = np.concatenate([coeffs / prob.s_z, [lam0 / prob.s_lam]])
-    out = newton(prob, w, np.eye(prob.n + 1)[-1], options.tol)
-    if out is None:
-        raise InputError(f"start: the torus at {param} = {lam0:g} does not converge again "
-                         "in the branch's unknowns")
-    first = branch_point(prob, out.w, out.jac, out.mono, None, direction, out.iterations)
+    first = start_at(prob, w, math.copysign(1.0, stop - lam0), options.tol)
+    if first is None:
+        raise InputError(f"start: the {prob.noun} at {param} = {lam0:g} does not converge "
+                         "again in the branch's unknowns")
     first.ds = options.first_ds
-    branch, ds = [first], first.ds
-    lo, hi = min(lam0, stop), max(lam0, stop)
-    status, tried = "reached the end of the range", math.nan
-    while len(branch) < options.max_points:
-        prev = branch[-1]
-        result = branch_step(prob, prev, ds, options.tol, options.guards)
-        if isinstance(result, str):
-            tried = prob.residual_norm(scaled(prob, prev) + ds * prev.tangent)
-            ds /= 2
-            if ds < options.ds_min:
-                status = (f"no convergence down to ds_min = {options.ds_min:g} from "
-                          f"{param} = {prev.lam:.8g}" if result == "no convergence" else
-                          f"refused every step down to ds_min = {options.ds_min:g} from "
-                          f"{param} = {prev.lam:.8g} ({result})")
-                break
-            continue
-        found, point = result
-        branch.extend(found)
-        branch.append(point)
-        ds = min(ds * 1.5, options.ds_max) if point.newton_iterations <= 3 else \
-            max(ds / 1.5, options.ds_min)
-        point.ds = ds
-        if progress:
-            progress(f"{len(branch)} tori, {param} = {point.lam:.6g}")
-        if not lo <= point.lam <= hi:
-            break
-    else:
-        status = f"stopped after max_points = {options.max_points}"
-    return branch, status, tried
+    return trace(prob, first, stop, options, **engine)
 
 
-def stop_report(prob: TorusBranchProblem, branch: list, status: str, fine: np.ndarray,
-                lambda1: np.ndarray, tried: float, drift: np.ndarray | None = None) -> str:
-    """Where and why the branch stopped, in one paragraph of numbers (``drift``: of the
-    trajectories from the tori, ``torus_solve.torus_drift``)."""
-    param, unit = prob.param_name, prob.model.units[prob.param_name]
-    a, b = branch[0], branch[-1]
-    text = (f"{status}. Last converged torus at {param} = {b.lam:.8g} {unit} "
-            f"({len(branch)} points from {a.lam:.8g}). Truncation: residual on the finer "
-            f"grid {fine[0, 0]:.2e} -> {fine[-1, 0]:.2e} (x{fine[-1, 0] / fine[0, 0]:.3g}), "
-            f"border harmonics {fine[0, 1]:.3g} -> {fine[-1, 1]:.3g} of the largest")
-    if math.isfinite(tried):
-        text += f"; the last predictor tried had scaled residual {tried:.2e}"
+def tried_residual(prob: ContinuedParameter, out: Trace) -> list[str]:
+    """The scaled residual of the last predictor tried, as a report measure (none when no
+    step failed)."""
+    if out.last_tried is None:
+        return []
+    return [f"the last predictor tried had scaled residual "
+            f"{prob.residual_norm(out.last_tried):.2e}"]
+
+
+def torus_report(prob: TorusBranchProblem, out: Trace, fine: np.ndarray,
+                 lambda1: np.ndarray, drift: np.ndarray | None = None) -> str:
+    """Where and why the branch stopped, in one paragraph of numbers (``fine``: the
+    truncation measures per point; ``drift``: of the trajectories from the tori,
+    ``torus_solve.torus_drift``)."""
+    measures = [f"Truncation: residual on the finer grid {fine[0, 0]:.2e} -> "
+                f"{fine[-1, 0]:.2e} (x{fine[-1, 0] / fine[0, 0]:.3g}), border harmonics "
+                f"{fine[0, 1]:.3g} -> {fine[-1, 1]:.3g} of the largest"]
+    measures += tried_residual(prob, out)
     if np.isfinite(lambda1).any():
         good = lambda1[np.isfinite(lambda1)]
-        text += f"; lambda1 {good[0]:.4g} -> {good[-1]:.4g} 1/s"
-        if good[-1] >= 0:
-            text += " (no longer attracting)"
+        measures.append(f"lambda1 {good[0]:.4g} -> {good[-1]:.4g} 1/s" +
+                        (" (no longer attracting)" if good[-1] >= 0 else ""))
     if drift is not None and np.isfinite(drift).any():
         left = int(np.sum(drift > DRIFT_LIMIT))
-        text += (f"; the trajectory from the torus left it (drift > {DRIFT_LIMIT:g}) at "
-                 f"{left} of {int(np.isfinite(drift).sum())} points")
-    if status.startswith(("no convergence", "refused")):
-        growth = fine[-1, 0] / fine[0, 0]
-        why = ("the torus outgrew its harmonics (the finer-grid residual grew "
-               f"{growth:.3g} times)" if growth > 10 or fine[-1, 1] > 0.3 else
-               "Newton found no torus near the predictor although the harmonics still "
-               "resolve the last one: the torus turns sharply, loses smoothness or "
-               "ceases to exist there")
-        if np.isfinite(lambda1).any() and lambda1[np.isfinite(lambda1)][-1] >= 0:
-            why += "; it had lost its attraction (lambda1 >= 0)"
-        text += f". Why: {why}"
-    return text + "."
+        measures.append(f"the trajectory from the torus left it (drift > {DRIFT_LIMIT:g}) "
+                        f"at {left} of {int(np.isfinite(drift).sum())} points")
+    growth = fine[-1, 0] / fine[0, 0]
+    why = ("the torus outgrew its harmonics (the finer-grid residual grew "
+           f"{growth:.3g} times)" if growth > 10 or fine[-1, 1] > 0.3 else
+           "Newton found no torus near the predictor although the harmonics still "
+           "resolve the last one: the torus turns sharply, loses smoothness or "
+           "ceases to exist there")
+    if np.isfinite(lambda1).any() and lambda1[np.isfinite(lambda1)][-1] >= 0:
+        why += "; it had lost its attraction (lambda1 >= 0)"
+    return stop_report(out, prob, prob.noun, prob.model.units[prob.param_name], measures,
+                       why)

@@ -65,7 +65,7 @@ from analysis.stability.continuation.shooting import (
     start_point,
     trace_branch,
 )
-from analysis.stability.continuation.step import refusal, step, step_tangent
+from analysis.stability.continuation.step import refusal, start_at, step, step_tangent
 from analysis.stability.continuation.switching import (
     SWITCHES,
     Switched,
@@ -83,7 +83,7 @@ __all__ = [
     "branch_point", "branch_summary", "continue_from_branch", "continue_from_orbit",
     "continue_orbits", "continue_problem", "correct", "first_point", "newton",
     "options_with", "orbit_scale", "refusal", "scaled", "special_point_lines",
-    "special_points", "start_point", "step", "step_tangent", "stop_report",
+    "special_points", "start_at", "start_point", "step", "step_tangent", "stop_report",
     "switch_and_continue", "switch_branch", "switch_branch_point", "switch_period_doubling",
     "tangent", "trace", "trace_branch",
 ]

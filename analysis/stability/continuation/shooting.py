@@ -47,9 +47,8 @@ from analysis.stability.continuation.problem import (
     BranchPoint,
     ContinuedParameter,
     ContinuedRange,
-    branch_point,
-    newton,
 )
+from analysis.stability.continuation.step import start_at
 from analysis.stability.continuation.trace import Progress, trace
 from analysis.stability.periodic import PeriodicOrbit, as_period, shoot, state_scale
 
@@ -219,16 +218,8 @@ def start_point(prob: ShootingProblem, z0: np.ndarray, lam: float, stop: float, 
     (λ held fixed, or along ``tangent`` when given, which then is the point's tangent; else
     the tangent is oriented so that λ moves towards ``stop``). None when it does not
     converge."""
-    direction = math.copysign(1.0, stop - lam)
     w = np.concatenate([z0 / prob.s_z, [lam / prob.s_lam]])
-    n = prob.n
-    out = newton(prob, w, np.eye(n + 1)[n] if tangent is None else tangent, tol)
-    if out is None:
-        return None
-    first = branch_point(prob, out.w, out.jac, out.mono, tangent, direction, out.iterations)
-    if tangent is not None:
-        first.tangent = tangent
-    return first
+    return start_at(prob, w, math.copysign(1.0, stop - lam), tol, tangent)
 
 
 def _steps_for_range(system: System, per: Period, param: str, ends: tuple[float, float],

@@ -92,3 +92,14 @@ def step(prob: BranchProblem, prev: Any, ds: float, options: ContinuationOptions
         return reason
     found = found_between(prev, point)
     return found if isinstance(found, str) else (found, point)
+
+
+def start_at(prob: BranchProblem, w: np.ndarray, direction: float, tol: float,
+             tau: np.ndarray | None = None) -> Any:
+    """The first point of a branch: ``w`` corrected by Newton with λ held fixed (or along
+    ``tau`` when given, which then is the point's tangent; else the tangent by SVD, its λ
+    component of the sign of ``direction``). None when it does not converge."""
+    out = newton(prob, w, np.eye(len(w))[-1] if tau is None else tau, tol)
+    if out is None:
+        return None
+    return prob.point(out, tangent(out.jac, None, direction) if tau is None else tau)
