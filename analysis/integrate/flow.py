@@ -29,7 +29,7 @@ from analysis.integrate.tangent import (
     model_tag,
     tangent_step,
 )
-from analysis.model import Model
+from analysis.model import Model, System
 
 PERIOD_KINDS = PERIOD.kinds
 PERIOD_SYNTAX = PERIOD.syntax
@@ -90,6 +90,32 @@ class Period:
             raise InputError(f"period: no bearing '{self.name}' in model '{model.name}'; "
                              f"bearings: {', '.join(bearings)}")
 
+    def seconds_in(self, system: System) -> float:
+        """The period in s of ``system`` (its balls and parameter values); ``InputError``
+        when it is not defined there (a speed of zero, no balls)."""
+        try:
+            value = float(self.seconds(system.model, system.structure, system.p))
+        except ZeroDivisionError:  # a numeric speed of 0: no period, as T = inf below
+            value = math.inf
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"period: {self} is not defined for these parameters "
+                             f"(got T = {value!r} s; is the speed zero, or are there no "
+                             "balls?)")
+        return value
+
+    def steps_in(self, system: System, dt: float) -> int:
+        """RK4 steps of one period of ``system`` so that the step is at most ``dt`` (s);
+        ``InputError`` beyond ``MAX_PERIOD_STEPS`` (the flow map and its derivatives would
+        not fit in memory)."""
+        check_seconds("dt", dt)
+        seconds = self.seconds_in(system)
+        steps = seconds / dt
+        if steps > MAX_PERIOD_STEPS:
+            raise InputError(f"period {self}: {seconds:.4g} s is {steps:.3g} RK4 steps of "
+                             f"{dt:g} s; at most {MAX_PERIOD_STEPS:.0e} per period (a "
+                             "shorter period, or a larger dt)")
+        return max(1, math.ceil(steps - 1e-9))
+
     def seconds(self, model: Model, structure: tuple[int, ...], p):
         """The period in s, as a CasADi expression of ``p`` (or a float for numeric p)."""
         self.check(model)
@@ -109,14 +135,10 @@ class Period:
 
 
 def period_seconds(model: Model, n_balls: tuple[int, ...], period: Period, values: dict) -> float:
-    try:
-        value = float(period.seconds(model, n_balls, model.parameter_vector(values)))
-    except ZeroDivisionError:  # a numeric speed of 0: no period, as T = inf below
-        value = math.inf
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"period: {period} is not defined for these parameters "
-                         f"(got T = {value!r} s; is the speed zero, or are there no balls?)")
-    return value
+    """``period.seconds_in(system)`` of the System of ``model``, ``n_balls`` and ``values``
+    (for callers that hold those three)."""
+    return period.seconds_in(System(model, model.structure(n_balls), values,
+                                    model.initial_state))
 
 
 SENSITIVITY_BLOCK_SIZES = (100, 10, 1)
@@ -198,19 +220,10 @@ def flow_map(model: Model, n_balls: tuple[int, ...], period: Period, n_steps: in
 
 def steps_per_period(model: Model, n_balls: tuple[int, ...], period: Period, values: dict,
                      dt: float) -> int:
-    """Number of RK4 steps so that the step is at most ``dt`` (s); ``InputError`` beyond
-    ``MAX_PERIOD_STEPS`` (the flow map and its derivatives would not fit in memory)."""
-    check_seconds("dt", dt)
-    seconds = period_seconds(model, n_balls, period, values)
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise InputError(f"period {period}: must last a finite time > 0 s here, got "
-                         f"{seconds:g} s")
-    steps = seconds / dt
-    if steps > MAX_PERIOD_STEPS:
-        raise InputError(f"period {period}: {seconds:.4g} s is {steps:.3g} RK4 steps of "
-                         f"{dt:g} s; at most {MAX_PERIOD_STEPS:.0e} per period (a shorter "
-                         "period, or a larger dt)")
-    return max(1, math.ceil(steps - 1e-9))
+    """``period.steps_in(system, dt)`` of the System of ``model``, ``n_balls`` and
+    ``values`` (for callers that hold those three)."""
+    return period.steps_in(System(model, model.structure(n_balls), values,
+                                  model.initial_state), dt)
 
 
 MAX_PERIOD_STEPS = 2_000_000
