@@ -41,6 +41,7 @@ import casadi as ca
 import numpy as np
 
 from analysis.integrate.tangent import Carry, block_tree, model_tag, tangent_step
+from analysis.model import BallCounts, Model, Structure
 from modelgen.locations import cache_root
 
 BLOCK_SIZES = (10_000, 1000, 100, 10, 1)
@@ -182,7 +183,7 @@ def vm_library(funcs: Any) -> Library:
     return Library("casadi-vm", rk4_blocks(funcs), funcs.rhs, funcs.jac, funcs.rk4_step)
 
 
-def library(model: Any, structure: Any, compiled: bool = True,
+def library(model: Model, structure: BallCounts, compiled: bool = True,
             functions: Any = None) -> Library:
     """The RK4 blocks (and rhs, jac, rk4_step) of ``model`` with ``structure`` balls per
     bearing (one number for a one-bearing model, a mapping or a tuple).
@@ -210,7 +211,7 @@ def library(model: Any, structure: Any, compiled: bool = True,
     return _REGISTRY.libraries[memo]
 
 
-def library_stem(prefix: str, model: Any, structure: tuple[int, ...]) -> str:
+def library_stem(prefix: str, model: Model, structure: Structure) -> str:
     """``<prefix>_<model>_nb<balls>``: the start of a cached library's name."""
     return f"{prefix}_{model_tag(model, structure)}"
 
@@ -223,7 +224,7 @@ def cached_path(stem: str, source: str, command: list[str]) -> Path:
     return cache_dir() / f"{stem}_{key[:20]}.so"
 
 
-def _compiled_library(model: Any, structure: tuple[int, ...], funcs: Any,
+def _compiled_library(model: Model, structure: Structure, funcs: Any,
                       command: list[str]) -> Library:
     functions = _library_functions(funcs)
     tag = getattr(funcs, "tag", "")
