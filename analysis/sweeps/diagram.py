@@ -49,6 +49,14 @@ import xarray as xr
 
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.kernels import (
+    Schedule,
+    blow_up_error,
+    resolve_device,
+    run_members,
+    section_step,
+)
+from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.io import save_dataset
 from analysis.model import System, as_system
@@ -177,12 +185,84 @@ def safe_diagram_point(setting: Setting, system: System, start: Start | None = N
     try:
         return {**diagram_point(setting, system, start), "status": ""}
     except SimulationError as exc:
-        model = system.model
-        return {**{v: np.zeros(0) for v in model.state_names},
-                "final": np.full(model.n_state, np.nan), "t_start": np.nan,
-                "t_final": np.nan, "status": failure_text(exc),
-                **dict.fromkeys(amplitude_fields(model), np.nan),
-                **dict.fromkeys(phasor_fields(_displacements(model)), np.nan)}
+        return _failed(system.model, exc)
+
+
+def _failed(model, exc: SimulationError) -> dict:
+    """The record of a value whose run failed (``status`` ``failed: …``)."""
+    return {**{v: np.zeros(0) for v in model.state_names},
+            "final": np.full(model.n_state, np.nan), "t_start": np.nan,
+            "t_final": np.nan, "status": failure_text(exc),
+            **dict.fromkeys(amplitude_fields(model), np.nan),
+            **dict.fromkeys(phasor_fields(_displacements(model)), np.nan)}
+
+
+ENSEMBLE_BLOCK = {"cpu": 64, "gpu": 1 << 15}
+"""Values per call of the member kernels in a brute-force diagram (``device`` given), and
+per store write: an interrupted diagram resumes from the last stored block."""
+
+
+def ensemble_points(setting: Setting, systems: list[System],
+                    device: str = "cpu") -> list[dict]:
+    """``safe_diagram_point`` of several values (no following: each from its initial
+    state at t = 0) as members of one call of the member kernels per model and balls
+    (``analysis.integrate.kernels``, the state variant, on ``device``).
+
+    Each value's step is the largest h <= ``setting.step()`` dividing its record section's
+    period (``kernels.section_step``), so its section points are states at steps (today's
+    points interpolate between samples of h = dt: the step rule changes a non-chaotic
+    value's points by the difference between the two RK4 solutions, ``O(dt⁴)``). Its
+    amplitudes are the extremes over the record's steps (h instead of dt); the 1X phasor
+    needs the whole record and is NaN here (the per-value path, ``device=None``, keeps it).
+    """
+    out: list = [None] * len(systems)
+    groups: dict[tuple, list[int]] = {}
+    for i, system in enumerate(systems):
+        groups.setdefault((id(system.model), system.structure), []).append(i)
+    dt = setting.step()
+    for indices in groups.values():
+        model = systems[indices[0]].model
+        plans = []
+        for i in indices:
+            h, every = section_step(setting.period(systems[i]), dt)
+            run = setting.plan(systems[i]) if h == dt else RunPlan.make(
+                systems[i], duration=setting.seconds(systems[i]),
+                transient=setting.transient, dt=h, warn=lambda message: None)
+            first = max(1, -(-run.first // every))
+            plans.append((h, every, first, run.first, run.n_steps))
+        schedule = Schedule([(f - 1) * e for _, e, f, *_ in plans], [e for _, e, *_ in plans],
+                            setting.samples, extremes_from=[a for *_, a, _ in plans],
+                            extremes_to=[b for *_, b in plans])
+        result = run_members(systems[indices[0]],
+                             np.array([np.asarray(systems[i].state, float) for i in indices]),
+                             np.array([systems[i].p for i in indices]),
+                             np.array([h for h, *_ in plans]), schedule, device=device)
+        names = [f[len("amplitude_"):] for f in amplitude_fields(model)]
+        where = [model.state_names.index(v) for v in names]
+        for j, i in enumerate(indices):
+            h, last = plans[j][0], plans[j][-1]
+            if result.diverged_at[j] >= 0:
+                exc = blow_up_error(systems[i], int(result.diverged_at[j]), h,
+                                    result.final[j])
+                out[i] = _failed(model, exc)
+                continue
+            sections = result.sections[j, :setting.samples]
+            out[i] = {**{v: sections[:, k] for k, v in enumerate(model.state_names)},
+                      "final": result.final[j].copy(), "t_start": 0.0,
+                      "t_final": float(max(last, schedule.per_member(len(plans))[0][j]
+                                           + plans[j][1] * setting.samples) * h),
+                      **{f"amplitude_{v}": float(result.high[j, k] - result.low[j, k]) / 2
+                         for v, k in zip(names, where, strict=True)},
+                      **dict.fromkeys(phasor_fields(_displacements(model)), np.nan),
+                      "status": ""}
+    return out
+
+
+def _ensemble_task(chain: Chain, indices: list[int], device: str) -> list[tuple[str, dict]]:
+    """One block of a brute-force diagram's values on the member kernels."""
+    points = ensemble_points(chain.setting, [chain.system(i) for i in indices], device)
+    return [(f"{chain.direction}-{i:05d}", point)
+            for i, point in zip(indices, points, strict=True)]
 
 
 def _displacements(model) -> tuple[str, ...]:
@@ -200,16 +280,26 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
                         direction: str = "up", follow: bool = True,
                         executor: Executor | None = None,
                         progress: Callable[[int, int], None] | None = None,
-                        on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+                        on_damaged: Callable[[str], None] | None = None,
+                        device: str | None = None) -> xr.Dataset:
     """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset.
 
     Resumable (``analysis.sweeps.store``): a stored point that cannot be read is removed,
     reported to ``on_damaged(key)`` and computed again. A value whose run fails is recorded
-    (``status``: ``failed: …``) and the diagram goes on."""
+    (``status``: ``failed: …``) and the diagram goes on. ``device`` (``cpu``, ``gpu``,
+    ``auto``; without ``follow`` only): the values run as members of the member kernels,
+    ``ENSEMBLE_BLOCK`` per call (``ensemble_points``: sections on steps, no 1X phasor); None:
+    value by value (``diagram_point``) through ``executor``."""
     if direction not in ("up", "down", "both"):
         raise InputError(f"direction: must be up, down or both, got {direction!r}")
     directions = ["up", "down"] if direction == "both" else [direction]
     check_grid(setting, axis)
+    if device is not None:
+        if follow:
+            raise InputError("--device: a followed diagram runs value by value; use "
+                             "--no-follow for the ensemble on a device")
+        device = resolve_device(device, len(axis.values) * len(directions),
+                                max(1, round(setting.transient / setting.step())))
     definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
                   "structure": list(setting.loaded().structure(setting.n_balls)),
                   "directions": directions, "follow": follow}
@@ -223,6 +313,17 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
         if follow:
             run_with_progress(executor, run_chain, chains, lambda: len(store.done()), total,
                               progress, None)
+        elif device is not None:
+            done = store.done()
+            for chain in chains:
+                todo = [i for i in range(len(axis.values))
+                        if f"{chain.direction}-{i:05d}" not in done]
+                size = ENSEMBLE_BLOCK[device]
+                for start in range(0, len(todo), size):
+                    for key, point in _ensemble_task(chain, todo[start:start + size], device):
+                        store.save(key, point)
+                    if progress is not None:
+                        progress(len(store.done()), total)
         else:
             todo = [(c, i) for c in chains for i in range(len(axis.values))
                     if f"{c.direction}-{i:05d}" not in store.done()]

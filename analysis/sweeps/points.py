@@ -48,6 +48,7 @@ from analysis.integrate.compiled import (
 from analysis.integrate.kernels import (
     Schedule,
     Unsupported,
+    blow_up_error,
     resolve_device,
     run_members,
     section_step,
@@ -335,6 +336,8 @@ class _KernelPoint:
     count: int
     skip: int
     averaged: int
+    steps: tuple[int, int]
+    """The record's first and last step (its extremes: the amplitudes)."""
 
 
 def _kernel_point(system: System, duration: float, transient: float, dt: float,
@@ -361,20 +364,7 @@ def _kernel_point(system: System, duration: float, transient: float, dt: float,
                          f"holds fewer than {BLOCKS} sections of {period:.3g} s")
     skip = min(math.ceil(default_lengths(model)[2] / period - 1e-9), first - 1)
     return _KernelPoint(system, attrs, section, period, h, every, first, count, max(skip, 0),
-                        averaged)
-
-
-def _blow_up(point: _KernelPoint, step: int, final: np.ndarray) -> SimulationError:
-    """The ``SimulationError`` ``simulate`` raises for a blow-up at ``step`` (its message,
-    from ``check_bounded``)."""
-    model = point.system.model
-    try:
-        check_bounded(final[:, None], np.array([step * point.h]),
-                      blow_up_limit(model, dict(point.system.parameters)),
-                      model.centre_indices())
-    except SimulationError as exc:
-        return exc
-    return SimulationError(f"the motion blew up at t = {step * point.h:.6g} s")
+                        averaged, (run.first, run.n_steps))
 
 
 def kernel_points(systems: list[System], durations: list[float], transient: float,
@@ -383,10 +373,9 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
     tangent variant): the points of each model and balls in one ``run_members`` call on
     ``device`` (``cpu``: every core; ``gpu``; ``auto``). Each point's step is the largest
     h <= ``dt`` dividing its section period (``section_step``), so its section points are
-    states at steps; its amplitudes are the extremes over the record (from the section
-    before the transient's end), λ1 and its interval the batch means of the last
-    ``averaged`` section logs (renormalised once per section). Per system its
-    ``PointResult`` or the ``SimulationError`` of its blow-up.
+    states at steps; its amplitudes are the extremes over the record's steps, λ1 and its
+    interval the batch means of the last ``averaged`` section logs (renormalised once per
+    section). Per system its ``PointResult`` or the ``SimulationError`` of its blow-up.
 
     Against ``one_pass`` (interpolated sections, h = dt, renormalised every
     ``RENORM_EVERY`` steps) non-chaotic points keep their class, and λ1 stays within its
@@ -403,7 +392,8 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
         schedule = Schedule(
             [(p.first - p.skip - 1) * p.every for p in points], [p.every for p in points],
             [p.skip + p.count for p in points], tangent=True,
-            lyapunov_skip=[p.skip for p in points])
+            lyapunov_skip=[p.skip for p in points],
+            extremes_from=[p.steps[0] for p in points], extremes_to=[p.steps[1] for p in points])
         try:
             out = run_members(points[0].system,
                               np.array([np.asarray(p.system.state, float) for p in points]),
@@ -417,7 +407,8 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
             continue
         for j, (i, point) in enumerate(group):
             if out.diverged_at[j] >= 0:
-                results[i] = _blow_up(point, int(out.diverged_at[j]), out.final[j])
+                results[i] = blow_up_error(point.system, int(out.diverged_at[j]), point.h,
+                                           out.final[j])
                 continue
             total = point.skip + point.count
             results[i] = _kernel_result(point, out.sections[j, point.skip:total],

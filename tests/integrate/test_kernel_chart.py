@@ -86,5 +86,6 @@ def test_without_a_cpu_build_the_points_run_one_by_one(monkeypatch):
 def test_section_step_divides_the_period():
     for period, dt in ((1 / 199.0, 1e-5), (0.005, 1e-5), (2 * np.pi / 1.4, 0.01)):
         h, steps = section_step(period, dt)
-        assert h <= dt and steps * h == pytest.approx(period, rel=1e-15)
+        assert h <= dt and steps * h == pytest.approx(period, rel=1e-12)
         assert period / (steps - 1) > dt or steps == 1
+    assert section_step(0.015, 1e-5) == (1e-5, 1500)  # whole steps: dt itself

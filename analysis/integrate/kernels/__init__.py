@@ -13,11 +13,12 @@ from analysis.integrate.kernels.devices import DeviceInfo, device_info, resolve_
 from analysis.integrate.kernels.members import (
     MemberResult,
     Schedule,
+    blow_up_error,
     check_fits,
     run_members,
     section_step,
 )
 from analysis.integrate.kernels.source import Unsupported
 
-__all__ = ["DeviceInfo", "MemberResult", "Schedule", "Unsupported", "check_fits",
+__all__ = ["DeviceInfo", "MemberResult", "Schedule", "Unsupported", "blow_up_error", "check_fits",
            "cuda_source", "device_info", "resolve_device", "run_members", "section_step"]

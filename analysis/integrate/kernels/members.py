@@ -23,11 +23,11 @@ from functools import cache
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import test_state
 from analysis.integrate.kernels.cpu import cores, cpu_library
 from analysis.integrate.kernels.devices import resolve_device
-from analysis.integrate.simulate import blow_up_limit
+from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.model import System
 
 HOST_BUDGET = 8 * 2**30
@@ -43,12 +43,15 @@ SELF_TEST_TOL = 1e-12
 def section_step(period_s: float, dt: float) -> tuple[float, int]:
     """(h, N): the largest RK4 step h <= ``dt`` (s) that divides the section period
     ``period_s`` (s) into N whole steps, N = ceil(T/dt − 1e-9), h = T/N: sections then fall
-    on steps (no interpolation between samples)."""
+    on steps (no interpolation between samples). A period of whole steps of ``dt`` (to
+    1e-9 of a step) keeps h = ``dt`` exactly."""
     if not (math.isfinite(period_s) and period_s > 0):
         raise InputError(f"period_s: a finite period > 0 s, got {period_s!r}")
     if not (math.isfinite(dt) and dt > 0):
         raise InputError(f"dt: a finite step > 0 s, got {dt!r}")
     steps = max(1, math.ceil(period_s / dt - 1e-9))
+    if abs(period_s / dt - steps) <= 1e-9:  # already whole steps: keep dt itself (bit for
+        return float(dt), steps             # bit the run of h = dt; T/N may round off it)
     return period_s / steps, steps
 
 
@@ -73,11 +76,20 @@ class Schedule:
     from the end of these sections on (the record)."""
     keep_sections: bool = True
     """False: only reduced results leave the device (no (M, K, n) sections)."""
+    extremes_from: int | Sequence[int] | None = None
+    """First step of the extremes (``low``, ``high``); None: ``transient_steps +
+    lyapunov_skip · steps_per_section``."""
+    extremes_to: int | Sequence[int] | None = None
+    """Last step of the extremes; None: the last section's. A member runs on to it when it
+    is later (a record that ends between sections)."""
 
     def __post_init__(self) -> None:
         for name, low in (("transient_steps", 0), ("steps_per_section", 1),
                           ("n_sections", 1), ("lyapunov_skip", 0)):
             self.counts(name, low)
+        for name in ("extremes_from", "extremes_to"):
+            if getattr(self, name) is not None:
+                self.counts(name, 0)
         if np.any(self.counts("lyapunov_skip") >= self.counts("n_sections")):
             raise InputError(f"lyapunov_skip: fewer than n_sections ({self.n_sections}), got "
                              f"{self.lyapunov_skip}")
@@ -95,11 +107,16 @@ class Schedule:
         return arr.astype(np.int64)
 
     def per_member(self, m: int) -> list[np.ndarray]:
-        """transient, steps per section, sections, skip: (m,) int64 each (``InputError``
-        when a per-member field's length is not m)."""
+        """transient, steps per section, sections, skip, extremes from and to: (m,) int64
+        each (``InputError`` when a per-member field's length is not m)."""
         out = []
-        for name in ("transient_steps", "steps_per_section", "n_sections", "lyapunov_skip"):
-            arr = self.counts(name)
+        for name in ("transient_steps", "steps_per_section", "n_sections", "lyapunov_skip",
+                     "extremes_from", "extremes_to"):
+            if getattr(self, name) is None:
+                tr, ev, ns, skip = out[:4]
+                arr = tr + skip * ev if name == "extremes_from" else tr + ev * ns
+            else:
+                arr = self.counts(name)
             if arr.ndim == 1 and len(arr) != m:
                 raise InputError(f"{name}: one number or one per member ({m}), got {len(arr)}")
             out.append(np.ascontiguousarray(np.broadcast_to(arr, (m,)), dtype=np.int64))
@@ -108,8 +125,11 @@ class Schedule:
     @property
     def total_steps(self) -> int:
         """RK4 steps of the longest member that does not blow up."""
-        return int(np.max(self.counts("transient_steps") + self.counts("steps_per_section")
-                          * self.counts("n_sections")))
+        last = self.counts("transient_steps") + self.counts("steps_per_section") \
+            * self.counts("n_sections")
+        if self.extremes_to is not None:
+            last = np.maximum(last, self.counts("extremes_to"))
+        return int(np.max(last))
 
     @property
     def max_sections(self) -> int:
@@ -136,8 +156,9 @@ class MemberResult:
     final: np.ndarray
     """(M, n) the last state (after the last step, or the first bad state)."""
     low: np.ndarray
-    """(M, n) smallest value of every state from step ``transient_steps + lyapunov_skip ·
-    steps_per_section`` on (up to a blow-up)."""
+    """(M, n) smallest value of every state over the steps ``Schedule.extremes_from`` …
+    ``extremes_to`` (default: from the end of the skipped sections to the last section;
+    up to a blow-up)."""
     high: np.ndarray
     """(M, n) largest value, likewise."""
     device: str
@@ -284,6 +305,19 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     return MemberResult(sections, logs, lambda1, diverged, final, low, high, device)
 
 
+def blow_up_error(system: System, step: int, h: float, state: np.ndarray) -> SimulationError:
+    """The ``SimulationError`` ``simulate`` raises for a member of ``system`` whose
+    ``state`` after RK4 step ``step`` (of h s, from t = 0) is its first bad one (the message
+    of ``simulate.check_bounded``)."""
+    model = system.model
+    try:
+        check_bounded(np.asarray(state, dtype=float)[:, None], np.array([step * h]),
+                      blow_up_limit(model, dict(system.parameters)), model.centre_indices())
+    except SimulationError as exc:
+        return exc
+    return SimulationError(f"the motion blew up at t = {step * h:.6g} s")
+
+
 def _limits(system: System, p: np.ndarray, shared: bool) -> np.ndarray:
     """Each member's blow-up limit (m), ``simulate.blow_up_limit`` of its parameters."""
     model = system.model
@@ -312,8 +346,7 @@ def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
     z0 = np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)])
     p = np.stack([p0 * (1 + 0.01 * j) for j in range(2)])
     hs, t0s, k0s = h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.array([3.0, 4.0])
-    sched = [np.ones(2, dtype=np.int64), np.full(2, 2, dtype=np.int64),
-             np.full(2, 2, dtype=np.int64), np.zeros(2, dtype=np.int64)]
+    sched = Schedule(1, 2, 2).per_member(2)
     outs = [np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, n)),
             np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
     lib = cpu_library(model, structure, tangent)

@@ -150,18 +150,20 @@ def blow_up_c(n: int, pairs: Sequence[tuple[int, int | None]]) -> str:
 
 _ARGS = """bd_long m, const double *z0, const double *k0, const double *p, const double *h,
     const double *t0, const double *limit, const bd_long *transient, const bd_long *every,
-    const bd_long *n_sec, const bd_long *skip, bd_long kmax, int keep, double *sections,
-    double *logs, double *final, bd_long *diverged, double *low, double *high"""
+    const bd_long *n_sec, const bd_long *skip, const bd_long *ext_from,
+    const bd_long *ext_to, bd_long kmax, int keep, double *sections, double *logs,
+    double *final, bd_long *diverged, double *low, double *high"""
 """The arguments of every member function and wrapper: member index, then per member
 (row-major, member first) the state z0 (n), step counter k0, parameters (n_par), step h
 (s), start time t0 (s), blow-up limit (m) and schedule (transient steps, steps per section,
 sections, skipped sections); the sections' stride kmax (>= every n_sec) and whether they
 are kept; the outputs: sections (kmax × n), logs (kmax; tangent), final state (n), the
-step of the blow-up (-1: none), and the extremes of every state from step transient +
-skip·every on. Sections and logs past a member's own are NaN."""
+step of the blow-up (-1: none), and the extremes of every state over the steps ext_from …
+ext_to (the run goes on to ext_to when it ends after the last section). Sections and logs
+past a member's own are NaN."""
 
-_CALL = ("m, z0, k0, p, h, t0, limit, transient, every, n_sec, skip, kmax, keep, sections, "
-         "logs, final, diverged, low, high")
+_CALL = ("m, z0, k0, p, h, t0, limit, transient, every, n_sec, skip, ext_from, ext_to, kmax, "
+         "keep, sections, logs, final, diverged, low, high")
 
 _MEMBER_HEAD = """
 BD_FN void bd_member_{variant}({args}) {{
@@ -173,27 +175,29 @@ BD_FN void bd_member_{variant}({args}) {{
   s[{n}] = k0[m];
   rk4_constants(pm, &hm, &t0m, c);
   const bd_long tr = transient[m], ev = every[m], ns = n_sec[m];
-  const bd_long total = tr + ev * ns, from = tr + skip[m] * ev;
+  const bd_long total = tr + ev * ns, from = ext_from[m], upto = ext_to[m];
+  const bd_long end = total > upto ? total : upto;
   bd_long step = 0, bad = -1, sec = 0;
-  if (from <= 0) bd_extend(lo, hi, s);
+  if (from <= 0 && upto >= 0) bd_extend(lo, hi, s);
   for (; step < tr; ) {{
     rk4_steps1(s, pm, &hm, &t0m, c, nx);
     for (int i = 0; i < {ns}; i++) s[i] = nx[i];
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
-    if (step >= from) bd_extend(lo, hi, s);
+    if (step >= from && step <= upto) bd_extend(lo, hi, s);
   }}
 """
 
 _STATE_BODY = """
-  for (bd_long left = ev; bad < 0 && step < total; ) {{
+  for (bd_long left = ev; bad < 0 && step < end; ) {{
     rk4_steps1(s, pm, &hm, &t0m, c, nx);
     for (int i = 0; i < {ns}; i++) s[i] = nx[i];
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
-    if (step >= from) bd_extend(lo, hi, s);
+    if (step >= from && step <= upto) bd_extend(lo, hi, s);
     if (--left == 0) {{
-      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
+      if (keep && sec < ns)
+        for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
       sec++; left = ev;
     }}
   }}
@@ -204,7 +208,7 @@ _TANGENT_BODY = """
   stage_constants(pm, d);
   for (int i = 0; i < {n}; i++) v[i] = i == 0 ? 1.0 : 0.0;
   const double half = hm / 2.0, sixth = hm / 6.0;
-  for (bd_long left = ev; bad < 0 && step < total; ) {{
+  for (bd_long left = ev; bad < 0 && step < end; ) {{
     const double t = t0m + s[{n}] * hm, th = t + half, tf = t + hm;
     stage(&t, s, pm, v, d, f, jv);
     for (int i = 0; i < {n}; i++) {{
@@ -228,8 +232,8 @@ _TANGENT_BODY = """
     s[{n}] += 1.0;
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
-    if (step >= from) bd_extend(lo, hi, s);
-    if (--left == 0) {{
+    if (step >= from && step <= upto) bd_extend(lo, hi, s);
+    if (--left == 0 && sec < ns) {{
       double norm = 0.0;
       for (int i = 0; i < {n}; i++) norm += v[i] * v[i];
       norm = sqrt(norm);
@@ -243,8 +247,8 @@ _TANGENT_BODY = """
 
 _MEMBER_TAIL = """
   diverged[m] = bad < 0 ? -1 : (bd_long)k0[m] + bad;
-  for (; sec < kmax; sec++) {{
-    if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = NAN;
+  for (bd_long q = sec < ns ? sec : ns; q < kmax; q++) {{
+    if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
     {nan_log}
   }}
   for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
@@ -293,7 +297,7 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
         body = _TANGENT_BODY.format(n=n, nd=nd)
     parts.append(_MEMBER_HEAD.format(variant=variant, args=_ARGS, ns=ns, nc=nc, n=n,
                                      npar=npar) + body
-                 + _MEMBER_TAIL.format(n=n, nan_log="logs[m * kmax + sec] = NAN;"
+                 + _MEMBER_TAIL.format(n=n, nan_log="logs[m * kmax + q] = NAN;"
                                        if stage is not None else ""))
     wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
     parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL))
