@@ -1,0 +1,191 @@
+"""The member engine at scale (issue 33): steps/s of each build, their ratios, and a basin.
+
+In one run, on the same model and step:
+
+- **one core, today's compiled path**: a few members one after the other through the
+  model's compiled RK4 blocks (``analysis.integrate.compiled.run_rk4``, the path of
+  ``simulate``);
+- **CPU build, all cores**: ``kernels.run_members`` on ``--members`` members (state only,
+  no sections kept: the kernel's throughput), OpenMP over every core this process may use;
+- **CUDA build**, when a GPU is visible (CuPy installed): the same call on the GPU, at
+  ``--gpu-members`` members (default 2²⁰, where an H200 reaches its throughput);
+- **a basin**: ``--size`` × ``--size`` initial states of the balanced rotor (50 N, N_b 8,
+  8000 rpm; x from −20 to 30 µm, y from −20 to 20 µm) mapped by the featurizing mapper
+  (0.5 s transient = 213 VC periods, 24 VC sections) on the GPU when there is one, else on
+  the cores; with a GPU, the CPU build also maps a 100 × 100 subset of the same grid and the
+  share of the subset labelled alike is printed.
+
+    python benchmarks/bench_engine.py [--size 100] [--members 65536] [--steps 2000]
+        [--gpu-members 1048576] [--json]
+
+The whole check of issue 33 on an H200 is ``python benchmarks/bench_engine.py --size 1000
+--json``. Steps/s are member-steps per second of wall time (the best of ``--repeat``); the
+first call of each build (compilation) is timed apart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.ensemble import StroboscopicMap
+from analysis.integrate.kernels import Schedule, device_info, run_members
+from analysis.integrate.kernels.cpu import cores
+from analysis.integrate.kernels.devices import gpu_problem
+from analysis.model import System
+from analysis.stability.attractors import Range, basins, grid_states
+from analysis.stability.attractors.featurizing import FeatureOptions
+from analysis.stability.attractors.study import make_study
+
+ROTOR = dict(n_balls=8, radial_load=50.0, speed_rpm=8000.0)
+X, Y = ("x", -20e-6, 30e-6), ("y", -20e-6, 20e-6)
+BASIN_FEATURES = FeatureOptions(transient=213, sections=24)
+"""0.5 s of transient at 8000 rpm (VC period 2.35 ms) and 24 VC sections: issue 33's run."""
+
+
+def members_of(system: System, count: int) -> np.ndarray:
+    """``count`` initial states near the spec's (seeded)."""
+    rng = np.random.default_rng(1)
+    return system.state * (1 + 0.5 * rng.standard_normal((count, system.n_state))) \
+        + 1e-7 * rng.standard_normal((count, system.n_state))
+
+
+def best_of(repeat: int, run) -> float:
+    """The shortest wall time of ``repeat`` calls of ``run``, s."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def one_core(system: System, h: float, steps: int, members: int, repeat: int) -> dict:
+    """Today's path: ``members`` members one after the other through the RK4 blocks."""
+    lib, p, z = library(system.model, system.structure), system.p, members_of(system, members)
+    run_rk4(lib, p, z[0], h, 10, 10)  # loaded
+    seconds = best_of(repeat, lambda: [run_rk4(lib, p, z[i], h, steps, steps)
+                                       for i in range(members)])
+    return {"members": members, "steps": steps, "seconds": seconds,
+            "steps_per_s": members * steps / seconds}
+
+
+def kernel(system: System, h: float, steps: int, members: int, repeat: int,
+           device: str) -> dict:
+    """The member kernel's build on ``device`` (state only, nothing kept)."""
+    z = members_of(system, members)
+    schedule = Schedule(0, steps, 1, keep_sections=False)
+    start = time.perf_counter()
+    run_members(system, z[:1], None, h, Schedule(0, 1, 1), device=device)  # built, loaded
+    first = time.perf_counter() - start
+    seconds = best_of(repeat, lambda: run_members(system, z, None, h, schedule,
+                                                  device=device))
+    return {"members": members, "steps": steps, "seconds": seconds, "first_use_s": first,
+            "steps_per_s": members * steps / seconds}
+
+
+def basin(system: System, size: int, device: str) -> dict:
+    """A ``size`` × ``size`` basin by the featurizing mapper on ``device``: the whole
+    ``studies.basins`` call (cell scale, grid, kernel runs, clustering, each attractor
+    described) after the kernel was built."""
+    x, y = Range(*X, size), Range(*Y, size)
+    study = make_study(system, size * size, mapper="features", device=device,
+                       feature_options=BASIN_FEATURES)
+    start = time.perf_counter()
+    ds = basins(system, x, y, mapper="features", device=device,
+                feature_options=BASIN_FEATURES)
+    seconds = time.perf_counter() - start
+    steps = (BASIN_FEATURES.transient + BASIN_FEATURES.sections) * study.map.steps
+    out = {"size": size, "device": device, "seconds": seconds,
+           "member_steps": size * size * steps,
+           "attractors": {int(i): str(ds.nature.sel(attractor=i).values)
+                          for i in ds.attractor.values},
+           "fractions": {int(i): float(ds.fraction.sel(attractor=i))
+                         for i in ds.attractor.values}}
+    return out, ds
+
+
+def subset_agreement(system: System, ds, size: int, sub: int) -> dict:
+    """The CPU build's labels of every (size // sub)-th grid state against ``ds``'s: the
+    share labelled alike (labels matched by their most common pairing)."""
+    x, y = Range(*X, size), Range(*Y, size)
+    stride = max(size // sub, 1)
+    states = grid_states(system, x, y).reshape(size, size, -1)[::stride, ::stride]
+    states = states.reshape(-1, system.n_state)
+    ours = ds.basin.values[::stride, ::stride].ravel()
+    study = make_study(system, len(states), mapper="features", device="cpu",
+                       feature_options=BASIN_FEATURES)
+    cpu = study.find(states).labels
+    pairs, counts = np.unique(np.stack([cpu, ours], axis=1), axis=0, return_counts=True)
+    best: dict[int, int] = {}
+    for (a, _), c in sorted(zip(map(tuple, pairs), counts, strict=True), key=lambda t: -t[1]):
+        best.setdefault(int(a), int(c))
+    return {"states": len(states), "alike": sum(best.values()) / len(states)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--size", type=int, default=100, help="basin grid side")
+    parser.add_argument("--members", type=int, default=1 << 16, help="CPU build members")
+    parser.add_argument("--gpu-members", type=int, default=1 << 20)
+    parser.add_argument("--one-core-members", type=int, default=256)
+    parser.add_argument("--steps", type=int, default=2000, help="RK4 steps per member")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    system = System.make("balanced-rotor", **ROTOR)
+    h = StroboscopicMap.make(system, "vc").dt
+    gpu = gpu_problem() is None
+    out: dict = {"model": "balanced-rotor", **ROTOR, "h_s": h, "cores": cores(),
+                 "threads_env": os.environ.get("BEARINGDYN_THREADS"),
+                 "load": os.getloadavg(),
+                 "devices": [d.__dict__ for d in device_info()]}
+    out["one_core"] = one_core(system, h, args.steps, args.one_core_members, args.repeat)
+    out["cpu_build"] = kernel(system, h, args.steps, args.members, args.repeat, "cpu")
+    out["cpu_over_one_core"] = out["cpu_build"]["steps_per_s"] / out["one_core"]["steps_per_s"]
+    if gpu:
+        out["cuda_build"] = kernel(system, h, args.steps, args.gpu_members, args.repeat, "gpu")
+        out["cuda_over_cpu"] = out["cuda_build"]["steps_per_s"] / out["cpu_build"]["steps_per_s"]
+        out["cuda_over_one_core"] = (out["cuda_build"]["steps_per_s"]
+                                     / out["one_core"]["steps_per_s"])
+    else:
+        out["cuda_build"] = None
+        out["no_gpu"] = gpu_problem()
+    out["basin"], ds = basin(system, args.size, "gpu" if gpu else "cpu")
+    if gpu:
+        out["basin"]["cpu_subset"] = subset_agreement(system, ds, args.size, 100)
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+        return
+    print(f"balanced-rotor N_b 8, 50 N, 8000 rpm, h = {h:.4g} s, {out['cores']} core(s), "
+          f"load {', '.join(f'{v:.2f}' for v in out['load'])}")
+    for key, name in (("one_core", "one core, compiled RK4 blocks"),
+                      ("cpu_build", "CPU build, all cores"), ("cuda_build", "CUDA build")):
+        row = out[key]
+        if row is None:
+            print(f"  {name:32s} no GPU: {out['no_gpu']}")
+            continue
+        print(f"  {name:32s} {row['steps_per_s']:10.3e} steps/s ({row['members']} members "
+              f"× {row['steps']} steps in {row['seconds']:.3g} s)")
+    print(f"  CPU build / one core: {out['cpu_over_one_core']:.1f}×")
+    if gpu:
+        print(f"  CUDA / CPU build: {out['cuda_over_cpu']:.1f}×;  CUDA / one core: "
+              f"{out['cuda_over_one_core']:.1f}×")
+    b = out["basin"]
+    print(f"  basin {b['size']} × {b['size']} on the {b['device']}: {b['seconds']:.3g} s "
+          f"({b['member_steps'] / b['seconds']:.3e} steps/s); attractors "
+          + ", ".join(f"{i}: {n} {100 * b['fractions'][i]:.1f} %"
+                      for i, n in b["attractors"].items()))
+    if "cpu_subset" in b:
+        print(f"  CPU build on a {b['cpu_subset']['states']}-state subset: "
+              f"{100 * b['cpu_subset']['alike']:.2f} % labelled alike")
+
+
+if __name__ == "__main__":
+    main()
