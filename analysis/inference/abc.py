@@ -61,7 +61,7 @@ MAX_SAMPLES = 200_000
 """Parameter sets per round at most."""
 MAX_ROUNDS = 30
 """Rounds at most."""
-MAX_CORE_HOURS = 1000.0
+MAX_CORE_HOURS = 100.0
 """A calibration estimated to take more CPU time than this is refused before any work."""
 CPU_RATE = 5.0e6
 """Member RK4 steps per second per core of the state lane kernel (with the host's
@@ -169,7 +169,7 @@ def smc_weights(particles: np.ndarray, population: np.ndarray,
 def tolerance(d: np.ndarray, quantile: float) -> float:
     """The round's tolerance: the ``quantile`` of its discrepancies (at least one member
     lies at or below it)."""
-    return float(np.quantile(d, quantile, method="higher"))
+    return float(np.quantile(d, quantile, method="lower"))
 
 
 # --- a calibration -------------------------------------------------------------------------
