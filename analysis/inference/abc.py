@@ -64,9 +64,10 @@ MAX_ROUNDS = 30
 MAX_CORE_HOURS = 100.0
 """A calibration estimated to take more CPU time than this is refused before any work."""
 CPU_RATE = 5.0e6
-"""Member RK4 steps per second per core of the state lane kernel (with the host's
-classification and spectra), measured on the paper's model (docs/calibration.md): the
-basis of the up-front estimate."""
+"""Member RK4 steps (a tangent carried over the record counted as one more member) per
+second per core of the member kernels' CPU build with the host's classification and
+spectra, measured on the paper's model (docs/calibration.md): the basis of the up-front
+estimate."""
 MIN_SD = 1e-3
 """Least kernel standard deviation per unit coordinate (a population of one point)."""
 

@@ -12,10 +12,8 @@ them. A member that blows up (``integrate.ensemble.bad_points``: not finite, or 
 blow-up limit) is given the class ``diverged``: it stays in the round, never dropped.
 
 The engine: the member kernels of ``analysis.integrate.kernels`` (``run_members`` with a
-``Schedule``; CPU with OpenMP or the GPU, ``device``) when that package is present, else
-the state lane kernel of ``analysis.integrate.ensemble.run_members`` (two members per
-vector register, the same RK4 steps as ``simulate`` bit for bit) with λ1 from a shadow
-member per member (Benettin's two-trajectory method, renormalised every revolution).
+``Schedule`` and one tangent vector; the C build on every core with OpenMP, or the CUDA
+build on the GPU: ``device``). A row's members are one call.
 """
 
 from __future__ import annotations
@@ -28,20 +26,14 @@ import numpy as np
 
 from analysis.errors import InputError
 from analysis.inference.targets import Target, TargetRow
-from analysis.integrate.ensemble import bad_points
-from analysis.integrate.ensemble import run_members as lane_members
+from analysis.integrate.kernels import Schedule, run_members
 from analysis.integrate.plan import RunPlan
-from analysis.integrate.simulate import blow_up_limit
 from analysis.model import Model, System, as_system, load_model
 from analysis.provenance import completed_attrs, to_dataset
 from analysis.signal.poincare import poincare_section
 from analysis.signal.spectrum import Peak, find_peaks
 from analysis.stability.classify import classify_section, verdict_points
 from analysis.stability.lyapunov import BLOCKS, batch_ci95
-
-SHADOW_OFFSET = 1e-11
-"""Initial separation of a shadow member (m, in x): small beside the clearance (1e-5 m) and
-the orbit, large beside the rounding of the state (1e-21 m)."""
 
 
 @dataclass(frozen=True)
@@ -100,77 +92,30 @@ class EngineResult:
     """(M,): λ1 over the record, 1/s (NaN for a diverged member)."""
     ci95: np.ndarray
     """(M,): its 95 % half-width, 1/s."""
+    diverged_at: np.ndarray
+    """(M,) the RK4 step of a member's first state beyond the blow-up bound
+    (``simulate.blow_up_limit``; not finite), -1 if never."""
     device: str
-
-
-def kernels_available() -> bool:
-    """Whether the member kernels (``analysis.integrate.kernels``: ``run_members`` with a
-    ``Schedule``) can be imported."""
-    try:
-        from analysis.integrate.kernels import Schedule, run_members  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def run_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
                every: int, transient_samples: int, n_samples: int, per_revolution: int,
                device: str = "cpu") -> EngineResult:
-    """Run M members of ``system``'s model and balls: ``states`` (M × n), ``parameters``
+    """Run M members of ``system``'s model and balls in one call of the member kernels
+    (``analysis.integrate.kernels.run_members``): ``states`` (M × n), ``parameters``
     (M × n_par), step ``h`` s; ``transient_samples`` · ``every`` steps dropped, then
-    ``n_samples`` samples every ``every`` steps kept, λ1 over them (renormalised every
-    ``per_revolution`` samples)."""
-    if kernels_available():
-        from analysis.integrate.kernels import Schedule, run_members
-
-        schedule = Schedule(transient_samples * every, every, n_samples, tangent=True,
-                            lyapunov_skip=0, keep_sections=True)
-        out = run_members(system, states, parameters, h, schedule, device=device)
-        logs = np.asarray(out.logs, dtype=float)
-        per = logs.reshape(len(logs), -1, per_revolution).sum(axis=2)
-        ci = batch_ci95(per, per_revolution * every * h)
-        return EngineResult(np.asarray(out.sections), np.asarray(out.lambda1), ci,
-                            str(out.device))
-    if device == "gpu":
-        raise InputError("--device: gpu needs the member kernels (analysis.integrate."
-                         "kernels) and CuPy; use cpu")
-    return _lanes_engine(system, states, parameters, h, every, transient_samples, n_samples,
-                         per_revolution)
-
-
-def _lanes_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
-                  every: int, transient_samples: int, n_samples: int,
-                  per_revolution: int) -> EngineResult:
-    """``run_engine`` on the state lane kernel, λ1 from a shadow member per member."""
-    m, n = states.shape
-    s = np.column_stack([states, np.zeros(m)])
-    hs = np.full(2 * m, h)
-    if transient_samples:
-        lane_members(system, parameters, hs[:m], s, 1, transient_samples * every)
-    shadow = s.copy()
-    shadow[:, 0] += SHADOW_OFFSET
-    both = np.concatenate([s, shadow])
-    p2 = np.concatenate([parameters, parameters])
-    revolutions = n_samples // per_revolution
-    samples = np.empty((m, n_samples, n))
-    logs = np.empty((m, revolutions))
-    omega = 2 * np.pi / (per_revolution * every * h)
-    scale = np.array([1.0 if not name.startswith("v") else 1.0 / omega
-                      for name in system.state_names])
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        for r in range(revolutions):
-            out = lane_members(system, p2, hs, both, per_revolution, every)
-            samples[:, r * per_revolution:(r + 1) * per_revolution] = out[:m]
-            diff = (both[m:, :n] - both[:m, :n]) * scale
-            dist = np.linalg.norm(diff, axis=1)
-            logs[:, r] = np.log(dist / SHADOW_OFFSET)
-            factor = np.where(dist > 0, SHADOW_OFFSET / dist, 1.0)
-            both[m:, :n] = both[:m, :n] + (both[m:, :n] - both[:m, :n]) * factor[:, None]
-    interval = per_revolution * every * h
-    lam = logs.sum(axis=1) / (interval * revolutions)
+    ``n_samples`` samples every ``every`` steps kept, with one tangent vector renormalised
+    at each sample; λ1 is the mean growth over the record, its 95 % interval from batch
+    means of the revolutions' growths (``per_revolution`` samples each)."""
+    schedule = Schedule(transient_samples * every, every, n_samples, tangent=True,
+                        lyapunov_skip=0, keep_sections=True)
+    out = run_members(system, states, parameters, h, schedule, device=device)
+    logs = np.asarray(out.logs, dtype=float)
+    per = logs.reshape(len(logs), -1, per_revolution).sum(axis=2)
     with np.errstate(invalid="ignore"):
-        ci = batch_ci95(logs, interval)
-    return EngineResult(samples, lam, ci, "cpu")
+        ci = batch_ci95(per, per_revolution * every * h)
+    return EngineResult(np.asarray(out.sections), np.asarray(out.lambda1), ci,
+                        np.asarray(out.diverged_at), str(out.device))
 
 
 def row_system(model: Model, row: TargetRow) -> System:
@@ -205,17 +150,15 @@ def peak_names(peaks: Sequence[Peak]) -> list[str]:
 
 
 def _member_row(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
-                every: int, start_step: int, settings: RunSettings,
+                every: int, start_step: int, diverged_at: int, settings: RunSettings,
                 coordinates: Sequence[str]) -> MemberRow:
-    """Classify one member's record and name its lines."""
+    """Classify one member's record and name its lines (``diverged`` when it blew up:
+    ``diverged_at`` >= 0, the step of its first bad state)."""
     model = system.model
-    values = dict(system.parameters)
-    limit = blow_up_limit(model, values)
-    bad = bad_points(samples, limit, model.centre_indices())
     times = (start_step + every * np.arange(1, len(samples) + 1)) * h
-    if bad.any() or not math.isfinite(lam):
-        first = int(np.argmax(bad)) if bad.any() else len(samples) - 1
-        return MemberRow("diverged", math.nan, math.nan, {}, {}, float(times[first]))
+    if diverged_at >= 0 or not math.isfinite(lam) or not np.all(np.isfinite(samples)):
+        step = diverged_at if diverged_at >= 0 else start_step + every * len(samples)
+        return MemberRow("diverged", math.nan, math.nan, {}, {}, float(step * h))
     duration = float(times[-1])
     attrs = completed_attrs(system, method="rk4", dt=h, save_every=every, duration=duration,
                             transient=float(times[0]))
@@ -258,7 +201,8 @@ def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],
                         per, device)
     start = settings.transient_revolutions * per * every
     return [_member_row(m, result.samples[i], float(result.lambda1[i]),
-                        float(result.ci95[i]), h, every, start, settings, coordinates)
+                        float(result.ci95[i]), h, every, start, int(result.diverged_at[i]),
+                        settings, coordinates)
             for i, m in enumerate(members)]
 
 
