@@ -1,0 +1,85 @@
+"""The CUDA build of the member kernels (``analysis.integrate.kernels.cuda``) against the CPU
+build: states to 1e-12 relative after a few thousand steps and λ1 on balanced-rotor and
+vakharia2015 (skipped, with the reason, without CuPy or a visible GPU). Without a GPU the
+CUDA text is still checked: it compiles as C++ with the CUDA keywords stubbed (g++), and,
+where ``nvcc`` is installed, ptxas reports no register spills for the one-body shipped
+models."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from analysis.integrate.kernels import Schedule, cuda_source, run_members
+from analysis.integrate.kernels.cuda import NVRTC_OPTIONS
+from analysis.integrate.kernels.devices import gpu_problem
+from analysis.model import System
+
+CASES = {"balanced-rotor": dict(n_balls=8, speed_rpm=8000.0, radial_load=50.0),
+         "vakharia2015": dict(n_balls=8, speed_rpm=5000.0, radial_load=50.0)}
+STUB = """\
+#include <cmath>
+#define __device__
+#define __forceinline__ inline
+#define __global__
+#define __restrict__
+struct bd_dim { unsigned x; };
+static bd_dim blockIdx, blockDim, threadIdx;
+static inline double __longlong_as_double(unsigned long long v) {
+  double d; __builtin_memcpy(&d, &v, 8); return d; }
+"""
+
+
+def _system(name: str) -> System:
+    return System.make(name, **CASES[name])
+
+
+needs_gpu = pytest.mark.skipif(gpu_problem() is not None,
+                               reason=f"CUDA build not testable here: {gpu_problem()}")
+
+
+@needs_gpu
+@pytest.mark.parametrize("name", list(CASES))
+def test_cuda_states_and_lambda_match_the_cpu_build(name):
+    system = _system(name)
+    z0 = system.state * (1 + 0.05 * np.arange(64))[:, None]
+    for tangent in (False, True):
+        schedule = Schedule(500, 500, 8, tangent=tangent)
+        cpu = run_members(system, z0, None, 1e-5, schedule, device="cpu")
+        gpu = run_members(system, z0, None, 1e-5, schedule, device="gpu")
+        assert gpu.device == "gpu" and np.array_equal(gpu.diverged_at, cpu.diverged_at)
+        scale = np.abs(cpu.sections).max(axis=(0, 1))
+        assert np.all(np.abs(gpu.sections - cpu.sections) <= 1e-12 * scale), name
+        if tangent:
+            np.testing.assert_allclose(gpu.lambda1, cpu.lambda1, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="no g++ to check the CUDA text")
+@pytest.mark.parametrize("tangent", [False, True])
+def test_the_cuda_text_compiles_as_cpp_with_stubs(tmp_path, tangent):
+    text = cuda_source(_system("vakharia2015"), tangent)
+    assert "#ifdef __CUDACC__" in text and "BD_GLOBAL void bd_members_" in text
+    source = tmp_path / "member.cpp"
+    source.write_text(STUB + text.replace("#ifdef __CUDACC__", "#if 1", 1))
+    done = subprocess.run(["g++", "-std=c++11", "-fsyntax-only", "-Wall", str(source)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
+@pytest.mark.skipif(shutil.which("nvcc") is None, reason="no nvcc: register check skipped")
+@pytest.mark.parametrize("name", list(CASES))
+def test_ptxas_reports_no_spills_for_the_one_body_models(tmp_path, name):
+    source = tmp_path / "member.cu"
+    source.write_text(cuda_source(_system(name), tangent=True))
+    done = subprocess.run(["nvcc", "-arch=sm_90", "-cubin", "-Xptxas", "-v",
+                           *(o for o in NVRTC_OPTIONS), "-x", "cu", "-o",
+                           str(tmp_path / "member.cubin"), str(source)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = done.stdout + done.stderr
+    spills = re.findall(r"(\d+) bytes spill stores, (\d+) bytes spill loads", report)
+    assert spills and all(a == "0" and b == "0" for a, b in spills), report
