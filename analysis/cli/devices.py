@@ -17,12 +17,13 @@ DEVICE_HELP = ("Where the member kernels run: cpu (every core, the C/OpenMP buil
                "`bearingdyn devices`).")
 
 
-def check_device(param: typer.CallbackParam, value: str) -> str:
-    """Option callback: ``value`` is one of the device names (checked before the command
-    runs; whether a GPU is there is checked by the command, before any work)."""
+def check_device(param: typer.CallbackParam, value: str | None) -> str | None:
+    """Option callback: ``value`` is one of the device names, or None where the option may
+    be left out (checked before the command runs; whether a GPU is there is checked by the
+    command, before any work)."""
     from analysis.integrate.kernels.devices import DEVICES
 
-    if value not in DEVICES:
+    if value is not None and value not in DEVICES:
         raise typer.BadParameter(f"one of {', '.join(DEVICES)}, got {value!r}",
                                  param_hint="--device")
     return value
@@ -30,6 +31,10 @@ def check_device(param: typer.CallbackParam, value: str) -> str:
 
 DeviceOption = Annotated[str, typer.Option("--device", help=DEVICE_HELP,
                                            callback=check_device)]
+SweepDeviceOption = Annotated[str | None, typer.Option(
+    "--device", help="With --no-follow: run the values as members of the member kernels on "
+                     "cpu, gpu or auto (sections on whole steps, no 1X phasor); left out: "
+                     "value by value through the executor.", callback=check_device)]
 
 
 def devices_json() -> dict:

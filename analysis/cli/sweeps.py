@@ -23,7 +23,7 @@ from analysis.cli.common import (
     parse_sets,
     reports_errors,
 )
-from analysis.cli.devices import DeviceOption
+from analysis.cli.devices import DeviceOption, SweepDeviceOption
 from analysis.errors import InputError
 
 
@@ -57,6 +57,7 @@ def sweep(
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     quiet: QuietOption = False,
+    device: SweepDeviceOption = None,
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
     from analysis.reports.progress import ProgressReporter
@@ -67,9 +68,12 @@ def sweep(
                       section, dt)
     axis = Axis.linear(param, start, stop, num)
     check_grid(setting, axis)  # every input, before a worker starts or a file is made
+    if device is not None and follow:
+        raise InputError("--device: the member kernels run the values of a --no-follow sweep "
+                         "(a followed sweep is one trajectory); add --no-follow")
     ex = executor_of(executor, workers, scheduler)
     try:
-        ds = bifurcation_diagram(setting, axis, output,
+        ds = bifurcation_diagram(setting, axis, output, device=device,
                                  direction=direction, follow=follow, executor=ex,
                                  progress=ProgressReporter(f"sweep {param}", quiet),
                                  on_damaged=_recomputing)

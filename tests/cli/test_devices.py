@@ -81,3 +81,14 @@ def test_chart_takes_the_device_option(cli, tmp_path):
               "--device", "tpu", "-o", "c.nc", cwd=tmp_path)
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "--device" in res.stderr
     assert nothing_written(tmp_path)
+
+
+def test_sweep_takes_the_device_option_without_follow_only(cli, tmp_path):
+    base = ("sweep", "vakharia2015", "--param", "speed_rpm", "--from", "4000", "--to", "6000",
+            "--num", "4", "-o", "s.nc")
+    res = cli(*base, "--device", "cpu", cwd=tmp_path)  # a followed sweep
+    assert res.returncode == 2 and res.stderr.count("\n") == 1
+    assert "--device" in res.stderr and "--no-follow" in res.stderr
+    res = cli(*base, "--no-follow", "--device", "xpu", cwd=tmp_path)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "xpu" in res.stderr
+    assert nothing_written(tmp_path)
