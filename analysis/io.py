@@ -95,8 +95,9 @@ def atomic_write(path: str | Path, write: Callable[[Path], None],
     folder = path.parent if str(path.parent) else Path(".")
     if size is not None:
         check_space(folder, size, path)
+    remove_stale_temporaries(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=folder)
     except OSError as exc:
         raise InputError(f"output: cannot write in '{folder}' ({exc.strerror})") from None
     os.close(fd)
@@ -118,6 +119,64 @@ def atomic_write(path: str | Path, write: Callable[[Path], None],
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+STALE_AGE = 600.0
+"""Seconds after its last change that a temporary file of the old name form (without the
+writer's process id) is taken as left by a killed writer."""
+_TEMPORARY = re.compile(r"(?:(?P<pid>\d+)-)?[a-z0-9_]{8}\.tmp")  # mkstemp: 8 characters
+
+
+def _temporary_prefix(path: Path) -> str:
+    """``.<name>.<pid>-``: the writer's process id in the temporary file's name, so that a
+    later run can tell a temporary left by a killed writer from one still being written."""
+    return f".{path.name}.{os.getpid()}-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # another user's process: it exists
+    return True
+
+
+def remove_stale_temporaries(path: str | Path) -> list[Path]:
+    """Remove the temporary files that writers of ``path`` left behind when they were killed
+    (SIGKILL, a power cut) during the final write: ``.<name>.<pid>-<random>.tmp`` beside
+    ``path`` whose process no longer runs (and ``.<name>.<random>.tmp`` of older versions,
+    unchanged for ``STALE_AGE`` s). A temporary that a running writer still fills is kept.
+    Called by ``atomic_write`` before every write, so the next run to the same output cleans
+    up after a killed one. Returns the files removed."""
+    import time
+
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    prefix = f".{path.name}."
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        if not entry.name.startswith(prefix):
+            continue
+        found = _TEMPORARY.fullmatch(entry.name[len(prefix):])
+        if found is None or not entry.is_file(follow_symlinks=False):
+            continue
+        try:
+            if found["pid"] is not None:
+                stale = int(found["pid"]) != os.getpid() and not _alive(int(found["pid"]))
+            else:
+                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_AGE
+            if stale:
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        except OSError:
+            continue  # gone already, or not ours to remove: the write goes on
+    return removed
 
 
 def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:

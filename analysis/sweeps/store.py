@@ -134,7 +134,11 @@ class PointStore:
 
     def check(self, on_damaged: Callable[[str], None] | None = None) -> list[str]:
         """Read every stored point back; remove (and return the keys of) those that cannot
-        be read, so they are computed again."""
+        be read, so they are computed again. Temporary files (``.*.tmp``) left by a process
+        killed mid-write are removed: the caller holds the output's lock, and its workers
+        have not started."""
+        for path in self.folder.glob(".*.tmp"):
+            path.unlink(missing_ok=True)
         damaged = []
         for path in sorted(self.folder.glob("*.npz")):
             try:
