@@ -29,6 +29,7 @@ import xarray as xr
 
 from analysis.errors import SimulationError
 from analysis.integrate.kernels import resolve_device
+from analysis.integrate.kernels.cpu import cores
 from analysis.io import save_dataset
 from analysis.model import System, as_system
 from analysis.provenance import run_attrs, state_at
@@ -102,14 +103,15 @@ write): on the CPU enough to keep every core busy while an interrupted chart los
 on a GPU enough to fill it."""
 
 
-def _chart_group_task(group: list[tuple], device: str = "cpu") -> list[tuple[str, dict]]:
+def _chart_group_task(group: list[tuple], device: str = "cpu",
+                      threads: int | None = None) -> list[tuple[str, dict]]:
     """Chart points of one model and balls together (``points.chart_points``: one call of
-    the member kernels on ``device``); with ``Ics`` (a task's last item) also each point's
-    attractors among K initial states."""
+    the member kernels on ``device``, ``threads`` CPU threads); with ``Ics`` (a task's last
+    item) also each point's attractors among K initial states."""
     setting = group[0][0]
     systems = [_task_system(task) for task in group]
     out = [(task[-2], point if isinstance(point, dict) else _failed_point(setting, point))
-           for task, point in zip(group, chart_points(setting, systems, device),
+           for task, point in zip(group, chart_points(setting, systems, device, threads),
                                   strict=True)]
     ics = group[0][-1]
     if ics is not None:
@@ -177,8 +179,10 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
-        run_with_progress(executor or SerialExecutor(), partial(_chart_group_task,
-                                                                device=device),
+        executor = executor or SerialExecutor()
+        threads = max(1, cores() // getattr(executor, "workers", 1))  # a pool shares them
+        run_with_progress(executor, partial(_chart_group_task, device=device,
+                                            threads=threads),
                           _chart_groups(setting, tasks, GROUP_POINTS[device]),
                           lambda: len(store.done()),
                           len(x.values) * len(y.values), progress,

@@ -368,7 +368,8 @@ def _kernel_point(system: System, duration: float, transient: float, dt: float,
 
 
 def kernel_points(systems: list[System], durations: list[float], transient: float,
-                  dt: float, section: str | None, device: str = "cpu") -> list:
+                  dt: float, section: str | None, device: str = "cpu",
+                  threads: int | None = None) -> list:
     """Chart points with λ1 on the member kernels (``analysis.integrate.kernels``, the
     tangent variant): the points of each model and balls in one ``run_members`` call on
     ``device`` (``cpu``: every core; ``gpu``; ``auto``). Each point's step is the largest
@@ -398,7 +399,8 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
             out = run_members(points[0].system,
                               np.array([np.asarray(p.system.state, float) for p in points]),
                               np.array([p.system.p for p in points]),
-                              np.array([p.h for p in points]), schedule, device=device)
+                              np.array([p.h for p in points]), schedule, device=device,
+                              threads=threads)
         except (Unsupported, CompileError):
             if resolve_device(device, len(points), schedule.total_steps) == "gpu":
                 raise
@@ -459,12 +461,13 @@ def chart_point(setting: Setting, system: System) -> dict:
                                   setting.step(), setting.section, tangent=setting.lyapunov))
 
 
-def chart_points(setting: Setting, systems: list[System],
-                 device: str = "cpu") -> list[dict | SimulationError]:
+def chart_points(setting: Setting, systems: list[System], device: str = "cpu",
+                 threads: int | None = None) -> list[dict | SimulationError]:
     """Chart points of one model and balls: with λ1 (``setting.lyapunov``) all in one call
     of the member kernels on ``device`` (``kernel_points``: sections on steps, see there),
     else one by one (``one_pass`` without a tangent, bit for bit ``chart_point``'s); per
-    point its result or the ``SimulationError`` of its blow-up."""
+    point its result or the ``SimulationError`` of its blow-up. ``threads``: CPU threads
+    of the kernel call (None: every core)."""
     durations = [setting.seconds(system) for system in systems]
     dt = setting.step()
     if not setting.lyapunov:
@@ -477,5 +480,5 @@ def chart_points(setting: Setting, systems: list[System],
                 outs.append(exc)
     else:
         outs = kernel_points(systems, durations, setting.transient, dt, setting.section,
-                             device)
+                             device, threads)
     return [out if isinstance(out, SimulationError) else _chart_result(out) for out in outs]

@@ -94,6 +94,9 @@ def build(source: str, stem: str, symbol: str) -> CpuLibrary:
     loaded."""
     command = [*compiler_command(), OPENMP_FLAG]
     path = cached_path(stem, source, command)
+    # idle threads sleep instead of spinning (read by libgomp when it loads): a chart's
+    # worker processes may share the cores, and a call's end waits for its longest member
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
         if not path.exists():
             with compiling(path):  # a second process waits, then loads the first's build

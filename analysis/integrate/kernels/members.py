@@ -232,7 +232,8 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
                 h: np.ndarray | float, schedule: Schedule, *,
                 t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
                 device: str = "cpu", block: int | None = None,
-                progress: Callable[[int, int], None] | None = None) -> MemberResult:
+                progress: Callable[[int, int], None] | None = None,
+                threads: int | None = None) -> MemberResult:
     """Run M members of ``system``'s model and balls by ``schedule``.
 
     ``states`` (M, n): initial states (SI units; a state that is not finite diverges at
@@ -242,7 +243,9 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     (step counters, whole numbers; one or per member): step k runs from ``t0 + k·h``, the
     first from k0. ``device``: ``cpu``, ``gpu`` or ``auto`` (``devices.resolve_device``);
     ``block``: members per call (default: ``CPU_BLOCK`` on the CPU, half the GPU's free
-    memory on the GPU); ``progress(done, total)`` after each block (members).
+    memory on the GPU); ``progress(done, total)`` after each block (members); ``threads``:
+    CPU threads (None: ``cpu.cores()``, every core; a worker process of a pool of W takes
+    cores / W).
 
     Each member's blow-up limit is ``simulate.blow_up_limit`` of its parameters. Bad input
     raises ``InputError`` before anything runs; a model whose kernel cannot be written or
@@ -288,7 +291,8 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
         if device == "gpu":
             kern.run(count, ins, k, schedule.keep_sections, outs)
         else:
-            kern.run(count, min(cores(), count), ins, k, schedule.keep_sections, outs)
+            kern.run(count, min(threads or cores(), count), ins, k, schedule.keep_sections,
+                     outs)
         if sections is not None:
             sections[part] = outs[0]
         if logs is not None:
