@@ -63,6 +63,9 @@ FEATURE_BLOCK = {"cpu": 1 << 16, "gpu": 1 << 20}
 """Initial states per block of the featurizing mapper by device: a block's sections are
 what the host holds at once (2¹⁶ × 48 sections × 4 states: 100 MB); the GPU wants 10⁶
 members in flight to reach its throughput."""
+PERIOD_SAMPLE = 64
+"""Members per cluster whose period is detected (the cluster's period is their most common
+one; every member's would cost a pass over all section points per period tried)."""
 TRANSIENT_CHUNK = 64
 """Periods per call of the map when no member kernel is at hand (the transient's points
 are checked for blow-up chunk by chunk, then dropped)."""
@@ -273,10 +276,11 @@ class FeaturizingMapper:
         cells = feature_cells(features(run.sections[ok], self.scale), opts.resolution)
         groups = touching_groups(cells)
         labels[ok] = groups + 1
-        detected = periods(run.sections[ok], self.scale, opts)
         self.found, self.period_of = {}, {}
-        for g in range(int(groups.max(initial=-1)) + 1):
-            members = np.flatnonzero(groups == g)
+        order = np.argsort(groups, kind="stable")  # each group's members, in index order
+        ends = np.cumsum(np.bincount(groups))
+        for g, end in enumerate(ends):
+            members = order[(ends[g - 1] if g else 0):end]
             i = int(ok[members[0]])
             label = g + 1
             self.found[label] = Found(
@@ -284,7 +288,9 @@ class FeaturizingMapper:
                 points=list(run.sections[i]), finder=i,
                 finder_state=np.append(states[i], 0.0), found_step=run.steps,
                 last_state=np.append(run.final[i], float(run.steps)))
-            self.period_of[label] = int(np.bincount(detected[members]).argmax())
+            sample = ok[members[:PERIOD_SAMPLE]]
+            detected = periods(run.sections[sample], self.scale, opts)
+            self.period_of[label] = int(np.bincount(detected).argmax())
         self.spent = np.full(len(states), opts.transient + opts.sections, dtype=np.int64)
         if progress is not None:
             progress(len(states), len(states))
