@@ -233,13 +233,11 @@ def hinge_count(rows: int) -> int:
 
 def read_table(path: str | Path) -> SpeedProfile:
     """The speed table of a CSV file (see the module: header ``t_s,speed_rpm``, ``#``
-    comments); every problem one ``InputError`` line naming the file and the line."""
+    comments; a UTF-8 byte-order mark, as Excel's "CSV UTF-8" writes, is accepted); every
+    problem one ``InputError`` line naming the file and the line. The file's kind and size
+    are judged before it is read, and at most ``MAX_ROWS`` rows are read."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"--speed-rpm: cannot read the speed table '{path}': "
-                         f"{getattr(exc, 'strerror', None) or exc}") from None
+    text = _table_text(path)
     rows = [(number, line.split("#", 1)[0].strip())
             for number, line in enumerate(text.splitlines(), start=1)]
     rows = [(number, line) for number, line in rows if line]
@@ -250,6 +248,8 @@ def read_table(path: str | Path) -> SpeedProfile:
     if tuple(cell.strip() for cell in next(csv.reader([header]))) != TABLE_HEADER:
         raise InputError(f"{where} line {number}: the header must be 't_s,speed_rpm', got "
                          f"{header!r}")
+    if len(rows) - 1 > MAX_ROWS:
+        raise InputError(f"{where}: must have 2 to {MAX_ROWS} rows, got more than {MAX_ROWS}")
     times, rpm = [], []
     for number, line in rows[1:]:
         cells = [cell.strip() for cell in next(csv.reader([line]))]
@@ -267,6 +267,44 @@ def read_table(path: str | Path) -> SpeedProfile:
         times.append(t)
         rpm.append(v)
     return SpeedProfile.table(times, rpm, str(path))
+
+
+TABLE_BYTES = 2**20
+"""The largest speed table read, bytes (``MAX_ROWS`` rows with long comments fit)."""
+
+
+def _table_text(path: Path) -> str:
+    """The text of the speed table at ``path``, judged before it is read: a missing file, a
+    folder, a pipe or a device, and a file over ``TABLE_BYTES`` are refused by name."""
+    import os
+    import stat
+
+    from modelgen.locations import broken_link
+
+    field = f"--speed-rpm: the speed table '{path}'"
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        reason = broken_link(path) or ("does not exist" if not os.path.lexists(path)
+                                       else exc.strerror)
+        raise InputError(f"{field} {reason}") from None
+    if stat.S_ISDIR(mode):
+        raise InputError(f"{field} is a folder; give a CSV file (t_s,speed_rpm)")
+    if not stat.S_ISREG(mode):
+        kind = "a pipe (FIFO)" if stat.S_ISFIFO(mode) else "a device or socket"
+        raise InputError(f"{field} is {kind}, not a plain file; give a CSV file (t_s,speed_rpm)")
+    size = path.stat().st_size
+    if size > TABLE_BYTES:
+        raise InputError(f"{field} is {size} bytes; at most {TABLE_BYTES} bytes (a table of 2 "
+                         f"to {MAX_ROWS} rows)")
+    try:
+        with open(path, encoding="utf-8-sig") as handle:  # a byte-order mark is dropped
+            return handle.read(TABLE_BYTES + 1)
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{field} is not UTF-8 text (byte {exc.start}); save it as CSV "
+                         "UTF-8") from None
+    except OSError as exc:
+        raise InputError(f"{field} cannot be read: {exc.strerror or exc}") from None
 
 
 def parse_speed(text: str) -> float | SpeedProfile:
@@ -288,9 +326,7 @@ def parse_speed(text: str) -> float | SpeedProfile:
             return profile.start_rpm if profile.is_constant else profile
     path = Path(text)
     if path.suffix.lower() == ".csv" or path.exists():
-        if not path.is_file():
-            raise InputError(f"--speed-rpm: no speed table at '{text}'")
-        profile = read_table(path)
+        profile = read_table(path)  # a missing file, a folder or a pipe refused by name
         return profile.start_rpm if profile.is_constant else profile
     raise InputError(f"--speed-rpm: must be a speed in rpm, a ramp A:B (rpm, A at t = 0, B "
                      f"at the end) or a CSV speed table (t_s,speed_rpm), got {text!r}")
