@@ -87,8 +87,9 @@ def rk4_pair(n_balls: int, pair: list[dict], durations: list[float]) -> None:
 
 
 def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
-    """Chart points (a pair in one kernel call, and each alone) against compiled RK4 at ``count``
-    grid points spread over both axes, each with its neighbour on x; median of ``repeat``
+    """Chart points (a pair in one kernel call, and each alone) against compiled RK4 at
+    ``count`` grid points spread over both axes, each with its neighbour on x; median of
+    ``repeat``
     interleaved runs each (the first call, which loads the libraries, not timed). Times in
     s, per point."""
     picks = []
@@ -103,12 +104,12 @@ def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
 
         timed(chart_points, SETTING, points), timed(each_alone, points)
         timed(rk4_pair, n_balls, pair, durations)
-        lanes, single, plain = [], [], []
+        kernel, single, plain = [], [], []
         for _ in range(repeat):
-            lanes.append(timed(chart_points, SETTING, points) / 2)
+            kernel.append(timed(chart_points, SETTING, points) / 2)
             single.append(timed(each_alone, points) / 2)
             plain.append(timed(rk4_pair, n_balls, pair, durations) / 2)
-        rows.append((n_balls, pair[0][x.name], sum(durations) / 2, statistics.median(lanes),
+        rows.append((n_balls, pair[0][x.name], sum(durations) / 2, statistics.median(kernel),
                      statistics.median(single), statistics.median(plain)))
     sums = [sum(r[i] for r in rows) for i in (3, 4, 5)]
     return {"rows": rows, "chart": sums[0] / len(rows), "alone": sums[1] / len(rows),

@@ -50,7 +50,10 @@ def test_cuda_states_and_lambda_match_the_cpu_build(name):
     for tangent in (False, True):
         schedule = Schedule(500, 500, 8, tangent=tangent)
         cpu = run_members(system, z0, None, 1e-5, schedule, device="cpu")
-        gpu = run_members(system, z0, None, 1e-5, schedule, device="gpu")
+        calls: list[int] = []
+        gpu = run_members(system, z0, None, 1e-5, schedule, device="gpu",
+                          progress=lambda done, total, seen=calls: seen.append(done))
+        assert len(calls) > 3 and calls[-1] == 300  # streamed in blocks that fit
         assert gpu.device == "gpu" and np.array_equal(gpu.diverged_at, cpu.diverged_at)
         scale = np.abs(cpu.sections).max(axis=(0, 1))
         assert np.all(np.abs(gpu.sections - cpu.sections) <= 1e-12 * scale), name
@@ -83,3 +86,76 @@ def test_ptxas_reports_no_spills_for_the_one_body_models(tmp_path, name):
     report = done.stdout + done.stderr
     spills = re.findall(r"(\d+) bytes spill stores, (\d+) bytes spill loads", report)
     assert spills and all(a == "0" and b == "0" for a, b in spills), report
+
+
+class _FakeCupy:
+    """CuPy's surface that ``kernels.cuda`` uses, on NumPy, whose ``RawModule`` runs the
+    CPU build of the same model: the GPU path's marshalling, blocks and device choice,
+    tested by its CPU twin."""
+
+    __version__ = "fake"
+
+    def __init__(self, system: System, tangent_seen: list):
+        from analysis.integrate.kernels.cpu import cpu_library
+
+        class Runtime:
+            @staticmethod
+            def getDeviceCount():
+                return 1
+
+            @staticmethod
+            def memGetInfo():
+                return (1 << 16, 1 << 30)  # 64 KiB free: blocks of ~50 members
+
+        class Cuda:
+            runtime = Runtime
+
+        class RawModule:
+            def __init__(self, code: str, options: tuple):
+                assert options == NVRTC_OPTIONS and "BD_GLOBAL" in code
+                self.tangent = "bd_members_tangent" in code
+
+            def get_function(self, name: str):
+                lib = cpu_library(system.model, system.structure, self.tangent)
+                tangent_seen.append(self.tangent)
+
+                def launch(grid, block, args):
+                    count, rest = int(args[0]), list(args[1:])
+                    assert grid[0] * block[0] >= count
+                    lib.run(count, 1, rest[:12], int(rest[12]), bool(rest[13]), rest[14:])
+                return launch
+
+        self.cuda, self.RawModule = Cuda, RawModule
+
+    asarray = staticmethod(lambda a: np.ascontiguousarray(np.array(a)))
+    empty = staticmethod(lambda shape, dtype: np.empty(shape, dtype=dtype))
+    asnumpy = staticmethod(lambda a: np.asarray(a))
+
+
+@pytest.mark.parametrize("tangent", [False, True])
+def test_the_gpu_path_with_a_cpu_twin_gives_the_cpu_results(monkeypatch, tangent):
+    from analysis.integrate.kernels import cuda, members
+
+    system = _system("vakharia2015")
+    seen: list = []
+    monkeypatch.setattr(cuda, "cupy_module", lambda: _FakeCupy(system, seen))
+    monkeypatch.setattr("analysis.integrate.kernels.devices.cupy_module",
+                        lambda: _FakeCupy(system, seen))
+    cuda.cuda_kernel.cache_clear()
+    members._self_test_gpu.cache_clear()
+    try:
+        z0 = system.state * (1 + 0.05 * np.arange(300))[:, None]
+        schedule = Schedule(100, 50, 6, tangent=tangent)
+        cpu = run_members(system, z0, None, 1e-5, schedule, device="cpu")
+        calls: list[int] = []
+        gpu = run_members(system, z0, None, 1e-5, schedule, device="gpu",
+                          progress=lambda done, total, seen=calls: seen.append(done))
+        assert len(calls) > 3 and calls[-1] == 300  # streamed in blocks that fit
+        assert gpu.device == "gpu" and seen and all(t == tangent for t in seen)
+        assert np.array_equal(gpu.sections, cpu.sections)
+        assert np.array_equal(gpu.final, cpu.final)
+        if tangent:
+            assert np.array_equal(gpu.lambda1, cpu.lambda1)
+    finally:
+        cuda.cuda_kernel.cache_clear()
+        members._self_test_gpu.cache_clear()

@@ -38,6 +38,9 @@ GPU_BLOCK_SHARE = 0.5
 """Share of the GPU's free memory one block of members may take."""
 SELF_TEST_TOL = 1e-12
 """Relative agreement of the tangent variant with its stage RK4 in CasADi (self-test)."""
+GPU_SELF_TEST_TOL = 1e-10
+"""Relative agreement of the CUDA build with the CPU build over the self-test's steps (CUDA's
+libm differs from glibc's in the last bits)."""
 
 
 def section_step(period_s: float, dt: float) -> tuple[float, int]:
@@ -223,6 +226,7 @@ def _kernel(system: System, tangent: bool, device: str):
     if device == "gpu":
         from analysis.integrate.kernels.cuda import cuda_kernel
 
+        _self_test_gpu(system.model, system.structure, tangent)
         return cuda_kernel(system.model, system.structure, tangent)
     _self_test(system.model, system.structure, tangent)
     return cpu_library(system.model, system.structure, tangent)
@@ -345,11 +349,7 @@ def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
 
     step, constants = state_functions(model, structure)
     n = model.n_state
-    p0 = model.parameter_vector(model.defaults)
-    h0 = float(model.simulation_defaults["dt"])
-    z0 = np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)])
-    p = np.stack([p0 * (1 + 0.01 * j) for j in range(2)])
-    hs, t0s, k0s = h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.array([3.0, 4.0])
+    z0, k0s, p, hs, t0s, _ = _self_test_inputs(model, n)
     sched = Schedule(1, 2, 2).per_member(2)
     outs = [np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, n)),
             np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
@@ -394,3 +394,44 @@ def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
         if not ok:
             raise CompileError(f"the member kernel of {model.name} does not reproduce "
                                "CasADi (check BEARINGDYN_CFLAGS: no fast-math)")
+
+
+def _self_test_inputs(model, n: int) -> list[np.ndarray]:
+    """The self-test's two members: z0, k0, p, h, t0, limit."""
+    p0 = model.parameter_vector(model.defaults)
+    h0 = float(model.simulation_defaults["dt"])
+    return [np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)]),
+            np.array([3.0, 4.0]), np.stack([p0 * (1 + 0.01 * j) for j in range(2)]),
+            h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.full(2, np.inf)]
+
+
+@cache
+def _self_test_gpu(model, structure: tuple[int, ...], tangent: bool) -> None:
+    """The CUDA build against the CPU build (itself checked against CasADi) on the
+    self-test's members over 20 steps: sections and logs to ``GPU_SELF_TEST_TOL``.
+    ``CompileError`` when they disagree. Once per process."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels.cuda import cuda_kernel
+
+    _self_test(model, structure, tangent)
+    n = model.n_state
+    inputs = [np.ascontiguousarray(a) for a in _self_test_inputs(model, n)]
+    inputs += Schedule(2, 6, 3).per_member(2)
+    results = []
+    for device in ("cpu", "gpu"):
+        outs = [np.empty((2, 3, n)), np.empty((2, 3)), np.empty((2, n)),
+                np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
+        if device == "cpu":
+            cpu_library(model, structure, tangent).run(2, 1, inputs, 3, True, outs)
+        else:
+            cuda_kernel(model, structure, tangent).run(2, inputs, 3, True, outs)
+        results.append(outs)
+    (cpu, gpu) = results
+    scale = np.abs(cpu[0]).max(axis=(0, 1)) + 1e-300
+    ok = np.all(np.abs(gpu[0] - cpu[0]) <= GPU_SELF_TEST_TOL * scale) \
+        and np.array_equal(gpu[3], cpu[3])
+    if tangent:
+        ok = ok and np.allclose(gpu[1], cpu[1], rtol=GPU_SELF_TEST_TOL, atol=1e-12)
+    if not ok:
+        raise CompileError(f"the CUDA member kernel of {model.name} does not reproduce the "
+                           "CPU build (NVRTC options: see kernels/cuda.py)")
