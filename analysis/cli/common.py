@@ -418,6 +418,9 @@ def executor_of(kind: str, workers: int | None, scheduler: str | None):
         if workers is not None:
             raise InputError(f"--workers: not with --scheduler (the scheduler's cluster has "
                              f"its own workers), got --workers {workers}")
+    if kind == "serial" and workers is not None and workers != 1:
+        raise InputError(f"--workers: --executor serial runs on one worker; give --executor "
+                         f"processes or dask for {workers}, got --workers {workers}")
     return make_executor(kind, workers, scheduler)
 
 
