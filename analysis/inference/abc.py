@@ -63,7 +63,7 @@ MAX_ROUNDS = 30
 """Rounds at most."""
 MAX_CORE_HOURS = 100.0
 """A calibration estimated to take more CPU time than this is refused before any work."""
-CPU_RATE = 5.0e6
+CPU_RATE = 1.0e6
 """Member RK4 steps (a tangent carried over the record counted as one more member) per
 second per core of the member kernels' CPU build with the host's classification and
 spectra, measured on the paper's model (docs/calibration.md): the basis of the up-front
