@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from analysis import errors
 from analysis.errors import InputError
 from analysis.io import save_dataset
 from analysis.model import System, load_model
@@ -167,6 +168,37 @@ class StoredRunner:
         return [found[k] for k in keys]
 
 
+MAX_SEED = 2**63 - 1
+"""The largest seed of the random initial states (a 64-bit signed integer, as the result
+file stores it)."""
+
+
+MAX_VALUES = 100_000
+"""The most parameter values of a global continuation (``--param NAME:LO:HI:N``)."""
+
+
+def check_value_count(field: str, count: int) -> int:
+    """``count`` values of a continued parameter, bounded by ``MAX_VALUES`` before any
+    value is made (``InputError`` naming ``field`` otherwise)."""
+    return errors.check_count(field, count, 1, MAX_VALUES, " (values of the parameter)")
+
+
+def check_branch_of(system: System, branch: xr.Dataset, parameter: str, field: str) -> None:
+    """``InputError`` (naming ``field``) unless ``branch``, a continuation branch drawn
+    beside a global continuation, is of ``system``'s model (its spec's SHA-256) and of the
+    continued ``parameter``."""
+    model = system.model
+    name = branch.attrs.get("model")
+    sha = branch.attrs.get("spec_sha256")
+    if name != model.name or (sha is not None and sha != model.spec_sha256):
+        other = f"model '{name}'" if name != model.name else "another spec of this model"
+        raise InputError(f"{field}: the branch is of {other}; give a branch of model "
+                         f"'{model.name}' (spec sha256 {model.spec_sha256[:12]})")
+    if branch.attrs.get("param") != parameter:
+        raise InputError(f"{field}: the branch is continued in '{branch.attrs.get('param')}'; "
+                         f"give one continued in '{parameter}' (the --param)")
+
+
 def system_definition(system: System) -> dict:
     """The System as a store's definition records it."""
     model = system.model
@@ -211,8 +243,17 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
     check_count("x", x.num)
     check_count("y", y.num)
     check_pair(system, x, y)
-    study = check_study(system, x.num * y.num, period, dt, options, label_options, block,
-                        mapper, device, feature_options)  # no grid allocated
+    try:
+        study = check_study(system, x.num * y.num, period, dt, options, label_options, block,
+                            mapper, device, feature_options)  # no grid allocated
+    except InputError as exc:  # the memory check counts states: name the grid's axes
+        text = str(exc)
+        head = f"samples: {x.num * y.num} initial states"
+        if not text.startswith(head):
+            raise
+        raise InputError(f"x, y: a {x.num} x {y.num} grid ({x.num * y.num} initial states)"
+                         + text[len(head):].replace("use fewer", "use fewer grid values")
+                         ) from None
     return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
 
 
@@ -224,6 +265,7 @@ def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     feature_options: FeatureOptions | None = None) -> dict:
     """Every input of ``fractions_to_file`` checked before any work; its definition."""
     check_count("samples", samples)
+    errors.check_count("seed", seed, 0, MAX_SEED)
     box.check(system)
     study = check_study(system, samples, period, dt, options, label_options, block, mapper,
                         device, feature_options)
@@ -245,6 +287,8 @@ def check_continuation(system: System, parameter: str, values: Sequence[float], 
                          f"'{system.model.name}'; parameters: "
                          f"{', '.join(system.model.parameter_names)}")
     check_count("samples", samples)
+    errors.check_count("seed", seed, 0, MAX_SEED)
+    check_value_count("param", len(values))
     box.check(system)
     settings = (period, dt, options, label_options, block, mapper, device, feature_options)
     study = check_study(system, samples + 16, *settings)
