@@ -240,8 +240,10 @@ def attractors(
     from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Box, Range
     from analysis.sweeps.attractor_blocks import (
+        check_branch_of,
         check_continuation,
         check_fractions,
+        check_value_count,
         continuation_to_file,
         fractions_to_file,
     )
@@ -249,10 +251,14 @@ def attractors(
     sides = Box.parse(box, "--box")
     options = _options(resolution, revisits, record, hits, max_periods)
     along = Range.parse(param, "--param", with_num=True) if param is not None else None
+    if along is not None:
+        check_value_count("--param", along.num)  # before its values are made
     branches = [_branch(path) for path in branch or []]
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
     system = _system(model, n_balls, speed_rpm, sets)
+    for path, drawn in zip(branch or [], branches, strict=True):
+        check_branch_of(system, drawn, along.coordinate, f"--branch '{path}'")
     settings = dict(seed=seed, period=period, dt=dt, options=options, block=block,
                     **_mapping(mapper, device, transient_periods, sections))
 
