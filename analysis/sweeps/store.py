@@ -74,12 +74,33 @@ def _differences(stored: Any, given: Any, where: str = "") -> list[str]:
     return [] if stored == given else [where or "definition"]
 
 
+INT64 = 2**63 - 1
+
+
+def check_definition(definition: Any, where: str = "") -> None:
+    """``InputError`` naming the field when a definition holds a whole number that the
+    result file cannot store (beyond a 64-bit signed integer, such as a seed of 2**70):
+    judged before the store is made, so a refused value leaves no folder that would then
+    block the corrected command."""
+    if isinstance(definition, dict):
+        for key, value in definition.items():
+            check_definition(value, f"{where}.{key}" if where else str(key))
+    elif isinstance(definition, (list, tuple)):
+        for value in definition:
+            check_definition(value, where)
+    elif isinstance(definition, int) and not isinstance(definition, bool) \
+            and not -INT64 <= definition <= INT64:
+        raise InputError(f"{where or 'definition'}: must be a whole number in [{-INT64}, "
+                         f"{INT64}], got {definition}")
+
+
 class PointStore:
     """The stored points of one sweep output. ``lock=True`` (the process running the
     sweep): take the output's lock and check the stored points; workers open it unlocked."""
 
     def __init__(self, output: str | Path, definition: dict[str, Any], *, lock: bool = False,
                  on_damaged: Callable[[str], None] | None = None):
+        check_definition(definition)  # before the folder is made
         self.output = Path(output)
         self.folder = self.output.with_name(self.output.name + ".parts")
         self._lock_fd: int | None = None
