@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.frequency.continuation import branch_variables, trace_from
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.invariant_circle import (
     DEFAULT_POINTS,
@@ -34,7 +35,7 @@ from analysis.frequency.invariant_circle import (
     shift_matrix,
     solve_circle,
 )
-from analysis.frequency.torus_continuation import trace_from, tried_residual
+from analysis.frequency.torus_continuation import tried_residual
 from analysis.frequency.torus_dataset import tori_dataset
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.stability.continuation.options import ContinuationOptions, options_with
@@ -198,13 +199,9 @@ def continue_circle(
         ts, np.array([r.coefficients for r in responses]), [r.system.p for r in responses],
         np.array(residuals), nan, tails, nan, nan, nan, [pt.special for pt in branch],
         prob.state_scale,
-        variables={param: ("point", np.array([pt.lam for pt in branch]),
-                           {"units": model.units[param]}),
+        variables={**branch_variables(prob, branch),
                    "circle": (("point", "state", "phi"),
-                              np.array([r.circle.T for r in responses])),
-                   "newton_iterations": ("point", np.array([pt.newton_iterations
-                                                            for pt in branch])),
-                   "ds": ("point", np.array([pt.ds for pt in branch]))},
+                              np.array([r.circle.T for r in responses]))},
         param=param, param_scale=prob.s_lam, status=out.status, stop_report=report,
         last_converged=float(branch[-1].lam), points=points, steps=first.steps)
     data = data.assign_coords(phi=("phi", 2 * np.pi * np.arange(points) / points,

@@ -46,7 +46,7 @@ from analysis.stability.continuation.problem import (
     ContinuedRange,
 )
 from analysis.stability.continuation.step import start_at
-from analysis.stability.continuation.trace import Progress, trace
+from analysis.stability.continuation.trace import Progress, Trace, trace
 
 
 class HillMonodromy:
@@ -67,12 +67,50 @@ class HillMonodromy:
         return self._value if dtype is None else self._value.astype(dtype)
 
 
+class FourierBranchProblem(ContinuedParameter):
+    """What the harmonic-balance families share (periodic HB here, 2-D HB tori in
+    ``torus_continuation``): unknowns w = (X / s_X, λ / s_λ) of the Fourier coefficients X
+    of ``equations`` (a ``HarmonicSystem`` or ``TorusSystem``: ``evaluate``, ``residual``,
+    ``size``, ``system``), equations G = R(X, λ) / (ω_0 s_i) with ω_0 ``omega_ref``
+    (rad/s); the tangent by the bordered solve. A family adds ``equations``, ``amplitude``
+    and ``monodromy(jacobian, p)`` (a matrix whose eigenvalues are its multipliers)."""
+
+    omega_ref: float
+    tangent_method = "bordered"
+
+    @property
+    def model(self) -> Model:
+        return self.equations.system.model
+
+    @property
+    def n(self) -> int:
+        """Number of unknowns besides λ (the Fourier coefficients)."""
+        return self.equations.size
+
+    def residual(self, w: np.ndarray):
+        """G(w) (m), its Jacobian (m × (m + 1)) and the family's ``monodromy``."""
+        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
+        p = self.p(lam)
+        r, jac, along = self.equations.evaluate(x, p, self.param_index)
+        unit = self.omega_ref * self.s_z
+        g = r / unit
+        jx = jac * (self.s_z[None, :] / unit[:, None])
+        jl = along * self.s_lam / unit
+        return g, np.column_stack([jx, jl]), self.monodromy(jac, p)
+
+    def residual_norm(self, w: np.ndarray) -> float:
+        """max |G_i| at ``w`` (the scaled residual of a single solve)."""
+        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
+        r = self.equations.residual(x, self.p(lam))
+        return float(np.max(np.abs(r / (self.omega_ref * self.s_z))))
+
+
 @dataclass
-class HarmonicBranchProblem(ContinuedParameter):
+class HarmonicBranchProblem(FourierBranchProblem):
     """Harmonic-balance responses of ``hs`` (system, period, H, N) as the runtime parameter
     number ``param_index`` varies, the others at ``values`` (their units); scales
     ``state_scale`` (per state, its unit), ``s_lam`` (the parameter's unit) and ω_0
-    ``omega_ref`` (rad/s) of the residual."""
+    ``omega_ref`` (rad/s) of the residual; Hill's multipliers sorted by ``sort``."""
 
     hs: HarmonicSystem
     param_index: int
@@ -82,37 +120,18 @@ class HarmonicBranchProblem(ContinuedParameter):
     omega_ref: float
     sort: str = "centroid"
     s_z: np.ndarray = field(init=False)
-    tangent_method = "bordered"
+    noun = "response"
 
     def __post_init__(self) -> None:
         self.s_z = np.tile(self.state_scale, 2 * self.hs.harmonics + 1)
 
     @property
-    def model(self) -> Model:
-        return self.hs.system.model
+    def equations(self) -> HarmonicSystem:
+        return self.hs
 
-    @property
-    def n(self) -> int:
-        """Number of unknowns besides λ (the Fourier coefficients)."""
-        return self.hs.size
-
-    def residual(self, w: np.ndarray):
-        """G(w) (n(2H + 1)), its Jacobian (n(2H + 1) × (n(2H + 1) + 1)) and a
-        ``HillMonodromy``."""
-        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
-        p = self.p(lam)
-        r, jac, along = self.hs.evaluate(x, p, self.param_index)
-        unit = self.omega_ref * self.s_z
-        g = r / unit
-        jx = jac * (self.s_z[None, :] / unit[:, None])
-        jl = along * self.s_lam / unit
-        return g, np.column_stack([jx, jl]), HillMonodromy(self, jac, self.hs.period_s(p))
-
-    def residual_norm(self, w: np.ndarray) -> float:
-        """max |G_i| at ``w`` (the scaled residual of ``solve``)."""
-        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
-        r, _, _ = self.hs.evaluate(x, self.p(lam))
-        return float(np.max(np.abs(r / (self.omega_ref * self.s_z))))
+    def monodromy(self, jacobian: np.ndarray, p: np.ndarray) -> HillMonodromy:
+        """Hill's multipliers, computed when first used (``HillMonodromy``)."""
+        return HillMonodromy(self, jacobian, self.hs.period_s(p))
 
     def amplitude(self, w: np.ndarray) -> float:
         """(max − min)/2 of the first state over the period (its unit)."""
@@ -178,15 +197,33 @@ def continue_harmonic(
                                  response_scale(hs, first.coefficients, first.period_s),
                                  span.scale, 2 * math.pi / first.period_s, sort)
     with blas_threads():
-        lam0 = prob.values[param]
-        w = np.concatenate([first.coefficients / prob.s_z, [lam0 / prob.s_lam]])
-        point = start_at(prob, w, span.direction, options.tol)
-        if point is None:
-            raise InputError(f"start: the response at {param} = {lam0:g} does not converge "
-                             "again in the branch's unknowns")
-        point.ds = options.first_ds
-        out = trace(prob, point, stop, options, progress=progress)
+        out = trace_from(prob, first.coefficients, stop, options, progress=progress)
     return harmonic_branch_dataset(prob, out.points, out.status, refused_steps=out.refused)
+
+
+def trace_from(prob: ContinuedParameter, coeffs: np.ndarray, stop: float,
+               options: ContinuationOptions, **engine: object) -> Trace:
+    """The engine's trace of ``prob`` (an HB, torus or circle problem) from the unknowns
+    ``coeffs`` at the problem's own parameter value towards ``stop``; ``engine``: the
+    ``hooks`` and ``progress`` of ``trace``."""
+    param, lam0 = prob.param_name, prob.values[prob.param_name]
+    w = np.concatenate([coeffs / prob.s_z, [lam0 / prob.s_lam]])
+    first = start_at(prob, w, math.copysign(1.0, stop - lam0), options.tol)
+    if first is None:
+        raise InputError(f"start: the {prob.noun} at {param} = {lam0:g} does not converge "
+                         "again in the branch's unknowns")
+    first.ds = options.first_ds
+    return trace(prob, first, stop, options, **engine)
+
+
+def branch_variables(prob: ContinuedParameter, branch: list[BranchPoint]) -> dict:
+    """The Dataset variables every branch of ``analysis.frequency`` has along ``point``:
+    the parameter (its unit), the Newton iterations and the planned step ``ds``."""
+    param = prob.param_name
+    return {param: ("point", np.array([pt.lam for pt in branch]),
+                    {"units": prob.model.units[param]}),
+            "newton_iterations": ("point", np.array([pt.newton_iterations for pt in branch])),
+            "ds": ("point", np.array([pt.ds for pt in branch]))}
 
 
 def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoint],
@@ -195,7 +232,7 @@ def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoin
     special, residual, coefficients, Hill's multipliers) with the parameter along ``point``
     (its unit), the tangent (dim ``w``) and the planned step ``ds``; attrs ``param``,
     ``param_scale``, ``sort``, ``status``, ``branch`` and ``extra``."""
-    model, hs = prob.model, prob.hs
+    hs = prob.hs
     param = prob.param_name
     residuals = [prob.residual_norm(prob.unknowns(p))
                  for p in branch]
@@ -205,11 +242,8 @@ def harmonic_branch_dataset(prob: HarmonicBranchProblem, branch: list[BranchPoin
         system, str(hs.period), hs.harmonics, hs.samples, np.array([p.z0 for p in branch]),
         np.array([p.multipliers for p in branch]), np.array(residuals),
         [p.special for p in branch], prob.state_scale,
-        variables={
-            param: ("point", np.array([p.lam for p in branch]), {"units": model.units[param]}),
-            "newton_iterations": ("point", np.array([p.newton_iterations for p in branch])),
-            "tangent": (("point", "w"), np.array([p.tangent for p in branch])),
-            "ds": ("point", np.array([p.ds for p in branch]))},
+        variables={**branch_variables(prob, branch),
+                   "tangent": (("point", "w"), np.array([p.tangent for p in branch]))},
         param=param, param_scale=prob.s_lam, sort=prob.sort, status=status,
         branch=f"harmonic balance, period {hs.period}, H = {hs.harmonics}", **extra)
     data.attrs.pop(param, None)

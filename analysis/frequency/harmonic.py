@@ -262,6 +262,10 @@ class HarmonicSystem:
         jac += omega * np.kron(self.basis.D, np.eye(n))
         return res.T.reshape(-1), jac, np.asarray(along).T.reshape(-1)
 
+    def residual(self, coeffs: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """The residual R of ``evaluate`` alone (n(2H + 1), units of z')."""
+        return self.evaluate(coeffs, p)[0]
+
     def sample(self, coeffs: np.ndarray, points: int | None = None) -> np.ndarray:
         """The response on ``points`` equally spaced phases of one period (default: the N
         AFT samples), points × n, the states' units."""

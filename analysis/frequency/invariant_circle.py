@@ -188,10 +188,6 @@ class ShaftMap:
     points: int
 
     @cached_property
-    def rhs(self) -> ca.Function:
-        return torus_function(self.system, self.frequencies)
-
-    @cached_property
     def function(self) -> ca.Function:
         model, system = self.system.model, self.system
         n, n_par = system.n_state, len(model.parameter_names)
@@ -202,7 +198,7 @@ class ShaftMap:
         w1, w2 = (2 * math.pi / per.seconds(model, system.structure, p)
                   for per in self.frequencies)
         h = 2 * math.pi / w1 / self.steps
-        f = self.rhs
+        f = torus_function(system, self.frequencies)
 
         def dz(tau, state):
             return f(ca.vertcat(w1 * tau, phi + w2 * tau), state, p)

@@ -19,7 +19,6 @@ bifurcates).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,6 +26,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.frequency.continuation import FourierBranchProblem, branch_variables, trace_from
 from analysis.frequency.harmonic import blas_threads
 from analysis.frequency.torus import TorusSystem, check_frequencies
 from analysis.frequency.torus_dataset import tori_dataset
@@ -49,15 +49,14 @@ from analysis.stability.continuation.problem import (
     ContinuedParameter,
     ContinuedRange,
 )
-from analysis.stability.continuation.step import start_at
-from analysis.stability.continuation.trace import Progress, Trace, stop_report, trace
+from analysis.stability.continuation.trace import Progress, Trace, stop_report
 
 
 @dataclass
-class TorusBranchProblem(ContinuedParameter):
+class TorusBranchProblem(FourierBranchProblem):
     """Tori of ``ts`` as parameter number ``param_index`` varies, the others at ``values``;
     scales ``state_scale`` (per state), ``s_lam`` (the parameter's unit) and ``omega_ref``
-    (rad/s)."""
+    (rad/s). No multipliers (an empty monodromy): λ1 is computed at the converged points."""
 
     ts: TorusSystem
     param_index: int
@@ -66,36 +65,20 @@ class TorusBranchProblem(ContinuedParameter):
     s_lam: float
     omega_ref: float
     s_z: np.ndarray = field(init=False)
-    tangent_method = "bordered"
+    noun = "torus"
 
     def __post_init__(self) -> None:
         self.s_z = np.tile(self.state_scale, self.ts.basis.size)
 
-    noun = "torus"
+    @property
+    def equations(self) -> TorusSystem:
+        return self.ts
+
+    def monodromy(self, jacobian: np.ndarray, p: np.ndarray) -> np.ndarray:
+        return np.zeros((0, 0))
 
     def describe(self, point: BranchPoint) -> str:
         return f"{self.param_name} = {point.lam:.6g}"
-
-    @property
-    def model(self) -> Model:
-        return self.ts.system.model
-
-    @property
-    def n(self) -> int:
-        return self.ts.size
-
-    def residual(self, w: np.ndarray):
-        """G(w), its Jacobian (n M × (n M + 1)) and an empty monodromy."""
-        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
-        r, jac, along = self.ts.evaluate(x, self.p(lam), self.param_index)
-        unit = self.omega_ref * self.s_z
-        jx = jac * (self.s_z[None, :] / unit[:, None])
-        return r / unit, np.column_stack([jx, along * self.s_lam / unit]), np.zeros((0, 0))
-
-    def residual_norm(self, w: np.ndarray) -> float:
-        x, lam = w[:-1] * self.s_z, w[-1] * self.s_lam
-        r = self.ts.residual(x, self.p(lam))
-        return float(np.max(np.abs(r / (self.omega_ref * self.s_z))))
 
     def amplitude(self, w: np.ndarray) -> float:
         """(max − min)/2 of the first state over the grid (its unit)."""
@@ -177,31 +160,12 @@ def continue_torus(
         ts, np.array([pt.z0 for pt in branch]), [prob.p(pt.lam) for pt in branch],
         np.array(residuals), fine[:, 0], fine[:, 1], lam1[:, 0], lam1[:, 1], lam1[:, 2],
         [pt.special for pt in branch], prob.state_scale,
-        variables={param: ("point", np.array([pt.lam for pt in branch]),
-                           {"units": model.units[param]}),
-                   "newton_iterations": ("point", np.array([pt.newton_iterations
-                                                            for pt in branch])),
-                   "ds": ("point", np.array([pt.ds for pt in branch]))},
+        variables=branch_variables(prob, branch),
         param=param, param_scale=prob.s_lam, status=out.status, stop_report=report,
         last_converged=float(branch[-1].lam))
     data.attrs.update({k: v for k, v in values.items()})
     data.attrs.pop(param, None)
     return data
-
-
-def trace_from(prob: ContinuedParameter, coeffs: np.ndarray, stop: float,
-               options: ContinuationOptions, **engine: object) -> Trace:
-    """The engine's trace of ``prob`` (a torus or circle problem) from the unknowns
-    ``coeffs`` at the problem's own parameter value towards ``stop``; ``engine``: the
-    ``hooks`` and ``progress`` of ``trace``."""
-    param, lam0 = prob.param_name, prob.values[prob.param_name]
-    w = np.concatenate([coeffs / prob.s_z, [lam0 / prob.s_lam]])
-    first = start_at(prob, w, math.copysign(1.0, stop - lam0), options.tol)
-    if first is None:
-        raise InputError(f"start: the {prob.noun} at {param} = {lam0:g} does not converge "
-                         "again in the branch's unknowns")
-    first.ds = options.first_ds
-    return trace(prob, first, stop, options, **engine)
 
 
 def tried_residual(prob: ContinuedParameter, out: Trace) -> list[str]:

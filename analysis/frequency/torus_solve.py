@@ -218,6 +218,17 @@ def truncation(ts: TorusSystem, coeffs: np.ndarray, scale: np.ndarray,
     return float(np.max(np.abs(r / unit))), float(amp[border].max() / top) if top > 0 else 0.0
 
 
+def _run_from(ts: TorusSystem, coeffs: np.ndarray, dt: float | None,
+              p: np.ndarray | None) -> tuple[System, np.ndarray, float]:
+    """The System at parameters ``p`` (None: the torus's own), the torus's state u(0, 0)
+    there and the RK4 step (s; ``dt`` None: the spec's) of a run started on it."""
+    system = ts.system
+    if p is not None:
+        system = system.replace(**dict(zip(system.model.parameter_names, p, strict=True)))
+    z0 = ts.at_times(coeffs, np.array([0.0]), system.p)[0]
+    return system, z0, RunPlan.step(system, dt).dt
+
+
 def torus_lambda1(ts: TorusSystem, coeffs: np.ndarray, duration: float,
                   dt: float | None = None, p: np.ndarray | None = None
                   ) -> tuple[float, float]:
@@ -228,11 +239,7 @@ def torus_lambda1(ts: TorusSystem, coeffs: np.ndarray, duration: float,
 
     if not (math.isfinite(duration) and duration > 0):
         raise InputError(f"lyapunov_duration: must be a finite number > 0 s, got {duration!r}")
-    system = ts.system
-    if p is not None:
-        system = system.replace(**dict(zip(system.model.parameter_names, p, strict=True)))
-    z0 = ts.at_times(coeffs, np.array([0.0]), system.p)[0]
-    step = RunPlan.step(system, dt).dt
+    system, z0, step = _run_from(ts, coeffs, dt, p)
     res = lyapunov(system.replace(state=z0), duration=duration, transient=duration / 10,
                    tangent_transient=duration / 10, dt=step, n_exponents=1)
     return float(res.exponents.values[0]), float(res.ci95.values[0])
@@ -245,11 +252,7 @@ def torus_drift(ts: TorusSystem, coeffs: np.ndarray, duration: float,
     amplitude ((max − min)/2 on its grid), largest over the states. About the truncation
     error of the series (``docs/frequency.md``) when the torus attracts; of the order of 1
     when the trajectory leaves it for another attractor (λ1 is then that attractor's)."""
-    system = ts.system
-    if p is not None:
-        system = system.replace(**dict(zip(system.model.parameter_names, p, strict=True)))
-    z0 = ts.at_times(coeffs, np.array([0.0]), system.p)[0]
-    step = RunPlan.step(system, dt).dt
+    system, z0, step = _run_from(ts, coeffs, dt, p)
     run = simulate(system.replace(state=z0), duration=duration, transient=duration / 2,
                    dt=step, save_every=10)
     z = np.column_stack([run[name].values for name in system.state_names])
