@@ -174,7 +174,7 @@ def lyapunov(
             traces.append(np.trace(np.asarray(jac(state[n] * dt, state[:n], p))))
     if progress:
         progress(calls, calls)
-    logs_all = np.concatenate(logs, axis=1)
+    logs_all = in_order(np.concatenate(logs, axis=1), discarded)
     interval = dt * renorm_every
     res = _result(model, structure, values, logs_all[:, discarded:], interval,
                   (start + discarded * renorm_every) * dt, float(np.mean(traces)), dt,
@@ -191,6 +191,17 @@ def _state_after(system: System, steps: int, dt: float) -> np.ndarray:
     settled = simulate(system, duration=(steps + 1) * dt, transient=steps * dt, dt=dt,
                        save_every=1)
     return state_at(settled, 0)
+
+
+def in_order(logs: np.ndarray, discarded: int = 0) -> np.ndarray:
+    """The rows of ``logs`` (k × m, one row per exponent) reordered so that their means
+    over the averaged columns (from ``discarded`` on) run from largest to smallest.
+
+    The QR frame orders the exponents only in the limit: over a finite time two close ones
+    (two near-zero exponents of a torus, say) can come out swapped. A stable sort, so rows
+    with equal means keep their QR order."""
+    order = np.argsort(-logs[:, discarded:].sum(axis=1), kind="stable")
+    return logs[order]
 
 
 def running_mean(logs: np.ndarray, interval: float) -> np.ndarray:
