@@ -72,7 +72,6 @@ def continue_(
 ):
     """Pseudo-arclength continuation of periodic orbits; LP, PD, NS, BP detection; every
     step guarded against jumps to another branch."""
-    from analysis.io import save_dataset
 
     def say(text: str) -> None:
         typer.echo(text, err=as_json)
@@ -87,6 +86,14 @@ def continue_(
             switched = _switched_branch(branch, kind, stop, common, say)
             if switched is not None:
                 branches.append(switched)
+    _write_branches(branches, output, plot, as_json)
+
+
+def _write_branches(branches: list, output: Path, plot: Path | None, as_json: bool) -> None:
+    """Each branch to its file (a switched one beside ``output``, named by its switch),
+    said in lines or JSON; the figure of them all."""
+    from analysis.io import save_dataset
+
     paths = [output if i == 0 else
              output.with_name(f"{output.stem}-{SWITCH_SUFFIX[br.attrs['switched_at']]}"
                               f"{output.suffix}") for i, br in enumerate(branches)]

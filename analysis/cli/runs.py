@@ -79,6 +79,25 @@ def simulate(
                    f"{', '.join(state_names(attrs))}")
 
 
+EnvelopeOption = Annotated[bool, typer.Option(
+    "--envelope", help="Envelope spectrum: band-pass, Hilbert envelope, peaks named by the "
+                       "defect frequencies (BPFO, BPFI, 2BSF, BPFI-X, …).")]
+BandOption = Annotated[str | None, typer.Option(
+    "--band", help="Pass band LO:HI in Hz of --envelope (default: the band of largest "
+                   "spectral kurtosis), or 'resonance': the band of largest kurtosis among "
+                   "those holding a structural resonance of the model.")]
+FaultsOption = Annotated[bool, typer.Option(
+    "--faults", help="Name the peaks by the defect frequencies (FTF, BPFO, BPFI, BSF, "
+                     "harmonics, sidebands) instead of X and VC.")]
+NoiseOption = Annotated[float | None, typer.Option(
+    "--noise", metavar="SNR_DB",
+    help="Add white Gaussian noise to the analysed variables first, SNR_DB below each one's "
+         "power (0: noise std equal to the signal's); seeded, recorded in the JSON "
+         "provenance.")]
+NoiseSeedOption = Annotated[int, typer.Option(
+    "--noise-seed", help="Seed of --noise's generator (numpy default_rng).")]
+
+
 @app.command()
 @reports_errors
 def spectrum(
@@ -90,35 +109,18 @@ def spectrum(
     var: Annotated[list[str] | None, typer.Option(
         "--var", help="State variable to analyse, repeatable (default: the first body's "
                       "displacements, x and y).")] = None,
-    envelope: Annotated[bool, typer.Option(
-        "--envelope", help="Envelope spectrum: band-pass, Hilbert envelope, peaks named by "
-                           "the defect frequencies (BPFO, BPFI, 2BSF, BPFI-X, …).")] = False,
-    band: Annotated[str | None, typer.Option(
-        "--band", help="Pass band LO:HI in Hz of --envelope (default: the band of largest "
-                       "spectral kurtosis), or 'resonance': the band of largest kurtosis "
-                       "among those holding a structural resonance of the model.")] = None,
-    faults: Annotated[bool, typer.Option(
-        "--faults", help="Name the peaks by the defect frequencies (FTF, BPFO, BPFI, BSF, "
-                         "harmonics, sidebands) instead of X and VC.")] = False,
-    noise: Annotated[float | None, typer.Option(
-        "--noise", metavar="SNR_DB",
-        help="Add white Gaussian noise to the analysed variables first, SNR_DB below each "
-             "one's power (0: noise std equal to the signal's); seeded, recorded in the "
-             "JSON provenance.")] = None,
-    noise_seed: Annotated[int, typer.Option(
-        "--noise-seed", help="Seed of --noise's generator (numpy default_rng).")] = 0,
+    envelope: EnvelopeOption = False,
+    band: BandOption = None,
+    faults: FaultsOption = False,
+    noise: NoiseOption = None,
+    noise_seed: NoiseSeedOption = 0,
 ):
     """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
     of a run's displacements or of any state variables; with --envelope the envelope
     spectrum, named by the defect frequencies; with --noise SNR_DB after adding seeded
     white noise."""
-    from analysis.provenance import (
-        cage_frequencies,
-        displacement_names,
-        load_dataset,
-        vc_frequencies,
-    )
-    from analysis.signal.spectrum import fault_frequencies, peak_table
+    from analysis.provenance import displacement_names, load_dataset
+    from analysis.signal.spectrum import peak_table
 
     passband = _spectrum_options(band, envelope, noise, noise_seed)
     ds = load_dataset(run_file)
@@ -137,25 +139,31 @@ def spectrum(
     if envelope:
         _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output)
         return
-    vocabulary = "fault" if faults else "shaft"
-    peaks = peak_table(ds, variables, max_peaks=max_peaks, vocabulary=vocabulary)
-    if as_json:
-        from analysis.provenance import provenance
-
-        report = {"shaft_hz": ds.attrs.get("shaft_hz"), "vc_hz": ds.attrs.get("vc_hz"),
-                  "vc": vc_frequencies(ds.attrs), "cage": cage_frequencies(ds.attrs)}
-        if faults:
-            report["faults"] = fault_frequencies(ds.attrs)
-        typer.echo(json.dumps({**report, "peaks": [p.as_dict() for p in peaks],
-                               "provenance": provenance(ds)}, indent=2))
-    else:
-        typer.echo(frequency_words(ds.attrs))
-        _print_peaks(ds, variables, peaks)
+    peaks = peak_table(ds, variables, max_peaks=max_peaks,
+                       vocabulary="fault" if faults else "shaft")
+    _say_peaks(ds, variables, peaks, faults, as_json)
     if output:
         from analysis.reports.plots import save_figure, spectrum_figure
 
         save_figure(spectrum_figure(ds, variables, peaks=peaks), output)
         typer.echo(f"wrote {output}", err=as_json)
+
+
+def _say_peaks(ds, variables, peaks, faults: bool, as_json: bool) -> None:
+    """The frequencies and the named peaks of `spectrum`, as lines or as JSON."""
+    if not as_json:
+        typer.echo(frequency_words(ds.attrs))
+        _print_peaks(ds, variables, peaks)
+        return
+    from analysis.provenance import cage_frequencies, provenance, vc_frequencies
+    from analysis.signal.spectrum import fault_frequencies
+
+    report = {"shaft_hz": ds.attrs.get("shaft_hz"), "vc_hz": ds.attrs.get("vc_hz"),
+              "vc": vc_frequencies(ds.attrs), "cage": cage_frequencies(ds.attrs)}
+    if faults:
+        report["faults"] = fault_frequencies(ds.attrs)
+    typer.echo(json.dumps({**report, "peaks": [p.as_dict() for p in peaks],
+                           "provenance": provenance(ds)}, indent=2))
 
 
 def _spectrum_options(band: str | None, envelope: bool, noise: float | None,

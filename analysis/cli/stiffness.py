@@ -24,7 +24,7 @@ from analysis.cli.common import (
     reports_errors,
     write_figure,
 )
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 
 def parse_speeds(text: str) -> list[float]:
@@ -109,17 +109,14 @@ def stiffness(
     from analysis.model import as_system
     from analysis.stability.statics import check_planar, coefficients, ross_coefficients
 
-    if not 1 <= angles <= 3600:
-        raise InputError(f"--angles: must be an integer in [1, 3600], got {angles}")
-    balls = parse_n_balls(n_balls)
-    params = parameter_values(speed_rpm, sets)
-    system = as_system(model, balls, **params)
+    check_count("--angles", angles, 1, 3600)
+    system = as_system(model, parse_n_balls(n_balls), **parameter_values(speed_rpm, sets))
     rpm = None
     if speeds is not None and not ross:
         raise InputError("--speeds: only with --ross")
     if ross:  # checked before any work
         check_planar(system.state_names[:system.n_state // 2])
-        base = float(system.parameters.get("speed_rpm", 0.0))
+        base = sum(float(system.parameters[n]) for n in system.model.role("speed")[:1])
         rpm = parse_speeds(speeds) if speeds else np.linspace(0.1 * base, 2 * base, 10).tolist()
     ds = coefficients(system, n_angles=angles)
     data = stiffness_json(ds)
@@ -128,22 +125,27 @@ def stiffness(
     else:
         _echo(data)
     if ross:
-        from analysis.io import atomic_write
-
-        element = ross_coefficients(system, rpm, n_angles=angles)
-        payload = {"bearing_element": element,
-                   "speeds_rpm": rpm,
-                   "units": {"k": "N/m", "c": "N*s/m", "frequency": "rad/s"},
-                   "note": "cage-averaged coefficients; rs.BearingElement(n=NODE, "
-                           "**data['bearing_element'])",
-                   "provenance": data["provenance"]}
-        text = json.dumps(payload, indent=2)
-        atomic_write(ross, lambda tmp: tmp.write_text(text))
-        typer.echo(f"wrote {ross}", err=as_json)
+        _write_ross(ross, ross_coefficients(system, rpm, n_angles=angles), rpm, data, as_json)
     if output:
         from analysis.reports.plots import stiffness_figure
 
         write_figure(stiffness_figure(ds), output, err=as_json)
+
+
+def _write_ross(path: Path, element: dict, rpm: list[float], data: dict,
+                as_json: bool) -> None:
+    """`stiffness --ross`: the keywords of ROSS's BearingElement over the speeds (rpm)."""
+    from analysis.io import atomic_write
+
+    payload = {"bearing_element": element,
+               "speeds_rpm": rpm,
+               "units": {"k": "N/m", "c": "N*s/m", "frequency": "rad/s"},
+               "note": "cage-averaged coefficients; rs.BearingElement(n=NODE, "
+                       "**data['bearing_element'])",
+               "provenance": data["provenance"]}
+    text = json.dumps(payload, indent=2)
+    atomic_write(path, lambda tmp: tmp.write_text(text))
+    typer.echo(f"wrote {path}", err=as_json)
 
 
 def _echo(data: dict) -> None:

@@ -38,7 +38,7 @@ def waterfall(
     the X, 2X, VC, VC±X, 2VC… and defect-order lines (FTF, BPFI, BSF) drawn and named;
     --orders adds the order spectrum. Without -o or --json, prints each line's largest
     amplitude and the speed where it occurs."""
-    from analysis.provenance import load_dataset, provenance
+    from analysis.provenance import load_dataset
     from analysis.signal.orders import order_peaks, order_spectrum
     from analysis.signal.waterfall import line_tracks
     from analysis.signal.waterfall import waterfall as compute
@@ -53,15 +53,27 @@ def waterfall(
 
         write_figure(waterfall_figure(wf, spectrum), output, err=as_json)
     if as_json:
-        report = {"variable": wf.attrs["variable"], "units": wf.attrs["units"],
-                  "window_s": wf.attrs["window_s"], "bin_hz": wf.attrs["bin_hz"],
-                  "lines": [{"name": name, **track} for name, track in tracks.items()]}
-        if spectrum is not None:
-            report["orders"] = {"order_bin": spectrum.attrs["order_bin"],
-                                "samples_per_rev": spectrum.attrs["samples_per_rev"],
-                                "peaks": [p.as_dict() for p in peaks]}
-        typer.echo(json.dumps({**report, "provenance": provenance(ds)}, indent=2))
-        return
+        _json(ds, wf, tracks, spectrum, peaks)
+    else:
+        _print(wf, tracks, spectrum, peaks)
+
+
+def _json(ds, wf, tracks: dict, spectrum, peaks) -> None:
+    """`waterfall --json`: the lines' amplitudes against speed (and the order peaks)."""
+    from analysis.provenance import provenance
+
+    report = {"variable": wf.attrs["variable"], "units": wf.attrs["units"],
+              "window_s": wf.attrs["window_s"], "bin_hz": wf.attrs["bin_hz"],
+              "lines": [{"name": name, **track} for name, track in tracks.items()]}
+    if spectrum is not None:
+        report["orders"] = {"order_bin": spectrum.attrs["order_bin"],
+                            "samples_per_rev": spectrum.attrs["samples_per_rev"],
+                            "peaks": [p.as_dict() for p in peaks]}
+    typer.echo(json.dumps({**report, "provenance": provenance(ds)}, indent=2))
+
+
+def _print(wf, tracks: dict, spectrum, peaks) -> None:
+    """Each line's largest amplitude and the speed where it occurs; the order peaks."""
     unit = wf.attrs["units"]
     typer.echo(f"waterfall of {wf.attrs['variable']}: {len(wf['time'])} windows of "
                f"{wf.attrs['window_s'] * 1e3:.3g} ms, bin {wf.attrs['bin_hz']:.3g} Hz, "
