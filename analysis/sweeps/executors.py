@@ -237,6 +237,14 @@ def make_executor(kind: str = "processes", workers: int | None = None,
     raise InputError(f"--executor: must be serial, processes or dask, got {kind!r}")
 
 
+def workers_of(executor: Executor) -> int:
+    """How many tasks ``executor`` runs at once: 1 for the serial one, its workers for the
+    others (the cores when it does not say)."""
+    if isinstance(executor, SerialExecutor):
+        return 1
+    return int(getattr(executor, "workers", None) or os.cpu_count() or 1)
+
+
 def run_with_progress(executor: Executor, fn: Callable[[Any], Any], tasks: Iterable[Any],
                       done: Callable[[], int], total: int,
                       progress: Callable[[int, int], None] | None,

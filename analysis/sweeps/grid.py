@@ -28,6 +28,7 @@ from analysis.model import BallCounts, Model, System, as_system, load_model
 from analysis.provenance import displacement_names, run_attrs
 from analysis.signal.poincare import period_of
 from analysis.stability.classify import GRID_RECORD_SECTION
+from analysis.sweeps.cost import CostEstimate, estimate_cost
 
 STRUCTURE_AXIS = "n_balls"
 """An axis over the number of balls: ``n_balls`` (the model's only bearing) or
@@ -275,6 +276,23 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
     for corner in itertools.product(*((axis.values[0], axis.values[-1]) for axis in axes)):
         system = setting.system_at(**{a.name: v for a, v in zip(axes, corner, strict=True)})
         setting.plan(system, warn=warn)  # times, resolution, RK4 step at the grid's corners
+
+
+def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
+              members_per_point: int = 1) -> CostEstimate:
+    """The cost of a grid's points (``analysis.sweeps.cost``), said before they run: every
+    point's RK4 steps taken at the corner with the longest record (the slowest forcing),
+    ``members_per_point`` runs a point (initial states), a chart's λ1 counted as the
+    tangent's ``n + 1`` columns. Call after ``check_grid``."""
+    corners = [setting.system_at(**dict(zip([a.name for a in axes], values, strict=True)))
+               for values in itertools.product(*((a.values[0], a.values[-1]) for a in axes))]
+    system = max(corners, key=setting.seconds)
+    dt = setting.step()
+    steps = math.ceil(setting.seconds(system) / dt)
+    if setting.lyapunov:
+        steps *= system.n_state + 1
+    points = math.prod(len(axis.values) for axis in axes) * members_per_point
+    return estimate_cost(system, points, steps, dt=dt, workers=workers)
 
 
 def _check_section_at(setting: Setting, name: str, value: float) -> None:

@@ -203,11 +203,15 @@ class PointStore:
                 what: str = "points") -> None:
         """The sweep stopped on ``exc``: ``discard`` the folder if it holds nothing, and
         note on ``exc`` how many points are kept and how to resume (``kept_note``). A
-        refusal before any point gets no note."""
+        refusal before any point gets no note; an interruption before any point is told
+        that nothing was kept."""
         self.discard()
         note = self.kept_note(total, what)
         if note and self.done():
             exc.add_note(note)
+        elif isinstance(exc, KeyboardInterrupt):  # stopped before any point was stored
+            exc.add_note(f"nothing was kept: none of the {total if total is not None else ''} "
+                         f"{what} had finished".replace("  ", " "))
 
     def save(self, key: str, values: dict[str, Any]) -> None:
         def write(handle):

@@ -1,0 +1,152 @@
+"""Costs said before they are paid: the RK4 steps a long command will take and about how
+long they will run, from a short timed probe of the compiled path.
+
+One module computes the estimate; every long command (chart, basins, attractors, sweep,
+calibrate, torus, hb) calls ``estimate_cost`` with its members (grid points, initial
+states, particles, harmonic-balance points) and the RK4 steps each takes, and prints
+``CostEstimate.lines()`` to stderr before the work starts. The estimate is
+
+    seconds = steps per member x members x (measured seconds per RK4 step) / workers,
+
+the seconds per step measured on a few hundred steps of the compiled RK4 blocks of the
+command's own System (the same library ``simulate`` runs; the member kernels of charts and
+basins are of the same order). Where a coarser step (within the run plan's checks: the RK4
+stability limit and 20 steps per period of the fastest forcing) or fewer members would bring
+a long estimate down, ``advice`` says so. Nothing here prints: the command line renders.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from analysis.errors import InputError
+from analysis.model import System
+
+PROBE_STEPS = 400
+"""RK4 steps of the timed probe (after one untimed warm-up block)."""
+LONG = 60.0
+"""An estimate above this many seconds comes with advice (a coarser step, fewer members)."""
+
+
+@dataclass(frozen=True)
+class CostEstimate:
+    """The cost of ``members`` runs of ``steps`` RK4 steps each (of ``dt`` s) on ``workers``
+    workers, at ``step_seconds`` s per step of one member (measured). ``coarsest_dt``: the
+    largest step the run plan accepts for this System (None: not known), ``what``: the
+    members' name in the lines (``points``, ``initial states``)."""
+
+    members: int
+    steps: int
+    workers: int
+    step_seconds: float
+    dt: float
+    coarsest_dt: float | None = None
+    what: str = "points"
+
+    @property
+    def total_steps(self) -> int:
+        """RK4 steps of every member together."""
+        return self.members * self.steps
+
+    @property
+    def seconds(self) -> float:
+        """Expected wall time, s."""
+        return self.total_steps * self.step_seconds / max(1, min(self.workers, self.members))
+
+    def lines(self) -> list[str]:
+        """The estimate in words (one line), then the advice (none, one or two lines)."""
+        head = (f"estimate: {self.members:,} {self.what} x {self.steps:,} RK4 steps (dt = "
+                f"{self.dt:.3g} s) = {self.total_steps:.3g} steps; expected "
+                f"{duration_text(self.seconds)} on {min(self.workers, self.members)} "
+                f"worker(s) ({self.step_seconds * 1e6:.3g} us per step, probed)")
+        return [head, *self.advice()]
+
+    def advice(self) -> list[str]:
+        """What would make a long run shorter: a coarser ``--dt`` the plan accepts, fewer
+        members. Empty when the estimate is under ``LONG`` seconds."""
+        if self.seconds <= LONG:
+            return []
+        found = []
+        if self.coarsest_dt is not None and self.coarsest_dt > 1.5 * self.dt:
+            gain = self.coarsest_dt / self.dt
+            found.append(f"hint: --dt {nice_down(self.coarsest_dt):.3g} (within the run "
+                         f"plan's checks) would take {duration_text(self.seconds / gain)}")
+        if self.members >= 4:
+            fewer = max(1, self.members // 4)
+            found.append(f"hint: {fewer:,} {self.what} instead of {self.members:,} would take "
+                         f"{duration_text(self.seconds * fewer / self.members)}")
+        return found
+
+
+def duration_text(seconds: float) -> str:
+    """``under a second``, ``about 42 s``, ``about 3.5 min``, ``about 2.1 h``."""
+    if seconds < 1:
+        return "under a second"
+    if seconds < 90:
+        return f"about {seconds:.0f} s"
+    if seconds < 5400:
+        return f"about {seconds / 60:.1f} min"
+    return f"about {seconds / 3600:.1f} h"
+
+
+def nice_down(value: float) -> float:
+    """The largest of 1, 2, 5 x 10^k not above ``value`` (a step a user types)."""
+    scale = 10.0 ** math.floor(math.log10(value))
+    return max(m * scale for m in (1, 2, 5) if m * scale <= value * (1 + 1e-12))
+
+
+def coarsest_step(system: System) -> float | None:
+    """The largest RK4 step (s) the run plan accepts for ``system`` without a warning: below
+    the RK4 stability limit and with at least ``RESOLUTION_WARN`` steps per period of the
+    fastest forcing; None when it cannot be said."""
+    from analysis.integrate.checks import RESOLUTION_WARN, fastest_forcing, stable_step
+    from analysis.integrate.plan import RunPlan
+
+    try:
+        limit = stable_step(system)[0]
+        freq = fastest_forcing(system)[1]
+        if freq > 0:
+            limit = min(limit, 1.0 / (RESOLUTION_WARN * freq))
+        if not math.isfinite(limit) or limit <= 0:
+            return None
+        dt = nice_down(limit)
+        RunPlan.step(system, dt, warn=lambda message: None)  # the plan's own checks
+        return dt
+    except (InputError, ValueError, ArithmeticError):
+        return None
+
+
+def probe_step_seconds(system: System, dt: float, steps: int = PROBE_STEPS,
+                       compiled: bool = True) -> float:
+    """Seconds one RK4 step of ``system`` takes on the compiled path (``compiled=False``: the
+    CasADi VM), measured on ``steps`` steps from its initial state after an untimed warm-up
+    (which also builds or loads the library)."""
+    from analysis.integrate.compiled import library, run_rk4
+
+    lib = library(system.model, system.structure, compiled)
+    p = np.asarray(system.p, dtype=float)
+    z0 = np.asarray(system.state, dtype=float)
+    run_rk4(lib, p, z0, dt, 8)  # warm-up: the library loaded, the buffers made
+    best = math.inf
+    for _ in range(2):
+        start = time.perf_counter()
+        run_rk4(lib, p, z0, dt, steps)
+        best = min(best, time.perf_counter() - start)
+    return best / steps
+
+
+def estimate_cost(system: System, members: int, steps: int, *, dt: float,
+                  workers: int | None = None, what: str = "points",
+                  compiled: bool = True) -> CostEstimate:
+    """The cost of ``members`` runs of ``steps`` RK4 steps of ``dt`` s each of ``system``
+    (or of systems like it: the points of a grid) on ``workers`` workers (default: the
+    cores), from a timed probe of ``PROBE_STEPS`` steps (about a millisecond compiled)."""
+    seconds = probe_step_seconds(system, dt, compiled=compiled)
+    return CostEstimate(members=int(members), steps=int(steps),
+                        workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
+                        dt=float(dt), coarsest_dt=coarsest_step(system), what=what)
