@@ -125,7 +125,8 @@ def chart(
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
     from analysis.sweeps.chart import chart_table, stability_chart
-    from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid
+    from analysis.sweeps.executors import workers_of
+    from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid, grid_cost
     from analysis.sweeps.multistability import parse_ics
 
     if not 1 <= revolutions <= MAX_SAMPLES:
@@ -137,6 +138,9 @@ def chart(
     check_grid(setting, *axes)  # every input, before a worker starts or a file is made
     several = parse_ics(ics, ics_box, ics_seed)
     ex = executor_of(executor, workers, scheduler)
+    if not quiet:  # the cost, said before it is paid
+        typer.echo("\n".join(grid_cost(setting, *axes, workers=workers_of(ex), members_per_point=(
+            several.count if several is not None else 1)).lines()), err=True)
     try:
         ds = stability_chart(setting, *axes, output, executor=ex,
                              progress=ProgressReporter("chart", quiet),
