@@ -41,8 +41,8 @@ import time
 
 import numpy as np
 
-from analysis.frequency.invariant_circle import solve_circle
-from analysis.frequency.torus_solve import solve_torus
+from analysis.frequency.circle.solve import solve_circle
+from analysis.frequency.torus.solve import solve_torus
 from analysis.integrate.simulate import simulate
 from analysis.model import System
 

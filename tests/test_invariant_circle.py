@@ -1,4 +1,4 @@
-"""Tori as the invariant circle of the shaft-period map (analysis.frequency.invariant_circle)
+"""Tori as the invariant circle of the shaft-period map (analysis.frequency.circle.solve)
 against independent computations, vakharia2015 at N_b = 10, 5000 rpm.
 
 * the circle against a long time integration (``simulate``, RK4 at the spec's 1e-5 s, the
@@ -20,16 +20,16 @@ import numpy as np
 import pytest
 
 from analysis.errors import InputError
-from analysis.frequency.invariant_circle import (
+from analysis.frequency.circle.solve import (
     check_points,
     circle_dataset,
     interpolate_circle,
     shift_matrix,
     solve_circle,
 )
-from analysis.frequency.torus import torus_function
-from analysis.frequency.torus_dataset import torus_run
-from analysis.frequency.torus_solve import solve_torus
+from analysis.frequency.torus.dataset import torus_run
+from analysis.frequency.torus.equations import torus_function
+from analysis.frequency.torus.solve import solve_torus
 from analysis.integrate.simulate import simulate
 from analysis.model import System
 from analysis.signal.poincare import poincare_section
@@ -80,7 +80,7 @@ def test_shift_matrix_and_points_check():
     assert np.allclose(moved[:, 0], np.cos(3 * (phi + 0.7)) + 0.5, atol=1e-13)
     assert np.allclose(moved[:, 1], np.sin(2 * (phi + 0.7)), atol=1e-13)
     assert np.allclose(interpolate_circle(v, phi + 0.7), moved, atol=1e-13)
-    from analysis.frequency.torus import TorusBasis
+    from analysis.frequency.torus.equations import TorusBasis
 
     basis = TorusBasis((3, 4), (8, 9))  # the FFT synthesis of large grids against E
     c = np.random.default_rng(3).normal(size=(basis.size, 2))
@@ -196,7 +196,7 @@ def test_dataset_and_sampled_run(circle, attractor):
 def test_continuation_in_speed_and_its_report():
     """Three circles from 5000 rpm: each one the circle solve_circle finds alone at its
     speed (from its own simulation), and the report of where the branch stopped."""
-    from analysis.frequency.circle_continuation import continue_circle
+    from analysis.frequency.circle.continuation import continue_circle
 
     data = continue_circle(rotor(), param="speed_rpm", start=5000, stop=5400, points=33,
                            max_points=3)

@@ -1,4 +1,4 @@
-"""Quasi-periodic responses by torus harmonic balance (analysis.frequency.torus*) against
+"""Quasi-periodic responses by torus harmonic balance (analysis.frequency.torus.equations*) against
 independent computations.
 
 * the 2-D AFT matrices against the explicit products P diag(a) E, the series' synthesis and
@@ -22,7 +22,9 @@ import numpy as np
 import pytest
 
 from analysis.errors import InputError
-from analysis.frequency.torus import (
+from analysis.frequency.torus.continuation import continue_torus
+from analysis.frequency.torus.dataset import torus_dataset, torus_of, torus_run
+from analysis.frequency.torus.equations import (
     TorusBasis,
     TorusSystem,
     check_frequencies,
@@ -30,9 +32,7 @@ from analysis.frequency.torus import (
     check_torus_harmonics,
     parse_frequencies,
 )
-from analysis.frequency.torus_continuation import continue_torus
-from analysis.frequency.torus_dataset import torus_dataset, torus_of, torus_run
-from analysis.frequency.torus_solve import settled_run, solve_torus
+from analysis.frequency.torus.solve import settled_run, solve_torus
 from analysis.integrate.simulate import simulate
 from analysis.model import System
 from analysis.signal.poincare import poincare_section

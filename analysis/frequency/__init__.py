@@ -1,40 +1,38 @@
-"""Frequency-domain methods: periodic responses by harmonic balance, Hill's stability, and
-their continuation.
+"""Frequency-domain methods by family: periodic responses by harmonic balance with Hill's
+stability, quasi-periodic tori by 2-D harmonic balance, and the same tori as invariant
+circles of the shaft map; each continued as a branch family of the one continuation engine
+(``analysis.stability.continuation.trace``).
 
-* ``harmonic``: the harmonic-balance equations of any forced System by AFT in CasADi
-  (``HarmonicSystem``: the residual, its exact Jacobian and parameter derivative; the
-  Fourier ``Basis``; the size checks ``check_harmonics``, ``check_forced``);
-* ``hill``: Floquet exponents and multipliers by Hill's method with eigenvalue sorting
-  (``hill_stability``, ``SORTS``);
-* ``solve``: one response by Newton (``harmonic_balance`` -> ``PeriodicResponse``) and its
-  convergence in the number of harmonics (``harmonic_convergence``);
-* ``continuation``: a branch in any runtime parameter on the pseudo-arclength corrector and
-  the special-point tests of ``analysis.stability.continuation`` (``continue_harmonic``,
-  ``HarmonicBranchProblem``, ``harmonic_branch_dataset``);
-* ``torus``: the quasi-periodic (2-torus) equations of two base frequencies by a 2-D AFT
-  (``TorusSystem``, ``TorusBasis``, ``parse_frequencies``, the checks);
-* ``torus_solve``: one torus by Newton, its truncation measures and λ1 (``solve_torus`` ->
-  ``TorusResponse``);
-* ``torus_dataset``: tori as Datasets with named spectrum lines, and runs sampled from them
-  (``torus_dataset``, ``torus_run``, ``torus_of``);
-* ``torus_continuation``: tori continued in a runtime parameter, with the report of where
-  and why the branch stops (``continue_torus``);
-* ``invariant_circle``: the same torus as the invariant circle of the shaft-period map
-  (quasi-periodic shooting: ``solve_circle`` -> ``CircleResponse``, ``circle_dataset``);
-* ``circle_continuation``: that circle continued in a runtime parameter
-  (``continue_circle``).
+* ``periodic/``: ``harmonic`` (the harmonic-balance equations of any forced System by AFT in
+  CasADi: ``HarmonicSystem``, the Fourier ``Basis``, ``check_harmonics``,
+  ``check_forced``), ``hill`` (Hill's multipliers with eigenvalue sorting:
+  ``hill_stability``, ``SORTS``), ``solve`` (one response by Newton: ``harmonic_balance``
+  -> ``PeriodicResponse``; ``harmonic_convergence``), ``continuation`` (the HB family:
+  ``HarmonicBranchProblem``, ``continue_harmonic``, ``harmonic_branch_dataset``; the
+  ``FourierBranchProblem`` shared with tori);
+* ``torus/``: ``equations`` (the 2-torus equations by a 2-D AFT: ``TorusSystem``,
+  ``TorusBasis``, ``parse_frequencies``, the checks), ``solve`` (one torus by Newton, its
+  truncation measures and λ1: ``solve_torus`` -> ``TorusResponse``), ``dataset`` (tori as
+  Datasets with named lines, runs sampled from them: ``torus_dataset``, ``torus_run``,
+  ``torus_of``), ``continuation`` (the torus family and its stop report:
+  ``continue_torus``);
+* ``circle/``: quasi-periodic shooting, ``solve`` (the invariant circle of the shaft-period
+  map: ``ShaftMap``, ``solve_circle`` -> ``CircleResponse``, ``circle_dataset``) and
+  ``continuation`` (the circle family: ``continue_circle``);
+* ``methods``: the methods as data, what ``bearingdyn hb`` and ``bearingdyn torus`` look up.
 
 Every public name is importable from here: ``from analysis.frequency import
 harmonic_balance, continue_harmonic``.
 """
 
-from analysis.frequency.circle_continuation import continue_circle
-from analysis.frequency.continuation import (
+from analysis.frequency.circle.continuation import continue_circle
+from analysis.frequency.circle.solve import CircleResponse, circle_dataset, solve_circle
+from analysis.frequency.periodic.continuation import (
     HarmonicBranchProblem,
     continue_harmonic,
     harmonic_branch_dataset,
 )
-from analysis.frequency.harmonic import (
+from analysis.frequency.periodic.harmonic import (
     MAX_UNKNOWNS,
     MEMORY_BUDGET,
     Basis,
@@ -43,18 +41,17 @@ from analysis.frequency.harmonic import (
     check_harmonics,
     fast_samples,
 )
-from analysis.frequency.hill import SORTS, HillResult, hill_stability
-from analysis.frequency.invariant_circle import CircleResponse, circle_dataset, solve_circle
-from analysis.frequency.solve import (
+from analysis.frequency.periodic.hill import SORTS, HillResult, hill_stability
+from analysis.frequency.periodic.solve import (
     PeriodicResponse,
     harmonic_balance,
     harmonic_convergence,
     hill_of,
 )
-from analysis.frequency.torus import TorusBasis, TorusSystem, parse_frequencies
-from analysis.frequency.torus_continuation import continue_torus
-from analysis.frequency.torus_dataset import torus_dataset, torus_of, torus_run
-from analysis.frequency.torus_solve import TorusResponse, solve_torus
+from analysis.frequency.torus.continuation import continue_torus
+from analysis.frequency.torus.dataset import torus_dataset, torus_of, torus_run
+from analysis.frequency.torus.equations import TorusBasis, TorusSystem, parse_frequencies
+from analysis.frequency.torus.solve import TorusResponse, solve_torus
 
 __all__ = [
     "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "CircleResponse",

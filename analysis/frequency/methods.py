@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.invariant_circle import DEFAULT_POINTS
+from analysis.frequency.circle.solve import DEFAULT_POINTS
 from analysis.model import System
 
 Progress = Callable[[str], None] | None
@@ -125,8 +125,8 @@ def _converged(result, what: str):
 
 
 def _check_periodic(system: System, end: System | None, request: Request) -> None:
-    from analysis.frequency.harmonic import check_forced, check_harmonics, fast_samples
-    from analysis.frequency.solve import prepare
+    from analysis.frequency.periodic.harmonic import check_forced, check_harmonics, fast_samples
+    from analysis.frequency.periodic.solve import prepare
 
     check_harmonics(request.resolution, system.n_state)
     check_forced(system)
@@ -135,7 +135,7 @@ def _check_periodic(system: System, end: System | None, request: Request) -> Non
 
 
 def _solve_periodic(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.solve import harmonic_balance, response_dataset
+    from analysis.frequency.periodic.solve import harmonic_balance, response_dataset
 
     response = harmonic_balance(system, None, request.period, request.resolution,
                                 **request.options)
@@ -143,7 +143,7 @@ def _solve_periodic(system: System, request: Request) -> xr.Dataset:
 
 
 def _follow_periodic(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.continuation import continue_harmonic
+    from analysis.frequency.periodic.continuation import continue_harmonic
 
     return continue_harmonic(system, None, period=request.period,
                              harmonics=request.resolution, **request.branch)
@@ -152,7 +152,7 @@ def _follow_periodic(system: System, request: Request) -> xr.Dataset:
 def _torus_frequencies(system: System, end: System | None, request: Request,
                        harmonics: object = (8, 4)):
     """F1, F2 parsed, and not commensurate within ``harmonics`` at either end."""
-    from analysis.frequency.torus import check_frequencies, parse_frequencies
+    from analysis.frequency.torus.equations import check_frequencies, parse_frequencies
 
     freqs = parse_frequencies(request.frequencies, system.model)
     for s in (system, end) if end is not None else (system,):
@@ -161,8 +161,8 @@ def _torus_frequencies(system: System, end: System | None, request: Request,
 
 
 def _check_torus(system: System, end: System | None, request: Request) -> None:
-    from analysis.frequency.harmonic import check_forced
-    from analysis.frequency.torus import check_torus_harmonics
+    from analysis.frequency.periodic.harmonic import check_forced
+    from analysis.frequency.torus.equations import check_torus_harmonics
 
     check_forced(system)
     pair = check_torus_harmonics(request.resolution, system.n_state)
@@ -170,8 +170,8 @@ def _check_torus(system: System, end: System | None, request: Request) -> None:
 
 
 def _solve_torus(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.torus_dataset import torus_dataset
-    from analysis.frequency.torus_solve import solve_torus
+    from analysis.frequency.torus.dataset import torus_dataset
+    from analysis.frequency.torus.solve import solve_torus
 
     response = solve_torus(system, None, request.frequencies, request.resolution,
                            **request.stability, **request.options)
@@ -179,7 +179,7 @@ def _solve_torus(system: System, request: Request) -> xr.Dataset:
 
 
 def _follow_torus(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.torus_continuation import continue_torus
+    from analysis.frequency.torus.continuation import continue_torus
 
     return continue_torus(system, None, frequencies=request.frequencies,
                           harmonics=request.resolution, **request.stability,
@@ -187,8 +187,8 @@ def _follow_torus(system: System, request: Request) -> xr.Dataset:
 
 
 def _check_circle(system: System, end: System | None, request: Request) -> None:
-    from analysis.frequency.harmonic import check_forced
-    from analysis.frequency.invariant_circle import check_points
+    from analysis.frequency.circle.solve import check_points
+    from analysis.frequency.periodic.harmonic import check_forced
 
     check_forced(system)
     check_points(request.resolution, system.n_state)
@@ -199,7 +199,7 @@ def _check_circle(system: System, end: System | None, request: Request) -> None:
 
 
 def _solve_circle(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.invariant_circle import circle_dataset, solve_circle
+    from analysis.frequency.circle.solve import circle_dataset, solve_circle
 
     circle = solve_circle(system, None, request.frequencies, request.resolution,
                           **request.stability, **request.options)
@@ -207,7 +207,7 @@ def _solve_circle(system: System, request: Request) -> xr.Dataset:
 
 
 def _follow_circle(system: System, request: Request) -> xr.Dataset:
-    from analysis.frequency.circle_continuation import continue_circle
+    from analysis.frequency.circle.continuation import continue_circle
 
     return continue_circle(system, None, frequencies=request.frequencies,
                            points=request.resolution, **request.branch)

@@ -22,9 +22,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import branch_variables, trace_from
-from analysis.frequency.harmonic import blas_threads
-from analysis.frequency.invariant_circle import (
+from analysis.frequency.circle.solve import (
     DEFAULT_POINTS,
     TAIL_FRACTION,
     CircleResponse,
@@ -35,8 +33,10 @@ from analysis.frequency.invariant_circle import (
     shift_matrix,
     solve_circle,
 )
-from analysis.frequency.torus_continuation import tried_residual
-from analysis.frequency.torus_dataset import tori_dataset
+from analysis.frequency.periodic.continuation import branch_variables, trace_from
+from analysis.frequency.periodic.harmonic import blas_threads
+from analysis.frequency.torus.continuation import tried_residual
+from analysis.frequency.torus.dataset import tori_dataset
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.stability.continuation.options import ContinuationOptions, options_with
 from analysis.stability.continuation.problem import (

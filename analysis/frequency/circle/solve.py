@@ -59,14 +59,14 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.harmonic import MEMORY_BUDGET, blas_threads
-from analysis.frequency.torus import (
+from analysis.frequency.periodic.harmonic import MEMORY_BUDGET, blas_threads
+from analysis.frequency.torus.equations import (
     TorusSystem,
     check_phases,
     omegas_of,
     torus_function,
 )
-from analysis.frequency.torus_solve import prepare_torus, torus_drift, torus_lambda1
+from analysis.frequency.torus.solve import prepare_torus, torus_drift, torus_lambda1
 from analysis.integrate.flow import Period
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
@@ -532,7 +532,7 @@ def circle_dataset(response: CircleResponse) -> xr.Dataset:
     phi) and attrs ``method`` (the invariant circle), ``points``, ``steps``,
     ``circle_change`` (the change at 2N points), ``converged``, ``iterations``,
     ``message``."""
-    from analysis.frequency.torus_dataset import tori_dataset
+    from analysis.frequency.torus.dataset import tori_dataset
 
     ts = response.torus
     n = response.points

@@ -24,9 +24,9 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.harmonic import HarmonicSystem, blas_threads, check_harmonics
-from analysis.frequency.hill import SORTS, hill_stability
-from analysis.frequency.solve import (
+from analysis.frequency.periodic.harmonic import HarmonicSystem, blas_threads, check_harmonics
+from analysis.frequency.periodic.hill import SORTS, hill_stability
+from analysis.frequency.periodic.solve import (
     DENSE_POINTS,
     harmonic_balance,
     prepare,

@@ -28,7 +28,7 @@ max(0, δ)^1.5 is evaluated as the model writes it (C¹, the Jacobian exact wher
 
 Sampling: N = ``scipy.fft.next_fast_len(max(4H + 1, 64))`` by default. Products of a
 degree-H series with a contact force alias into the kept harmonics unless N is well above
-2H + 1; the residual is always that of the N samples, and ``analysis.frequency.solve``
+2H + 1; the residual is always that of the N samples, and ``analysis.frequency.periodic.solve``
 reports how the solution moves when H (and N with it) doubles.
 """
 

@@ -2,7 +2,7 @@
 
 A perturbation y of the T-periodic response obeys y' = J(t) y with J = ∂f/∂z on the
 response. Floquet: y = e^{λt} q(t) with q T-periodic, so q' = (J − λ) q, and in the
-harmonic-balance basis (``analysis.frequency.harmonic``)
+harmonic-balance basis (``analysis.frequency.periodic.harmonic``)
 
     (P J E − ω ∇) Q = λ Q:
 

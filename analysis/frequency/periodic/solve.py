@@ -1,7 +1,7 @@
 """One periodic response by harmonic balance: the guess, Newton, Hill's stability and the
 convergence in the number of harmonics.
 
-``harmonic_balance`` solves R(X) = 0 (``analysis.frequency.harmonic``) by Newton's method
+``harmonic_balance`` solves R(X) = 0 (``analysis.frequency.periodic.harmonic``) by Newton's method
 with a dense solve and a backtracking line search, in scaled unknowns: the coefficients of
 state i divided by its scale s_i (``periodic.state_scale`` of the response: positions by
 their largest value, velocities at least that times 2π/T) and its residual by ω·s_i, so the
@@ -9,7 +9,7 @@ residual is dimensionless and comparable with shooting's. The guess is the respo
 settled simulation (the state after about the spec's transient, at a whole number of
 periods, then one more period sampled on the AFT grid and projected by FFT), as
 ``periodic.default_guess`` does for shooting. Stability is Hill's method
-(``analysis.frequency.hill``) on the converged Jacobian.
+(``analysis.frequency.periodic.hill``) on the converged Jacobian.
 
 ``harmonic_convergence`` solves again with 2H harmonics (and the samples that go with them)
 from the solution padded with zeros, and reports the residual of the H solution in the 2H
@@ -26,14 +26,14 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.harmonic import (
+from analysis.frequency.periodic.harmonic import (
     HarmonicSystem,
     blas_threads,
     check_forced,
     check_harmonics,
     resize,
 )
-from analysis.frequency.hill import SORTS, HillResult, hill_stability
+from analysis.frequency.periodic.hill import SORTS, HillResult, hill_stability
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate

@@ -26,11 +26,15 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.continuation import FourierBranchProblem, branch_variables, trace_from
-from analysis.frequency.harmonic import blas_threads
-from analysis.frequency.torus import TorusSystem, check_frequencies
-from analysis.frequency.torus_dataset import tori_dataset
-from analysis.frequency.torus_solve import (
+from analysis.frequency.periodic.continuation import (
+    FourierBranchProblem,
+    branch_variables,
+    trace_from,
+)
+from analysis.frequency.periodic.harmonic import blas_threads
+from analysis.frequency.torus.dataset import tori_dataset
+from analysis.frequency.torus.equations import TorusSystem, check_frequencies
+from analysis.frequency.torus.solve import (
     DRIFT_LIMIT,
     prepare_torus,
     solve_torus,

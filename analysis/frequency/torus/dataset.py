@@ -19,8 +19,8 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.frequency.torus import TorusSystem, parse_frequencies
-from analysis.frequency.torus_solve import TorusResponse, stability_of
+from analysis.frequency.torus.equations import TorusSystem, parse_frequencies
+from analysis.frequency.torus.solve import TorusResponse, stability_of
 from analysis.provenance import completed_attrs, run_attrs, system_of_attrs, to_dataset
 from analysis.signal.spectrum import frequency_names
 

@@ -10,7 +10,7 @@ the truncated real Fourier series on the harmonic set {k·ω = k1 ω1 + k2 ω2 :
 
 K⁺ = {(0, k2): 1 ≤ k2 ≤ H2} ∪ {(k1, k2): 1 ≤ k1 ≤ H1, |k2| ≤ H2} (one of each pair ±k),
 so n(2H1 + 1)(2H2 + 1) real unknowns, stored harmonic-major as in
-``analysis.frequency.harmonic``: X = [c_0; a_k1; b_k1; …] (each block the n states). The
+``analysis.frequency.periodic.harmonic``: X = [c_0; a_k1; b_k1; …] (each block the n states). The
 torus satisfies the invariance equation (ω1 ∂/∂θ1 + ω2 ∂/∂θ2) u = f(θ, u); its Galerkin
 projection on the same harmonics is the residual
 
@@ -56,7 +56,7 @@ import numpy as np
 import scipy.fft
 
 from analysis.errors import InputError
-from analysis.frequency.harmonic import MAX_UNKNOWNS, MEMORY_BUDGET
+from analysis.frequency.periodic.harmonic import MAX_UNKNOWNS, MEMORY_BUDGET
 from analysis.integrate.flow import Period
 from analysis.model import Model, System
 

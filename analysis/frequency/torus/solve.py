@@ -1,7 +1,7 @@
 """One quasi-periodic response (a 2-torus) by harmonic balance: the guess, Newton, its
 truncation measures, its largest Lyapunov exponent, and its time series at any t.
 
-``solve_torus`` solves the torus equations of ``analysis.frequency.torus`` by the same
+``solve_torus`` solves the torus equations of ``analysis.frequency.torus.equations`` by the same
 Newton as periodic harmonic balance (``solve.newton_solve``: dense solve, backtracking, the
 residual of state i scaled by ω1·s_i). The guess is the least-squares fit of the series to
 a settled simulation (``TorusSystem.fit``: the states of ``simulate`` after about the
@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from analysis.errors import InputError
-from analysis.frequency.harmonic import blas_threads, check_forced
-from analysis.frequency.solve import newton_solve
-from analysis.frequency.torus import (
+from analysis.frequency.periodic.harmonic import blas_threads, check_forced
+from analysis.frequency.periodic.solve import newton_solve
+from analysis.frequency.torus.equations import (
     TorusSystem,
     check_frequencies,
     check_phases,
