@@ -62,7 +62,8 @@ def sweep(
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
     from analysis.reports.progress import ProgressReporter
     from analysis.sweeps.diagram import bifurcation_diagram
-    from analysis.sweeps.grid import Axis, Setting, check_grid
+    from analysis.sweeps.executors import workers_of
+    from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
 
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
                       section, dt)
@@ -72,6 +73,10 @@ def sweep(
         raise InputError("--device: the member kernels run the values of a --no-follow sweep "
                          "(a followed sweep is one trajectory); add --no-follow")
     ex = executor_of(executor, workers, scheduler)
+    if not quiet:  # the cost, said before it is paid (a followed sweep: one run at a time)
+        typer.echo("\n".join(grid_cost(setting, axis, workers=1 if follow else workers_of(ex),
+                                        members_per_point=2 if direction == "both" else 1,
+                                        lyapunov=False).lines()), err=True)
     try:
         ds = bifurcation_diagram(setting, axis, output, device=device,
                                  direction=direction, follow=follow, executor=ex,

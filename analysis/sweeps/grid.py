@@ -279,17 +279,18 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
 
 
 def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
-              members_per_point: int = 1) -> CostEstimate:
+              members_per_point: int = 1, lyapunov: bool | None = None) -> CostEstimate:
     """The cost of a grid's points (``analysis.sweeps.cost``), said before they run: every
     point's RK4 steps taken at the corner with the longest record (the slowest forcing),
-    ``members_per_point`` runs a point (initial states), a chart's λ1 counted as the
-    tangent's ``n + 1`` columns. Call after ``check_grid``."""
+    ``members_per_point`` runs a point (initial states, directions), λ1 (``lyapunov``;
+    None: the setting's) counted as the tangent's ``n + 1`` columns. Call after
+    ``check_grid``."""
     corners = [setting.system_at(**dict(zip([a.name for a in axes], values, strict=True)))
                for values in itertools.product(*((a.values[0], a.values[-1]) for a in axes))]
     system = max(corners, key=setting.seconds)
     dt = setting.step()
     steps = math.ceil(setting.seconds(system) / dt)
-    if setting.lyapunov:
+    if setting.lyapunov if lyapunov is None else lyapunov:
         steps *= system.n_state + 1
     points = math.prod(len(axis.values) for axis in axes) * members_per_point
     return estimate_cost(system, points, steps, dt=dt, workers=workers)
