@@ -47,6 +47,7 @@ from analysis.stability.attractors.studies import (
     global_continuation,
 )
 from analysis.stability.attractors.study import AttractorStudy, Block, make_study
+from analysis.sweeps.cost import CostEstimate, estimate_cost
 from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
 from analysis.sweeps.store import PointStore
 
@@ -197,6 +198,25 @@ def check_branch_of(system: System, branch: xr.Dataset, parameter: str, field: s
     if branch.attrs.get("param") != parameter:
         raise InputError(f"{field}: the branch is continued in '{branch.attrs.get('param')}'; "
                          f"give one continued in '{parameter}' (the --param)")
+
+
+def study_cost(system: System, members: int, *, workers: int | None = None,
+               period: str | None = None, dt: float | None = None,
+               options: MapperOptions | None = None, block: int | None = None,
+               mapper: str = "auto", device: str = "auto",
+               feature_options: FeatureOptions | None = None, **_: object) -> CostEstimate:
+    """The cost of mapping ``members`` initial states (``analysis.sweeps.cost``), said before
+    the work: the featurizing mapper runs every member its transient and section periods;
+    the recurrence mapper at most ``max_periods`` (most stop far earlier: a bound). Takes
+    the settings of the ``*_to_file`` functions (others, such as ``seed``, ignored)."""
+    study = check_study(system, members, period, dt, options, None, block, mapper, device,
+                        feature_options)
+    if study.mapper_kind == "features":
+        periods, bound = study.feature_options.transient + study.feature_options.sections, False
+    else:
+        periods, bound = study.options.max_periods, True
+    return estimate_cost(study.system, members, periods * study.map.steps, dt=study.map.dt,
+                         workers=workers, what="initial states", bound=bound)
 
 
 def system_definition(system: System) -> dict:

@@ -47,6 +47,8 @@ class CostEstimate:
     dt: float
     coarsest_dt: float | None = None
     what: str = "points"
+    bound: bool = False
+    """``steps`` is an upper bound (a member may stop early: the recurrence mapper)."""
 
     @property
     def total_steps(self) -> int:
@@ -60,10 +62,12 @@ class CostEstimate:
 
     def lines(self) -> list[str]:
         """The estimate in words (one line), then the advice (none, one or two lines)."""
-        head = (f"estimate: {self.members:,} {self.what} x {self.steps:,} RK4 steps (dt = "
+        steps = f"up to {self.steps:,}" if self.bound else f"{self.steps:,}"
+        head = (f"estimate: {self.members:,} {self.what} x {steps} RK4 steps (dt = "
                 f"{self.dt:.3g} s) = {self.total_steps:.3g} steps; expected "
-                f"{duration_text(self.seconds)} on {min(self.workers, self.members)} "
-                f"worker(s) ({self.step_seconds * 1e6:.3g} us per step, probed)")
+                f"{'at most ' if self.bound else ''}{duration_text(self.seconds)} on "
+                f"{min(self.workers, self.members)} worker(s) "
+                f"({self.step_seconds * 1e6:.3g} us per step, probed)")
         return [head, *self.advice()]
 
     def advice(self) -> list[str]:
@@ -142,11 +146,12 @@ def probe_step_seconds(system: System, dt: float, steps: int = PROBE_STEPS,
 
 def estimate_cost(system: System, members: int, steps: int, *, dt: float,
                   workers: int | None = None, what: str = "points",
-                  compiled: bool = True) -> CostEstimate:
+                  compiled: bool = True, bound: bool = False) -> CostEstimate:
     """The cost of ``members`` runs of ``steps`` RK4 steps of ``dt`` s each of ``system``
     (or of systems like it: the points of a grid) on ``workers`` workers (default: the
     cores), from a timed probe of ``PROBE_STEPS`` steps (about a millisecond compiled)."""
     seconds = probe_step_seconds(system, dt, compiled=compiled)
     return CostEstimate(members=int(members), steps=int(steps),
                         workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
-                        dt=float(dt), coarsest_dt=coarsest_step(system), what=what)
+                        dt=float(dt), coarsest_dt=coarsest_step(system), what=what,
+                        bound=bound)
