@@ -188,6 +188,7 @@ def basins(
     settings = dict(period=period, dt=dt, options=options, block=block,
                     **_mapping(mapper, device, transient_periods, sections))
     check_basins(system, x_range, y_range, **settings)  # before any work or file
+    _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings)
     ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
         system, x_range, y_range, output, **settings, executor=ex,
         progress=ProgressReporter("basins", quiet or as_json), on_damaged=_recomputing))
@@ -267,6 +268,7 @@ def attractors(
 
     if along is None:
         check_fractions(system, sides, samples, **settings)  # before any work or file
+        _say_cost(quiet or as_json, system, samples, executor, workers, settings)
         ds = _run(executor_made, lambda ex: fractions_to_file(
             system, sides, samples, output, **settings, executor=ex,
             progress=ProgressReporter("attractors", quiet or as_json),
@@ -275,10 +277,26 @@ def attractors(
         say = None if quiet else (lambda line: typer.echo(line, err=True))
         check_continuation(system, along.coordinate, along.points, sides, samples,
                            **settings)
+        _say_cost(quiet or as_json, system, (samples + 16) * along.num, executor, workers,
+                  settings)
         ds = _run(executor_made, lambda ex: continuation_to_file(
             system, along.coordinate, along.points, sides, samples, output, **settings,
             executor=ex, progress=say, on_damaged=_recomputing))
     _finish(ds, output, as_json, plot, branches)
+
+
+def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | None,
+              settings: dict) -> None:
+    """The cost estimate (``analysis.sweeps.cost``) on stderr, before the work."""
+    if quiet:
+        return
+    import os
+
+    from analysis.sweeps.attractor_blocks import study_cost
+
+    count = 1 if executor == "serial" else (workers or os.cpu_count() or 1)
+    typer.echo("\n".join(study_cost(system, members, workers=count, **settings).lines()),
+               err=True)
 
 
 def _input_error(text: str):
