@@ -51,7 +51,7 @@ class ModelFunctions:
         z, p = ca.SX.sym("z", n_state), ca.SX.sym("p", n_par)
         cages = [cage(p) for _, _, _, cage, _ in self.bearings]
         angles = [(ca.cos(w * t), ca.sin(w * t)) for w in cages]
-        dz = ca.cse(self._derivative(t, z, p, angles))
+        dz = ca.cse(self.derivative(t, z, p, angles))
         names = ["t", "z", "p"]
         self.rhs = ca.Function("rhs", [t, z, p], [dz], names, ["dz"])
         self.jac = ca.Function("rhs_jac", [t, z, p], [ca.jacobian(dz, z)], names, ["dfdz"])
@@ -61,15 +61,18 @@ class ModelFunctions:
             cf, sf = ca.cos(w * h), ca.sin(w * h)
             half.append((c0 * ch - s0 * sh, s0 * ch + c0 * sh))
             full.append((c0 * cf - s0 * sf, s0 * cf + c0 * sf))
-        k1 = self._derivative(t, z, p, angles)
-        k2 = self._derivative(t + h / 2, z + h / 2 * k1, p, half)
-        k3 = self._derivative(t + h / 2, z + h / 2 * k2, p, half)
-        k4 = self._derivative(t + h, z + h * k3, p, full)
+        k1 = self.derivative(t, z, p, angles)
+        k2 = self.derivative(t + h / 2, z + h / 2 * k1, p, half)
+        k3 = self.derivative(t + h / 2, z + h / 2 * k2, p, half)
+        k4 = self.derivative(t + h, z + h * k3, p, full)
         z_next = ca.cse(z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
         self.rk4_step = ca.Function("rk4_step", [t, z, p, h], [z_next], [*names, "h"], ["z_next"])
 
-    def _derivative(self, t, z, p, angles):
-        """dz/dt at time t, with angles[k] = (cos ψ, sin ψ) of bearing k's cage angle ψ(t)."""
+    def derivative(self, t, z, p, angles):
+        """dz/dt at time t, with angles[k] = (cos ψ, sin ψ) of bearing k's cage angle ψ(t):
+        the right-hand side with the cage angles given (symbolic CasADi expressions), the
+        public door for builders of other equations on the same forces (the torus's
+        separate phases, the static balance)."""
         state = ca.vertsplit(z)
         n_dof = len(state) // 2
         forces = list(self.model.external_force(state, t, p))

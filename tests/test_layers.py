@@ -6,7 +6,10 @@ counted, the lazy ones inside functions included. The test fails on
 * a module the table does not place in a layer;
 * an import that climbs a layer (a module importing one of a later row of the table);
 * a circle of imports between modules (within one layer too);
-* an underscored name taken from another module (``from analysis.x import _helper``).
+* an underscored name taken from another module (``from analysis.x import _helper``), or
+  reached by attribute from another module (``module._helper``, ``functions._derivative``:
+  an underscored attribute a module uses but does not define, defined in another module of
+  the package or of ``generated``).
 
 The table is read from the page itself, so the page and the code cannot drift apart.
 """
@@ -22,6 +25,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "architecture.md"
 PACKAGES = ("analysis",)
+GENERATED = ROOT / "generated"
 
 
 def layer_table() -> list[tuple[str, tuple[str, ...]]]:
@@ -178,6 +182,51 @@ def test_no_underscored_name_crosses_a_module():
                 taken.append(f"{path.relative_to(ROOT)}:{line} takes {', '.join(private)} "
                              f"from {target}")
     assert not taken, "underscored names taken across modules:\n" + "\n".join(taken)
+
+
+def underscored_defined(tree: ast.AST) -> set[str]:
+    """The underscored names a module defines: functions, classes, assigned names and
+    attributes, arguments."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            names.add(node.attr)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+    return {n for n in names if n.startswith("_") and not n.startswith("__")}
+
+
+def foreign_attributes(tree: ast.AST, elsewhere: set[str]) -> list[tuple[int, str]]:
+    """(line, text) of each attribute access ``x._name`` whose name the module does not
+    define but another module of ours (``elsewhere``) does."""
+    own = underscored_defined(tree)
+    return [(node.lineno, ast.unparse(node)) for node in ast.walk(tree)
+            if isinstance(node, ast.Attribute) and node.attr in elsewhere - own]
+
+
+def test_no_underscored_attribute_crosses_a_module():
+    trees = {path: ast.parse(path.read_text(encoding="utf-8")) for path in
+             [*KNOWN.values(), *sorted(GENERATED.rglob("*.py"))]}
+    defined = {path: underscored_defined(tree) for path, tree in trees.items()}
+    reached = []
+    for path in KNOWN.values():
+        elsewhere = set().union(*(d for p, d in defined.items() if p != path))
+        reached += [f"{path.relative_to(ROOT)}:{line} reaches {text}"
+                    for line, text in foreign_attributes(trees[path], elsewhere)]
+    assert not reached, "underscored attributes reached across modules:\n" + \
+        "\n".join(reached)
+
+
+def test_the_attribute_check_sees_a_foreign_attribute():
+    tree = ast.parse("def f(functions):\n    return functions._derivative(1)\n")
+    assert foreign_attributes(tree, {"_derivative"}) == [(2, "functions._derivative")]
+    own = ast.parse("class A:\n    def __init__(self):\n        self._x = 1\n"
+                    "    def y(self):\n        return self._x\n")
+    assert foreign_attributes(own, {"_x"}) == []
 
 
 @pytest.mark.parametrize("source, expected", [

@@ -93,7 +93,7 @@ def _force_function(system: System) -> tuple[ca.Function, list[str]]:
     # The runtime's sum over the balls of every bearing with the cage angles given
     # explicitly (rhs ties them to t): the one place the balls are summed, reused.
     force = ca.vertcat(*model.module.mass(p)) * \
-        system.functions._derivative(t, z, p, angles)[n_dof:]
+        system.functions.derivative(t, z, p, angles)[n_dof:]
     for period in _periods(model, p):
         if ca.depends_on(force, t):
             force = sum(ca.substitute(force, t, t + period * j / TIME_SAMPLES)

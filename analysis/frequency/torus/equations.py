@@ -23,7 +23,7 @@ and ∇_i the derivative of the series in θ_i (a'_k = k_i b_k, b'_k = −k_i a_
 (``generated/_runtime.ModelFunctions``): explicitly, through ``external_force`` and
 ``ball_load_<b>`` (the unbalance P_u (cos ωt, sin ωt), a harmonic force of a forcing
 period), and through each bearing's cage angle ψ_b = ω_cage,b t, from which the runtime
-places ball i at θ_i = 2π(i − 1)/N_b + ψ_b (``_derivative(t, z, p, angles)`` takes the
+places ball i at θ_i = 2π(i − 1)/N_b + ψ_b (``derivative(t, z, p, angles)`` takes the
 explicit time and the cage angles separately). With equally spaced identical balls the sum
 over balls is periodic in ψ_b with period 2π/N_b, i.e. in VC·t. So f(θ1, θ2, z) is the
 runtime's own right-hand side with *separate phases*: the explicit time replaced by θ_a/ω_a
@@ -345,7 +345,7 @@ def torus_function(system: System, frequencies: tuple[Period, Period]) -> ca.Fun
         psi = theta[chosen[0]] / system.structure[b] if chosen else \
             model.cage_speed(name, p) * t
         angles.append((ca.cos(psi), ca.sin(psi)))
-    dz = ca.cse(funcs._derivative(t, z, p, angles))
+    dz = ca.cse(funcs.derivative(t, z, p, angles))
     return ca.Function("torus_rhs", [theta, z, p], [dz], ["theta", "z", "p"], ["dz"])
 
 
