@@ -166,11 +166,23 @@ def _say_peaks(ds, variables, peaks, faults: bool, as_json: bool) -> None:
                            "provenance": provenance(ds)}, indent=2))
 
 
+def _typed(name: str) -> bool:
+    """Whether the option ``name`` (its parameter name) was typed on the command line."""
+    from analysis.cli.common import click
+
+    context = click.globals.get_current_context(silent=True)
+    return context is not None and context.get_parameter_source(name) \
+        == click.core.ParameterSource.COMMANDLINE
+
+
 def _spectrum_options(band: str | None, envelope: bool, noise: float | None,
                       noise_seed: int) -> tuple[float, float] | str | None:
     """The pass band of ``--band`` (None: chosen by kurtosis), every option of ``spectrum``
     checked before the run is read."""
     passband = None
+    if noise is None and _typed("noise_seed"):
+        raise InputError(f"--noise-seed: only with --noise SNR_DB (it seeds that noise), got "
+                         f"--noise-seed {noise_seed} without --noise")
     if band is not None:
         from analysis.signal.envelope import parse_band
 
