@@ -21,6 +21,7 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.frequency.torus.equations import TorusSystem, parse_frequencies
 from analysis.frequency.torus.solve import TorusResponse, stability_of
+from analysis.model import System
 from analysis.provenance import completed_attrs, run_attrs, system_of_attrs, to_dataset
 from analysis.signal.spectrum import frequency_names
 
@@ -191,6 +192,24 @@ def torus_of(data: xr.Dataset, point: int = -1) -> tuple[TorusSystem, np.ndarray
     return ts, np.asarray(data.coefficients.values[point], dtype=float).reshape(-1)
 
 
+def check_torus_run(system: System, duration: float, dt: float | None = None,
+                    t_start: float = 0.0) -> tuple[float, int]:
+    """``(dt, steps)`` of a run sampled from a torus of ``system`` over ``duration`` s
+    (``dt``: the spec's step when None), judged before any torus is solved (the command
+    line calls it first): ``InputError`` naming the field otherwise."""
+    dt = float(system.model.simulation_defaults["dt"] if dt is None else dt)
+    for name, value, low in (("duration", duration, 0.0), ("dt", dt, 0.0)):
+        if not (math.isfinite(value) and value > low):
+            raise InputError(f"{name}: must be a finite number > 0 s, got {value!r}")
+    if not math.isfinite(t_start):
+        raise InputError(f"t_start: must be a finite number of s, got {t_start!r}")
+    steps = round(duration / dt)
+    if steps < 2 or steps > 50_000_000:
+        raise InputError(f"duration: {duration:g} s at dt = {dt:g} s gives {steps} samples; "
+                         "give between 2 and 5e7")
+    return dt, steps
+
+
 def torus_run(source: xr.Dataset | TorusResponse, duration: float, dt: float | None = None,
               t_start: float = 0.0, point: int = -1) -> xr.Dataset:
     """A run-like Dataset sampled from a torus: z(t) = u(ω1 t, ω2 t) at t = t_start +
@@ -202,16 +221,7 @@ def torus_run(source: xr.Dataset | TorusResponse, duration: float, dt: float | N
     else:
         ts, coeffs = torus_of(source, point)
     system = ts.system
-    dt = float(system.model.simulation_defaults["dt"] if dt is None else dt)
-    for name, value, low in (("duration", duration, 0.0), ("dt", dt, 0.0)):
-        if not (math.isfinite(value) and value > low):
-            raise InputError(f"{name}: must be a finite number > 0 s, got {value!r}")
-    if not math.isfinite(t_start):
-        raise InputError(f"t_start: must be a finite number of s, got {t_start!r}")
-    steps = round(duration / dt)
-    if steps < 2 or steps > 50_000_000:
-        raise InputError(f"duration: {duration:g} s at dt = {dt:g} s gives {steps} samples; "
-                         "give between 2 and 5e7")
+    dt, steps = check_torus_run(system, duration, dt, t_start)
     t = t_start + dt * np.arange(steps + 1)
     z = ts.at_times(coeffs, t)
     attrs = completed_attrs(system, method="torus", dt=dt, save_every=1, duration=duration,
