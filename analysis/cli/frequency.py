@@ -253,6 +253,11 @@ def torus(
     check_seconds("--duration", duration)
     system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
                                               **parse_sets(sets)), param, start, stop)
+    if run:  # the run's length judged before any torus is solved
+        from analysis.frequency.torus.dataset import check_torus_run
+
+        with option_names("duration", "dt"):
+            check_torus_run(system, duration, dt)
     with option_names(*API_FIELDS):
         request = Request(resolution, frequencies=frequencies, param=param, start=start,
                           stop=stop, max_points=max_points, ds_max=ds_max,
