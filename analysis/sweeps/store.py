@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 MANIFEST = "sweep.json"
 LOCK = "lock"
@@ -88,10 +88,8 @@ def check_definition(definition: Any, where: str = "") -> None:
     elif isinstance(definition, (list, tuple)):
         for value in definition:
             check_definition(value, where)
-    elif isinstance(definition, int) and not isinstance(definition, bool) \
-            and not -INT64 <= definition <= INT64:
-        raise InputError(f"{where or 'definition'}: must be a whole number in [{-INT64}, "
-                         f"{INT64}], got {definition}")
+    elif isinstance(definition, int) and not isinstance(definition, bool):
+        check_count(where or "definition", definition, -INT64, INT64)
 
 
 class PointStore:
