@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from analysis.errors import InputError
+from analysis.integrate.kernels.devices import gpu_problem
 from analysis.integrate.simulate import blow_up_limit
 from analysis.model import System
 from analysis.stability.attractors import DIVERGED, Box, basin_fractions, study_json
@@ -212,3 +213,16 @@ def test_feature_blocks_stream_into_the_store_and_resume(monkeypatch, tmp_path):
     assert mapped == [20, 20, 4]  # the stored block was not mapped again
     xr.testing.assert_identical(again.drop_attrs(), reference.drop_attrs())
     np.testing.assert_array_equal(again.basin.values, reference.basin.values)
+
+
+GPU_PROBLEM = gpu_problem()
+
+
+@pytest.mark.skipif(GPU_PROBLEM is not None, reason=f"no GPU: {GPU_PROBLEM}")
+def test_the_gpu_labels_states_as_the_cores_do(rotor):
+    states = ROTOR_BOX.sample(rotor, 400, np.random.default_rng(7))
+    cpu = make_study(rotor, 400, mapper="features", device="cpu")
+    gpu = make_study(rotor, 400, mapper="features", device="gpu", scale=cpu.scale)
+    a, b = cpu.find(states), gpu.find(states)
+    assert [x.nature for x in a.attractors] == [x.nature for x in b.attractors]
+    np.testing.assert_array_equal(a.labels, b.labels)
