@@ -17,12 +17,12 @@ spills; no GPU needed): ``nvcc -arch=sm_90 -cubin -Xptxas -v --fmad=false -std=c
 member.cu``. Measured with nvcc 13.0 for sm_90 (registers per thread, spill stores/loads in
 bytes), states | tangent:
 
-- balanced-rotor N_b 8: 180 | 202, no spills; vakharia2015 N_b 6: 162 | 190, N_b 8: – |
-  210, N_b 12: 208 | 248, no spills (the stage-wise tangent; issue 33's forward AD through
-  the fused step took 255 registers and spilled 576 B at N_b 8);
-- rotor-housing (8 states): 230, no spills | 255, 184/304 B; two-bearing-rotor (8, 10):
-  255, 564/744 B | 255, 1832/2504 B. ``__noinline__`` stage functions do not remove
-  them: the eight-state models' rhs needs more than 255 live values in CasADi's order.
+- balanced-rotor N_b 8: 180 | 202; vakharia2015 N_b 6: 162 | 192, N_b 8: – | 212, N_b 12:
+  208 | 250; no spills (issue 33's forward AD through the fused step took 255 registers
+  and spilled 576 B at N_b 8);
+- rotor-housing (8 states): 230, no spills | 255, 136/200 B; two-bearing-rotor (8, 10):
+  255, 564/744 B | 255, 1864/2392 B: the eight-state models' rhs needs more than 255 live
+  values in CasADi's order (``__noinline__`` stage functions do not remove them).
 """
 
 from __future__ import annotations
