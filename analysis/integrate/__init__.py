@@ -6,7 +6,10 @@ caches the compiled libraries; ``checks`` validates the RK4 step against the mod
 scales; ``flow`` gives flow maps over a period and their derivatives (shooting, continuation,
 Lyapunov exponents build on them); ``ensemble`` runs many initial states or parameter
 points of one System together (``StroboscopicMap``, ``ensemble``), each member ``simulate``'s
-run bit for bit. Nothing here prints or draws.
+run bit for bit; ``kernels`` is the one writer of compiled member code (states, or states
+and a tangent for λ1) and its CPU (OpenMP) and CUDA (CuPy) builds, ``kernels.run_members``
+the call every ensemble, chart and brute-force diagram goes through. Nothing here prints or
+draws.
 """
 
 from analysis.integrate.ensemble import StroboscopicMap, ensemble
