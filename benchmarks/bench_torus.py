@@ -23,7 +23,7 @@ The last lines give the error per state, largest and rms (the table of docs/freq
 Tori: ``--harmonics 8,4 12,6 16,8 20,10 24,12``).
 
 For each N of ``--points``, the same torus by the invariant circle of the shaft map
-(``invariant_circle.solve_circle`` without λ1 and without its 2N solve): its wall time,
+(``circle.solve.solve_circle`` without λ1 and without its 2N solve): its wall time,
 its error at the shaft sections t = k·T1 of the reference (the circle u(ω2 t)), at every
 reference time (the Dataset's series on the N1 × N grid), and at the sections outside the
 cage phases 0.5–2.5 rad (where the shaft map's local multiplier is a flip below −1; the

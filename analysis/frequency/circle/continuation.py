@@ -8,7 +8,7 @@ and ∂P/∂λ are carried through the RK4 (``ShaftMap.along``: the step h = T1(
 the phases' dependence included), and ∂R_ρ/∂λ = ∂R/∂ρ · ∂ρ/∂λ (``shift_derivative``, ρ by
 AD). Its monodromy is empty, so the engine's step (Keller's bordered Newton, the
 ``StepGuards``, folds) runs as for the HB torus. Its ``accept`` hook stops the branch when a
-corrected circle's Fourier tail (``invariant_circle.TAIL_FRACTION``) grows beyond
+corrected circle's Fourier tail (``circle.solve.TAIL_FRACTION``) grows beyond
 ``tail_limit``: the circle is no longer resolved by its N points (it loses smoothness).
 """
 

@@ -69,7 +69,7 @@ class HillMonodromy:
 
 class FourierBranchProblem(ContinuedParameter):
     """What the harmonic-balance families share (periodic HB here, 2-D HB tori in
-    ``torus_continuation``): unknowns w = (X / s_X, λ / s_λ) of the Fourier coefficients X
+    ``torus.continuation``): unknowns w = (X / s_X, λ / s_λ) of the Fourier coefficients X
     of ``equations`` (a ``HarmonicSystem`` or ``TorusSystem``: ``evaluate``, ``residual``,
     ``size``, ``system``), equations G = R(X, λ) / (ω_0 s_i) with ω_0 ``omega_ref``
     (rad/s); the tangent by the bordered solve. A family adds ``equations``, ``amplitude``
