@@ -127,6 +127,34 @@ def default_samples_per_rev(ds: xr.Dataset) -> int:
     return max(8, 2 * int(1.0 / (dt * top) // 2))
 
 
+MAX_ANGLE_SAMPLES = 50_000_000
+"""The most samples of an angle grid (400 MB of doubles)."""
+
+
+def check_samples_per_rev(ds: xr.Dataset, samples_per_rev: int | None = None
+                          ) -> tuple[int, int, np.ndarray]:
+    """``(samples per revolution, samples of the angle grid, shaft angle)`` of the run
+    ``ds``, judged before the grid is made: ``samples_per_rev`` (None: the default) an
+    integer >= 4, and the grid of at least 16 and at most ``MAX_ANGLE_SAMPLES`` samples."""
+    samples_per_rev = default_samples_per_rev(ds) if samples_per_rev is None \
+        else samples_per_rev
+    if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, (int, np.integer)) \
+            or samples_per_rev < 4:
+        raise InputError(f"--samples-per-rev: must be an integer >= 4, got {samples_per_rev!r}")
+    phi = shaft_angle(ds)
+    turns = (phi[-1] - phi[0]) / (2 * math.pi)
+    count = math.floor((phi[-1] - phi[0]) / (2 * math.pi / samples_per_rev) * (1 + 1e-12)) + 1
+    if count < 16:
+        raise InputError(f"orders: the record holds {turns:.3g} shaft revolutions; order "
+                         "tracking needs several")
+    if count > MAX_ANGLE_SAMPLES:
+        most = max(4, int(MAX_ANGLE_SAMPLES // max(turns, 1e-300)))
+        raise InputError(f"--samples-per-rev: at most {most} over the record's {turns:.4g} "
+                         f"revolutions ({MAX_ANGLE_SAMPLES:.0e} angle samples in all), got "
+                         f"{samples_per_rev}")
+    return int(samples_per_rev), count, phi
+
+
 def angle_resample(ds: xr.Dataset, var: str | None = None,
                    samples_per_rev: int | None = None) -> xr.DataArray:
     """``ds[var]`` (default: the first displacement) at equal steps of the shaft angle:
@@ -137,19 +165,10 @@ def angle_resample(ds: xr.Dataset, var: str | None = None,
     if var not in ds.data_vars:
         raise InputError(f"--var: no state variable {var!r} in this run; variables: "
                          f"{', '.join(map(str, ds.data_vars))}")
-    samples_per_rev = default_samples_per_rev(ds) if samples_per_rev is None \
-        else samples_per_rev
-    if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, (int, np.integer)) \
-            or samples_per_rev < 4:
-        raise InputError(f"--samples-per-rev: must be an integer >= 4, got {samples_per_rev!r}")
+    samples_per_rev, count, phi = check_samples_per_rev(ds, samples_per_rev)
     t = np.asarray(ds["t"].values, dtype=float)
     values = np.asarray(ds[var].values, dtype=float)
-    phi = shaft_angle(ds)
     step = 2 * math.pi / samples_per_rev
-    count = math.floor((phi[-1] - phi[0]) / step * (1 + 1e-12)) + 1
-    if count < 16:
-        raise InputError(f"orders: the record holds {(phi[-1] - phi[0]) / (2 * math.pi):.3g} "
-                         "shaft revolutions; order tracking needs several")
     grid = phi[0] + step * np.arange(count)
     profile = profile_of(ds.attrs)
     if profile is not None:
