@@ -44,6 +44,10 @@ def waterfall(
     from analysis.signal.waterfall import waterfall as compute
 
     ds = load_dataset(run_file)
+    if orders:  # the angle grid's size judged before any spectrum is computed
+        from analysis.signal.orders import check_samples_per_rev
+
+        check_samples_per_rev(ds, samples_per_rev)
     wf = compute(ds, var, window)
     spectrum = order_spectrum(ds, wf.attrs["variable"], samples_per_rev) if orders else None
     tracks = line_tracks(wf)
