@@ -32,9 +32,6 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Literal
 
-from scipy.optimize import brentq
-from scipy.special import ellipe, ellipk
-
 from modelgen.unrolled import NUMPY, Ops, Unrolled
 
 Race = Literal["inner", "outer"]
@@ -166,6 +163,8 @@ def exact_ellipticity(difference: float) -> float:
     """κ solving F(κ) = F(ρ) to machine precision (Brent's method, SciPy integrals)."""
     if not 0 < difference < 1:
         raise ValueError(f"curvature difference must be in (0, 1), got {difference}")
+    from scipy.optimize import brentq  # here, not at import: a spec is judged without SciPy
+    from scipy.special import ellipe, ellipk
 
     def residual(kappa: float) -> float:
         m = 1 - 1 / kappa**2
@@ -190,6 +189,8 @@ def race_contact(ball_diameter: float, pitch_diameter: float, conformity: float,
     """Hertz contact of a ball with the inner or outer race (SI units)."""
     total, difference = curvatures(ball_diameter, pitch_diameter, conformity, RACE_SIGN[race])
     if method == "exact":
+        from scipy.special import ellipe, ellipk
+
         kappa = exact_ellipticity(difference)
         m = 1 - 1 / kappa**2
         first, second = float(ellipk(m)), float(ellipe(m))

@@ -636,8 +636,9 @@ def _contact_problems(spec: Spec) -> list[str]:
                 for i, t in terms if isinstance(t, Centrifugal))
         high = n_balls_range(spec, bearing)[1]
         problems.extend(
-            f"terms[{i}].ball: must be in [1, {min(bearing.n_balls, high)}] (a ball of "
-            f"bearing '{bearing.name}', {bearing.n_balls} by default), got {ball}"
+            f"terms[{i}] ({spec.terms[i].kind}).ball: must be in "
+            f"[1, {min(bearing.n_balls, high)}] (a ball of bearing '{bearing.name}', "
+            f"{bearing.n_balls} by default), got {ball}"
             for i, ball in _defect_balls(spec, bearing) if ball > min(bearing.n_balls, high))
     return problems
 
@@ -667,7 +668,7 @@ def _expression_problems(i: int, term: ExpressionTerm, spec: Spec, ctx: Context)
         unknown = sorted(names - parameters.keys() - QUANTITIES.keys())
         for name in unknown:
             symbols = (*state, *TIME_SYMBOLS, *(BALL_SYMBOLS if field == "ball" else ()))
-            problems.append(f"terms.{i}.{field}: unknown name '{name}'"
+            problems.append(f"terms[{i}] ({term.kind}).{field}: unknown name '{name}'"
                             f"{_suggest(name, [*parameters, *symbols])}; a new parameter "
                             f"needs a declaration [parameters.{name}] with value, unit, "
                             "source, low and high")
@@ -675,7 +676,7 @@ def _expression_problems(i: int, term: ExpressionTerm, spec: Spec, ctx: Context)
             try:
                 term.parse(field, ctx)
             except ExpressionError as exc:
-                problems.append(f"terms.{i}.{field}: {exc}")
+                problems.append(f"terms[{i}] ({term.kind}).{field}: {exc}")
     return problems
 
 
@@ -773,9 +774,24 @@ def _suggest(word: str, choices: Any) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
+def field_path(parts: tuple) -> str:
+    """The one path style of every spec message: list items by index in brackets, a term
+    followed by its kind (``terms[0] (hertz_contact).bearing``, ``bearings[1].n_balls``,
+    ``parameters.damping.value``), from Pydantic's location tuple."""
+    text = ""
+    for i, part in enumerate(parts):
+        if isinstance(part, int):
+            text += f"[{part}]"
+        elif _is_union_tag(parts, i):
+            text += f" ({part})"
+        else:
+            text += f".{part}" if text else str(part)
+    return text
+
+
 def _format_error(err: dict[str, Any]) -> str:
     parts = err["loc"]
-    loc = ".".join(str(p) for i, p in enumerate(parts) if not _is_union_tag(parts, i))
+    loc = field_path(parts)
     kind, msg, got = err["type"], err["msg"], _shown(err.get("input"))
     if kind == "extra_forbidden":
         return f"{loc}: unknown field{_suggest(parts[-1], _all_field_names())}"
@@ -866,7 +882,25 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
         problems: list[str] = []
         for err in exc.errors():
             problems.extend(_format_error(err).splitlines())
-        raise SpecError(source, problems) from None
+        raise SpecError(source, lists_once(problems)) from None
+
+
+_NAME_LIST = re.compile(r"\b(known|allowed): ([^;()]+)")
+
+
+def lists_once(problems: list[str]) -> list[str]:
+    """``problems`` with each list of known or allowed names written out once: a later
+    problem that would repeat the same list says 'as above' instead."""
+    seen: set[str] = set()
+
+    def shorten(match: re.Match) -> str:
+        names = match.group(2).strip()
+        if names in seen:
+            return f"{match.group(1)}: as above"
+        seen.add(names)
+        return match.group(0)
+
+    return [_NAME_LIST.sub(shorten, problem) for problem in problems]
 
 
 def spec_path(name_or_path: str | Path) -> Path:

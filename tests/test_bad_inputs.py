@@ -144,7 +144,7 @@ SPEC_CASES = [
               "n_balls in a one-body spec, else [[bearings]]) with a 'hertz_contact' term",)),
     SpecCase("missing-kind", "missing field", "a term without its kind",
              (("terms.1", {"variant": "paper_eq9"}),),
-             ("terms.1.kind: missing; allowed: hertz_contact, centrifugal",)),
+             ("terms[1].kind: missing; allowed: hertz_contact, centrifugal",)),
     SpecCase("empty-terms", "missing field", "no terms at all", (("terms", []),),
              ("terms: must not be empty",)),
     SpecCase("file-missing", "missing field", "a spec file that does not exist", (),
@@ -162,11 +162,11 @@ SPEC_CASES = [
               "a new parameter needs its allowed range: low = …, high = …")),
     SpecCase("term-typo", "unknown field", "a misspelt term kind",
              (("terms.0.kind", "hertz_contakt"),),
-             ("terms.0.kind: unknown term 'hertz_contakt' (did you mean 'hertz_contact'?); "
+             ("terms[0].kind: unknown term 'hertz_contakt' (did you mean 'hertz_contact'?); "
               "allowed:",)),
     SpecCase("variant-typo", "unknown field", "a misspelt choice",
              (("terms.0.cage", "race_diameter"),),
-             ("terms.0.cage: must be 'race_diameters' or 'pitch_diameter', got "
+             ("terms[0] (hertz_contact).cage: must be 'race_diameters' or 'pitch_diameter', got "
               "'race_diameter' (did you mean 'race_diameters'?)",)),
     SpecCase("name-mismatch", "unknown field", "model name differs from the file name",
              (("model.name", "other"),),
@@ -255,7 +255,7 @@ SPEC_CASES = [
              expect=("bodies/bearings: the name 'rotor' is used 2 times",)),
     SpecCase("body-motion-unknown", "bodies and bearings", "an unknown motion",
              (("bodies.0.motion", "spinning"),), base="rotor-housing",
-             expect=("bodies.0.motion: must be 'planar', 'linear' or 'planar_tilt', got "
+             expect=("bodies[0].motion: must be 'planar', 'linear' or 'planar_tilt', got "
                      "'spinning'",)),
     SpecCase("bearing-on-linear-body", "bodies and bearings", "a bearing on a body that moves "
              "along x only", (("bodies.1.motion", "linear"),), base="rotor-housing",
@@ -317,7 +317,8 @@ SPEC_CASES = [
              expect=("body 'rotor': nothing holds it to ground; give it support",)),
     SpecCase("defect-ball-beyond-balls", "bodies and bearings", "a pit on a ball the "
              "bearing does not have", (("terms.1.ball", 12),), base="6205-ball-defect",
-             expect=("terms[1].ball: must be in [1, 9] (a ball of bearing 'bearing', 9 by "
+             expect=("terms[1] (localized_defect)."
+                     "ball: must be in [1, 9] (a ball of bearing 'bearing', 9 by "
                      "default), got 12",)),
     # user-declared parameters
     SpecCase("user-parameter-without-range", "user parameters", "a new parameter without a "
@@ -344,67 +345,72 @@ SPEC_CASES = [
     # custom expressions
     SpecCase("expr-attribute", "custom expressions", "attribute access",
              (expression(fx="x.__class__"),),
-             ("terms.5.fx: attribute access is not allowed: 'x.__class__'",)),
+             ("terms[5] (expression).fx: attribute access is not allowed: 'x.__class__'",)),
     SpecCase("expr-call", "custom expressions", "a call of anything but the listed functions",
              (expression(fx="__import__('os').system('touch PWNED')"),),
-             ("terms.5.fx: attribute access is not allowed: "
+             ("terms[5] (expression).fx: attribute access is not allowed: "
               "'__import__('os').system'",)),
     SpecCase("expr-builtin-call", "custom expressions", "a call of a Python builtin",
              (expression(fx="eval('1')"),),
-             ("terms.5.fx: calls to 'eval' are not allowed; functions: sin, cos, exp, sqrt, "
+             ("terms[5] (expression)."
+              "fx: calls to 'eval' are not allowed; functions: sin, cos, exp, sqrt, "
               "abs, Heaviside, Max, Min: 'eval('1')'",)),
     SpecCase("expr-lambda", "custom expressions", "a lambda",
              (expression(fx="(lambda: 0)()"),),
-             ("terms.5.fx: lambdas are not allowed: 'lambda: 0'",)),
+             ("terms[5] (expression).fx: lambdas are not allowed: 'lambda: 0'",)),
     SpecCase("expr-comprehension", "custom expressions", "a comprehension",
              (expression(fx="Max(x, [y for y in (x, y)])"),),
-             ("terms.5.fx: comprehensions are not allowed: '[y for y in (x, y)]'",)),
+             ("terms[5] (expression).fx: comprehensions are not allowed: '[y for y in (x, y)]'",)),
     SpecCase("expr-subscript", "custom expressions", "a subscript",
              (expression(fy="y[0]"),),
-             ("terms.5.fy: subscripts are not allowed: 'y[0]'",)),
+             ("terms[5] (expression).fy: subscripts are not allowed: 'y[0]'",)),
     SpecCase("expr-dunder", "custom expressions", "a name starting with '_'",
              (expression(fx="__builtins__"),),
-             ("terms.5.fx: names starting with '_' are not allowed: '__builtins__'",)),
+             ("terms[5] (expression)."
+              "fx: names starting with '_' are not allowed: '__builtins__'",)),
     SpecCase("expr-too-long", "custom expressions", "an expression over 2000 characters",
              (expression(fx="+".join(["x"] * 1001)),),
-             ("terms.5.fx: too long: 2001 characters, at most 2000",)),
+             ("terms[5] (expression).fx: too long: 2001 characters, at most 2000",)),
     SpecCase("expr-too-deep", "custom expressions", "nesting deeper than 40 levels",
              (expression(fx="(" * 41 + "x" + ")" * 41),),
-             ("terms.5.fx: nested deeper than 40 levels",)),
+             ("terms[5] (expression).fx: nested deeper than 40 levels",)),
     SpecCase("expr-syntax", "custom expressions", "not an expression",
              (expression(fx="x +"),),
-             ("terms.5.fx: not a valid expression (invalid syntax): 'x +'",)),
+             ("terms[5] (expression).fx: not a valid expression (invalid syntax): 'x +'",)),
     SpecCase("expr-power-caret", "custom expressions", "'^' for a power",
              (expression(fx="-k3*x^3"),),
-             ("terms.5.fx: '^' is not a power here; use '**': '-k3*x^3'",)),
+             ("terms[5] (expression).fx: '^' is not a power here; use '**': '-k3*x^3'",)),
     SpecCase("expr-division-by-zero", "custom expressions", "a division by zero",
              (expression(fx="1/(x - x)"),),
-             ("terms.5.fx: division by zero or an infinite value: '1/(x - x)'",)),
+             ("terms[5] (expression).fx: division by zero or an infinite value: '1/(x - x)'",)),
     SpecCase("expr-complex", "custom expressions", "a complex number",
              (expression(fy="sqrt(-4)*y"),),
-             ("terms.5.fy: complex value (e.g. sqrt of a negative number): 'sqrt(-4)*y'",)),
+             ("terms[5] (expression)."
+              "fy: complex value (e.g. sqrt of a negative number): 'sqrt(-4)*y'",)),
     SpecCase("expr-huge-number", "custom expressions", "a number beyond the double range",
              (expression(fx="1e999*x"),),
-             ("terms.5.fx: number outside the floating-point range: '1e999'",)),
+             ("terms[5] (expression).fx: number outside the floating-point range: '1e999'",)),
     SpecCase("expr-unknown-name", "custom expressions", "an undeclared name",
              (K3, expression(fx="-k_3*x**3")),
-             ("terms.5.fx: unknown name 'k_3' (did you mean 'k3'?); a new parameter needs a "
+             ("terms[5] (expression)."
+              "fx: unknown name 'k_3' (did you mean 'k3'?); a new parameter needs a "
               "declaration [parameters.k_3] with value, unit, source, low and high",)),
     SpecCase("expr-ball-symbol", "custom expressions", "a per-ball symbol in a rotor force",
              (expression(fx="1e9*delta"),),
-             ("terms.5.fx: 'delta' is a per-ball symbol; it may be used in 'ball' only",)),
+             ("terms[5] (expression)."
+              "fx: 'delta' is a per-ball symbol; it may be used in 'ball' only",)),
     SpecCase("expr-star", "custom expressions", "'*' unpacking in a call (reported as an "
              "argument count before)", (expression(fx="Max(*x)"),),
-             ("terms.5.fx: '*' unpacking is not allowed: '*x'",)),
+             ("terms[5] (expression).fx: '*' unpacking is not allowed: '*x'",)),
     SpecCase("expr-double-star", "custom expressions", "'**' unpacking in a call",
              (expression(fx="sin(**x)"),),
-             ("terms.5.fx: '**' unpacking is not allowed: 'sin(**x)'",)),
+             ("terms[5] (expression).fx: '**' unpacking is not allowed: 'sin(**x)'",)),
     SpecCase("defect-ball-zero", "bodies and bearings", "a pit on ball 0 (the range was "
              "missing from the message)", (("terms.1.ball", 0),), base="6205-ball-defect",
-             expect=("terms.1.ball: must be in [1, 64], got 0",)),
+             expect=("terms[1] (localized_defect).ball: must be in [1, 64], got 0",)),
     SpecCase("expr-empty", "custom expressions", "an expression term without expressions",
              (expression(description="nothing"),),
-             ("terms.5: an expression term needs at least one of fx, fy, ball",)),
+             ("terms[5] (expression): an expression term needs at least one of fx, fy, ball",)),
 ]
 
 
@@ -544,11 +550,11 @@ CLI_CASES = [
                       "; available:",)),
     CliCase("spec-unknown-term", "command line", "a bad spec given to `generate`",
             ("generate", "vakharia2015.toml", "--out", "gen"),
-            ("vakharia2015.toml: terms.4.kind: unknown term 'unbalanse' (did you mean "
+            ("vakharia2015.toml: terms[4].kind: unknown term 'unbalanse' (did you mean "
              "'unbalance'?)",), setup=_bad_spec),
     CliCase("spec-hostile-expression", "command line", "a spec expression that tries to "
             "escape", ("generate", "vakharia2015.toml", "--out", "gen"),
-            ("terms.5.fx: attribute access is not allowed: '().__class__.__base__."
+            ("terms[5] (expression).fx: attribute access is not allowed: '().__class__.__base__."
              "__subclasses__'",), setup=_hostile_spec),
     CliCase("output-folder-missing", "files", "an output folder that does not exist",
             (*SIM[:3], "nowhere/r.nc", *SHORT), ("output: folder 'nowhere' does not exist",)),

@@ -155,7 +155,18 @@ SetOption = Annotated[list[str] | None, typer.Option(
 MODEL_HELP = ("Model: a shipped name or a name in a BEARINGDYN_MODELS folder (see `bearingdyn "
               "models`), the path of a .toml spec, or a folder written by `bearingdyn "
               "generate SPEC --out DIR`.")
-ModelArgument = Annotated[str, typer.Argument(help=MODEL_HELP, metavar="MODEL")]
+
+
+def _judge_spec(value: str) -> str:
+    """Argument callback: a spec of your own that will be generated is judged now, before
+    the command imports its libraries (``modelgen.early``)."""
+    from modelgen.early import judge_spec_early
+
+    return judge_spec_early(value) if isinstance(value, str) else value
+
+
+ModelArgument = Annotated[str, typer.Argument(help=MODEL_HELP, metavar="MODEL",
+                                              callback=_judge_spec, is_eager=True)]
 
 
 def parse_n_balls(items: list[str] | int | dict[str, int] | None
@@ -432,6 +443,8 @@ def main(args: list[str] | None = None) -> None:
     import sys
     import warnings
 
+    from modelgen.errors import SpecError
+
     def one_line(message, category, filename, lineno, file=None, line=None):
         typer.echo(f"warning: {' '.join(str(message).split())}", err=True)
 
@@ -452,6 +465,9 @@ def main(args: list[str] | None = None) -> None:
     except (typer.Abort, KeyboardInterrupt):
         typer.echo("interrupted", err=True)
         _leave(130)
+    except SpecError as exc:  # a spec judged while the arguments were read (_judge_spec)
+        typer.echo(f"error: {exc}", err=True)
+        sys.exit(2)
     except typer.Exit as exc:
         _leave(exc.exit_code)
     except Exception as exc:  # raised while the options were read: still one line
