@@ -5,13 +5,17 @@ as cited (``modelgen/specs/NAME.toml`` for a shipped model, the real absolute pa
 of your own), the spec's SHA-256 (``sha256sum`` of the file gives the same), the versions of
 bearingdyn, SymPy and CasADi that generated its code, and where its equations come from (the
 spec's ``reference``). Models built on the seed paper (their reference names Vakharia) also
-cite the paper itself:
+cite the paper itself, with everything its own text states: the title, the three authors,
+their affiliation (Mechanical Engineering Discipline, PDPM Indian Institute of Information
+Technology, Design and Manufacturing Jabalpur, Jabalpur 482005, India) and e-mail addresses
+(the corresponding author marked), the abstract and the keywords:
 
     V. Vakharia, V. K. Gupta, P. K. Kankar, *Nonlinear dynamic analysis of ball bearings due
     to varying number of balls and centrifugal force*.
 
-The seed paper's text names no venue, year or DOI, so none is given here (add them from the
-publisher's page when you cite it).
+The seed paper's text names no venue, year, volume, pages or DOI, so none is given here and
+the entry says so in its ``note`` (add them from the publisher's page when you cite it; this
+module never guesses them).
 """
 
 from __future__ import annotations
@@ -32,6 +36,33 @@ SEED_PAPER_TITLE = ("Nonlinear Dynamic Analysis of Ball Bearings Due to Varying 
                     "Balls and Centrifugal Force")
 SEED_PAPER_AUTHORS = (("Vakharia", "V."), ("Gupta", "V. K."), ("Kankar", "P. K."))
 """The seed paper's authors (family name, initials), as its first page gives them."""
+SEED_PAPER_EMAILS = ("vinayvakharia4343@gmail.com", "vkgupta@iiitdmj.ac.in",
+                     "pavankankar@gmail.com")
+"""The authors' e-mail addresses, in the order of ``SEED_PAPER_AUTHORS``, as the first page
+gives them."""
+SEED_PAPER_CORRESPONDING = "Kankar"
+"""The author the first page marks as corresponding (✉)."""
+SEED_PAPER_INSTITUTION = ("Mechanical Engineering Discipline, PDPM Indian Institute of "
+                          "Information Technology, Design and Manufacturing Jabalpur")
+SEED_PAPER_ADDRESS = "Jabalpur 482005, India"
+SEED_PAPER_AFFILIATION = f"{SEED_PAPER_INSTITUTION}, {SEED_PAPER_ADDRESS}"
+"""The affiliation of all three authors, as the first page gives it."""
+SEED_PAPER_KEYWORDS = ("Nonlinear dynamics", "Ball bearing", "Unbalanced rotor",
+                       "Centrifugal force", "Poincare map")
+SEED_PAPER_ABSTRACT = (
+    "This paper aims to study the influence of varying number of balls on nonlinear dynamic "
+    "behavior of an unbalanced rotor supported by ball bearings. Centrifugal force due to "
+    "rotation of balls is included in the model. An oscillating spring-mass-damper is "
+    "considered to formulate the contact between races and rolling elements. Stiffness for "
+    "the spring-mass-damper system is calculated using Hertzian elastic contact deformation "
+    "theory. The results show appearance of regions of periodic, sub-harmonic and chaotic "
+    "behavior on response of the system. Invariably, the route to chaos is seen to be "
+    "intermittency mechanism by period doubling behavior. Poincare maps and frequency "
+    "responses are used to explain and to study the system behavior.")
+"""The seed paper's abstract, word for word."""
+SEED_PAPER_UNSTATED = ("The source text states no venue, year, volume, pages, publisher or "
+                       "DOI; add them from the publisher's record")
+"""What the entry says about the fields it leaves out."""
 SEED_PAPER_KEY = "vakharia-ball-bearings"
 SOFTWARE_AUTHOR = "The bearingdyn developers"
 REPOSITORY_LICENSE = "MIT"
@@ -138,11 +169,22 @@ def bibtex(facts: ModelCitation) -> str:
 
 
 def seed_paper_bibtex() -> str:
-    """The seed paper as a BibTeX ``@misc`` entry (authors and title; its text names no
-    venue or year)."""
+    """The seed paper as a full BibTeX ``@misc`` entry of what its own text states: authors,
+    title, affiliation (``institution`` and ``address``), e-mail addresses, keywords and
+    abstract, and a ``note`` naming the fields it leaves out because the text does not
+    state them (venue, year, DOI: never guessed)."""
     authors = " and ".join(f"{family}, {given}" for family, given in SEED_PAPER_AUTHORS)
-    return _entry("misc", SEED_PAPER_KEY, [("author", authors),
-                                           ("title", "{" + SEED_PAPER_TITLE + "}")])
+    emails = ", ".join(f"{family}: {email}" + (" (corresponding)"
+                                               if family == SEED_PAPER_CORRESPONDING else "")
+                       for (family, _), email in zip(SEED_PAPER_AUTHORS, SEED_PAPER_EMAILS,
+                                                     strict=True))
+    return _entry("misc", SEED_PAPER_KEY, [
+        ("author", authors), ("title", "{" + SEED_PAPER_TITLE + "}"),
+        ("institution", latex_escape(SEED_PAPER_INSTITUTION)),
+        ("address", latex_escape(SEED_PAPER_ADDRESS)),
+        ("email", _verbatim(emails)), ("keywords", ", ".join(SEED_PAPER_KEYWORDS)),
+        ("abstract", latex_escape(SEED_PAPER_ABSTRACT)),
+        ("note", latex_escape(SEED_PAPER_UNSTATED))])
 
 
 def _yaml(value: object, indent: int = 0) -> str:
@@ -166,10 +208,16 @@ def _yaml(value: object, indent: int = 0) -> str:
 
 
 def seed_paper_cff() -> dict:
-    """The seed paper as a CFF reference."""
-    return {"type": "article", "title": SEED_PAPER_TITLE,
-            "authors": [{"family-names": family, "given-names": given}
-                        for family, given in SEED_PAPER_AUTHORS]}
+    """The seed paper as a CFF reference: type ``generic`` (its text does not say where it
+    appeared), the authors with their affiliation and e-mail, the abstract, the keywords and
+    a note on what is left out."""
+    return {"type": "generic", "title": SEED_PAPER_TITLE,
+            "authors": [{"family-names": family, "given-names": given,
+                         "affiliation": SEED_PAPER_AFFILIATION, "email": email}
+                        for (family, given), email in zip(SEED_PAPER_AUTHORS,
+                                                          SEED_PAPER_EMAILS, strict=True)],
+            "abstract": SEED_PAPER_ABSTRACT, "keywords": list(SEED_PAPER_KEYWORDS),
+            "notes": SEED_PAPER_UNSTATED + "."}
 
 
 def cff(facts: ModelCitation) -> str:
