@@ -500,7 +500,12 @@ def any_figure(ds: xr.Dataset, variables: list[str] | None = None,
                          f"{', '.join(FIGURE_KINDS)} to be drawn, got {str(kind)[:60]!r} (a "
                          "damaged or edited file, or a result drawn by its own command)")
     if kind is not None:
-        return FIGURE_KINDS[kind](ds, variables)
+        try:
+            return FIGURE_KINDS[kind](ds, variables)
+        except KeyError as exc:  # the kind says one thing, the content another
+            raise InputError(f"result file: '{path}': attribute kind says {kind!r}, but the "
+                             f"file lacks the {kind}'s {exc.args[0]!r} (a damaged or edited "
+                             "file)") from None
     if "special" in ds and "param" in ds.attrs:
         return branch_figure([ds])
     ds = as_run(ds, path)
