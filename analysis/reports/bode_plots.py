@@ -23,9 +23,11 @@ def phasor_variables(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | No
     diagram or has no 1X record (a diagram written before it, or of a model without a
     shaft)."""
     if ds.attrs.get("kind") != "diagram":
-        raise InputError(f"result file: '{path}' is not a sweep's diagram (kind "
-                         f"{ds.attrs.get('kind', 'run')!r}); Bode and polar plots need a "
-                         "`bearingdyn sweep` result")
+        kind = ds.attrs.get("kind")
+        what = (f"kind {str(kind)[:60]!r}" if kind is not None else "a run" if "t" in ds.dims
+                else "it has no kind attribute")
+        raise InputError(f"result file: '{path}' is not a sweep's diagram ({what}); Bode and "
+                         "polar plots need a `bearingdyn sweep` result")
     recorded = tuple(str(v)[len("amplitude1x_"):] for v in ds.data_vars
                      if str(v).startswith("amplitude1x_"))
     if not recorded or not any(np.isfinite(ds[f"amplitude1x_{v}"].values).any()
