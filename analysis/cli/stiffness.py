@@ -107,7 +107,13 @@ def stiffness(
     stiffness K = -dF/dq and damping C = -dF/dq' matrices: at cage angle 0, over one ball
     pitch and averaged over it."""
     from analysis.model import as_system
-    from analysis.stability.statics import check_planar, coefficients, ross_coefficients
+    from analysis.stability.statics import (
+        balls_in_contact,
+        check_planar,
+        coefficients,
+        ross_coefficients,
+        unloaded_note,
+    )
 
     check_count("--angles", angles, 1, 3600)
     system = as_system(model, parse_n_balls(n_balls), **parameter_values(speed_rpm, sets))
@@ -120,10 +126,14 @@ def stiffness(
         rpm = parse_speeds(speeds) if speeds else np.linspace(0.1 * base, 2 * base, 10).tolist()
     ds = coefficients(system, n_angles=angles)
     data = stiffness_json(ds)
+    contact = balls_in_contact(system, ds.position.isel(cage_angle=0).values)
+    data["balls_in_contact"] = {name: touching for name, (touching, _) in contact.items()}
     if as_json:
         typer.echo(json.dumps(data, indent=2))
     else:
         _echo(data)
+    if (note := unloaded_note(contact)) is not None:  # the no-load line (issue 32)
+        typer.echo(note, err=as_json)
     if ross:
         _write_ross(ross, ross_coefficients(system, rpm, n_angles=angles), rpm, data, as_json)
     if output:

@@ -232,6 +232,47 @@ def _dataset(system: System, results: list[Equilibrium], angles: np.ndarray,
     return ds
 
 
+def balls_in_contact(system: System, position: Sequence[float], cage_angle: float = 0.0,
+                     t: float = 0.0) -> dict[str, tuple[int, int]]:
+    """``{bearing: (in contact, balls)}`` at the positions ``position`` (the model's
+    coordinates, m or rad; velocities 0) with every cage at ``cage_angle`` rad: a ball is in
+    contact when its load changes with the displacement (a ball inside the clearance carries
+    at most the constant centrifugal part, which no displacement changes). A bearing with
+    none in contact carries no load there: it adds nothing to the stiffness."""
+    module, p = system.model.module, np.asarray(system.p, dtype=float)
+    position = np.asarray(position, dtype=float)
+    z = ca.SX.sym("z", 2 * len(position))
+    state = ca.vertsplit(z)
+    counts: dict[str, tuple[int, int]] = {}
+    for row, n in zip(module.BEARINGS, system.structure, strict=True):
+        name = row[0]
+        load = getattr(module, f"ball_load_{name}")
+        slopes = []
+        for i in range(n):
+            theta = 2 * math.pi * i / n + cage_angle
+            q = ca.SX(load(math.cos(theta), math.sin(theta), i + 1, n, state, t, p))
+            slopes.append(ca.jacobian(q, z))
+        if not slopes:
+            counts[name] = (0, 0)
+            continue
+        fun = ca.Function("ball_slopes", [z], [ca.vertcat(*slopes)])
+        grad = np.array(fun(np.concatenate([position, np.zeros_like(position)])), dtype=float)
+        counts[name] = (int(np.count_nonzero(np.any(grad != 0, axis=1))), int(n))
+    return counts
+
+
+def unloaded_note(counts: dict[str, tuple[int, int]]) -> str | None:
+    """One line naming the bearings that carry no load (``balls_in_contact``), or None."""
+    idle = [f"'{name}' (none of its {n} balls touches a race)"
+            for name, (touching, n) in counts.items() if n and not touching]
+    if not idle:
+        return None
+    which = "bearing " + idle[0] if len(idle) == 1 else "bearings " + ", ".join(idle)
+    return (f"note: {which} carries no load at the static equilibrium: the rotor sits inside "
+            "its clearance there, so it adds no stiffness; a load or a smaller clearance "
+            "brings the balls into contact")
+
+
 def check_planar(coordinates: Sequence[str]) -> None:
     """Raise InputError unless the coordinates are a one-body planar model's (x, y)."""
     if list(coordinates) != ["x", "y"]:
