@@ -77,6 +77,11 @@ def simulate(
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "
                    f"{', '.join(state_names(attrs))}")
+    if profile is None:  # a bearing that carries no load (issue 32)
+        from analysis.stability.statics import static_load_note
+
+        if (note := static_load_note(model, balls, **params)) is not None:
+            typer.echo(note)
 
 
 EnvelopeOption = Annotated[bool, typer.Option(

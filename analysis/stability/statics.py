@@ -273,6 +273,19 @@ def unloaded_note(counts: dict[str, tuple[int, int]]) -> str | None:
             "brings the balls into contact")
 
 
+def static_load_note(target: System | Model | str, n_balls: BallCounts = None,
+                     **parameters: float) -> str | None:
+    """``unloaded_note`` at the static equilibrium with the cages at angle 0 (``simulate``'s
+    line), or None: every bearing carries load, or no equilibrium was found (then the
+    statics say nothing about the run)."""
+    try:
+        system = as_system(target, n_balls, **parameters)
+        found = equilibrium(system)
+    except (InputError, SimulationError, np.linalg.LinAlgError):
+        return None
+    return unloaded_note(balls_in_contact(system, found.position))
+
+
 def check_planar(coordinates: Sequence[str]) -> None:
     """Raise InputError unless the coordinates are a one-body planar model's (x, y)."""
     if list(coordinates) != ["x", "y"]:
