@@ -79,8 +79,17 @@ def check_space(folder: Path, size: int, path: Path) -> None:
     room = min(free, limit if limit != resource.RLIM_INFINITY else free)
     if need > room:
         what = "free on its disk" if room == free else "allowed per file (ulimit -f)"
-        raise WriteError(f"output: '{path}' needs about {need / 2**20:.1f} MiB and "
-                         f"{room / 2**20:.1f} MiB are {what}; nothing was written")
+        raise WriteError(f"output: '{path}' needs about {_bytes(need)} and {_bytes(room)} "
+                         f"are {what}; nothing was written")
+
+
+def _bytes(size: float) -> str:
+    """``1.8 MiB``, ``50 KiB``, ``0 bytes``: a size said in the unit that shows it."""
+    if size >= 2**20:
+        return f"{size / 2**20:.1f} MiB"
+    if size >= 2**10:
+        return f"{size / 2**10:.0f} KiB"
+    return f"{int(size)} bytes"
 
 
 def atomic_write(path: str | Path, write: Callable[[Path], None],
