@@ -32,6 +32,10 @@ def reproduce(
     quick: Annotated[bool, typer.Option(
         "--quick", help="Short runs and two values per sensitivity parameter (a smoke test; "
                         "verdicts less reliable).")] = False,
+    calibrated: Annotated[str | None, typer.Option(
+        "--calibrated", help="A calibrated model to classify beside MODEL at every N_b (e.g. "
+                             "vakharia2015-calibrated): the report's classes in three "
+                             "columns, paper / MODEL / calibrated.")] = None,
     executor: ExecutorOption = "processes",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
@@ -51,11 +55,13 @@ def reproduce(
         kwargs = dict(duration=1.6, transient=0.6, revolutions=60,
                       sensitivity={k: (min(v), max(v)) for k, v in SENSITIVITY.items()})
     check_reproduction(model, **kwargs)  # every input, before a worker starts or a file is made
+    if calibrated is not None:
+        check_reproduction(calibrated, **{**kwargs, "sensitivity": {}})
     ex = executor_of(executor, workers, scheduler)
     try:
         rep = run_reproduce(out_dir, model, executor=ex, log=None if quiet else typer.echo,
                             progress_factory=lambda label: ProgressReporter(label, quiet),
-                            quick=quick, **kwargs)
+                            quick=quick, calibrated=calibrated, **kwargs)
     finally:
         ex.close()
     paths = write_reproduction(rep, out_dir)

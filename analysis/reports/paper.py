@@ -57,6 +57,15 @@ PAPER_TABLE2: dict[int, PaperRow] = {
 """Table 2 of the paper, transcribed. N_b = 5 is only in the conclusions: 'chaotic'."""
 PAPER_NATURE = {5: "chaotic", **{n: row.nature for n, row in PAPER_TABLE2.items()}}
 
+CALIBRATED_MODEL = "vakharia2015-calibrated"
+"""The paper-literal model at a point calibrated against Table 2 (``bearingdyn calibrate``,
+target ``paper-table2``; docs/calibration.md)."""
+EXPLANATION = ("Where the classes differ from the paper's: the paper gives no rotor mass, "
+               "damping or contact stiffness; which values reproduce its Table 2 is answered "
+               "in docs/calibration.md (\"Which parameters did the paper use?\", "
+               "`bearingdyn calibrate`); model `vakharia2015-calibrated` runs such a point.")
+"""The line under ``run``'s table that says where the explanation of a disagreement lives."""
+
 SENSITIVITY: dict[str, tuple[float, ...]] = {
     "damping": (50.0, 100.0, 200.0, 300.0, 400.0),
     "rotor_mass": (0.3, 0.6, 0.9, 1.2),

@@ -16,11 +16,13 @@ from analysis.io import atomic_write
 from analysis.model import load_model
 from analysis.provenance import provenance
 from analysis.reports.paper import (
+    EXPLANATION,
     PAPER_N_BALLS,
     PAPER_NATURE,
     SENSITIVITY,
     case_verdict,
     major_name,
+    nature_matches,
     other_peak_names,
     paper_nature,
     series_f_max,
@@ -127,6 +129,8 @@ def peak_table_markdown(results: Sequence[CaseResult]) -> str:
         lines.append(f"| {r.n_balls} | {r.frequencies['vc_hz']:.1f} | {r.major('x')} | "
                      f"{r.major('y')} | {r.others('x')} | {r.others('y')} | {r.paper} | "
                      f"{r.motion()} | {r.exponent()} |")
+    if any(r.paper != "-" for r in results):  # the paper's case: say where to read why
+        lines += ["", EXPLANATION]
     return "\n".join(lines) + "\n"
 
 
@@ -237,7 +241,7 @@ Nature: periodic-n, quasi-periodic (a two-frequency torus locked to X and VC, or
 of its own) or chaotic, from the shaft-synchronous Poincaré points and the largest Lyapunov
 exponent (`analysis.stability.classify`).
 {MULTI_ORBIT}
-Run: {rep.settings['duration']:g} s simulated, the first
+{_calibrated_table(rep)}Run: {rep.settings['duration']:g} s simulated, the first
 {rep.settings['transient']:g} s dropped, fixed-step RK4 with Δt = 1e-5 s.
 
 ## Figures 2–6 redrawn
@@ -266,6 +270,25 @@ values, and classifies every N_b; {rep.settings['revolutions']} shaft revolution
 |---|---|---|---|
 {params}
 """
+
+
+def _calibrated_table(rep: Reproduction) -> str:
+    """The classes side by side, paper / default model / calibrated model, when the
+    reproduction ran a calibrated model too (``reproduce(calibrated=…)``), else ''."""
+    if not rep.calibrated:
+        return ""
+    lines = [f"### Classes: the paper, `{rep.model}` and `{rep.calibrated_model}`", "",
+             f"| N_b | paper | `{rep.model}` (assumed values) | `{rep.calibrated_model}` "
+             "(calibrated, docs/calibration.md) |", "|---|---|---|---|"]
+    for r in rep.rows:
+        paper = PAPER_NATURE.get(r.n_balls, "–")
+        nature, lam, ci = rep.calibrated[r.n_balls]
+        marks = ["" if paper == "–" else (" ✓" if nature_matches(paper, ours) else " ✗")
+                 for ours in (r.nature, nature)]
+        lines.append(f"| {r.n_balls} | {paper} | {r.nature}{marks[0]} (λ1 = "
+                     f"{r.lyapunov:.3g} ± {r.ci95:.2g}) | {nature}{marks[1]} (λ1 = "
+                     f"{lam:.3g} ± {ci:.2g}) |")
+    return "\n".join(lines) + "\n\n" + EXPLANATION + "\n\n"
 
 
 def _versions() -> str:

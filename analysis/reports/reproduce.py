@@ -16,7 +16,7 @@ from pathlib import Path
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.integrate.simulate import check_run
+from analysis.integrate.simulate import check_run, simulate
 from analysis.model import as_system, load_model
 from analysis.provenance import run_attrs
 from analysis.reports.paper import (
@@ -106,6 +106,10 @@ class Reproduction:
     sensitivity: dict[str, xr.Dataset] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     wall_s: float = 0.0
+    calibrated_model: str | None = None
+    """A calibrated model run beside ``model`` (``reproduce(calibrated=…)``), or None."""
+    calibrated: dict[int, tuple[str, float, float]] = field(default_factory=dict)
+    """Per N_b the calibrated model's class, λ1 and its 95 % half-width (1/s)."""
 
     def reproduced_ranges(self) -> dict[str, list[float]]:
         """For each varied parameter, the values at which every N_b gets the paper's class."""
@@ -161,6 +165,7 @@ def reproduce(
     revolutions: int = 200,
     sensitivity: dict[str, Sequence[float]] | None = None,
     quick: bool = False,
+    calibrated: str | None = None,
     executor: Executor | None = None,
     log: Callable[[str], None] | None = None,
     progress_factory: Callable[[str], Callable[[int, int], None]] | None = None,
@@ -168,12 +173,17 @@ def reproduce(
     """Simulate the paper's case for each N_b (``duration`` s, the first ``transient`` s
     dropped), classify it with its largest Lyapunov exponent, and chart the verdicts over
     the ``sensitivity`` ranges (default ``SENSITIVITY``). Results go to ``out_dir``.
-    ``quick`` marks the result as a smoke test (the report says so at the top)."""
+    ``quick`` marks the result as a smoke test (the report says so at the top).
+    ``calibrated``: a second model (e.g. ``paper.CALIBRATED_MODEL``) run and classified the
+    same way at every N_b, its classes shown beside the paper's and ``model``'s."""
     start = time.perf_counter()
     out = Path(out_dir)
     charts_of = SENSITIVITY if sensitivity is None else sensitivity
     check_reproduction(model, n_balls, duration=duration, transient=transient,
                        revolutions=revolutions, sensitivity=charts_of)
+    if calibrated is not None:
+        check_reproduction(calibrated, n_balls, duration=duration, transient=transient,
+                           sensitivity={})
     (out / "runs").mkdir(parents=True, exist_ok=True)
     mdl = load_model(model)
     f_max = series_f_max(mdl, n_balls)  # one frequency range for every N_b's figure
@@ -189,6 +199,13 @@ def reproduce(
         if log:
             log(f"N_b = {nb}: {verdict.nature} (λ1 = {rows[-1].lyapunov:.3g} ± "
                 f"{rows[-1].ci95:.2g} 1/s)")
+    beside = {}
+    for nb in n_balls if calibrated is not None else ():
+        verdict = case_verdict(simulate(calibrated, nb, duration=duration,
+                                        transient=transient))
+        beside[nb] = (verdict.nature, verdict.largest_exponent, verdict.ci95)
+        if log:
+            log(f"N_b = {nb}, {calibrated}: {verdict.nature}")
     charts = {}
     setting = Setting(model, None, {}, transient, revolutions)
     for name, values in charts_of.items():
@@ -200,5 +217,5 @@ def reproduce(
                         {"duration": duration, "transient": transient,
                          "revolutions": revolutions, "n_balls": list(n_balls),
                          "quick": bool(quick)},
-                        time.perf_counter() - start)
+                        time.perf_counter() - start, calibrated, beside)
 
