@@ -200,6 +200,25 @@ def check_branch_of(system: System, branch: xr.Dataset, parameter: str, field: s
                          f"give one continued in '{parameter}' (the --param)")
 
 
+def check_sides(system: System, sides: Sequence[Range], field: str) -> None:
+    """``InputError`` (naming ``field``) when a side of initial states reaches a displacement
+    beyond the blow-up limit of ``system`` (``integrate.simulate.blow_up_limit``: 1000
+    clearances or a quarter ball): such a state has blown up before its first step (±1e300
+    m was mapped as 'diverged')."""
+    from analysis.integrate.simulate import blow_up_limit
+
+    limit = blow_up_limit(system.model, system.parameters)
+    centres = {i for pair in system.model.centre_indices() for i in pair if i is not None}
+    for side in sides:
+        index = side.check_state(system, field)
+        reach = max(abs(side.low), abs(side.high))
+        if index in centres and reach > limit:
+            raise InputError(f"{side.field or field}: {side.coordinate} from {side.low:g} to "
+                             f"{side.high:g} m reaches beyond the blow-up limit of {limit:.3g} "
+                             f"m (a state there has diverged before it starts); give a side "
+                             f"within ±{limit:.3g} m")
+
+
 def study_cost(system: System, members: int, *, workers: int | None = None,
                period: str | None = None, dt: float | None = None,
                options: MapperOptions | None = None, block: int | None = None,
@@ -263,6 +282,7 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
     check_count("x", x.num)
     check_count("y", y.num)
     check_pair(system, x, y)
+    check_sides(system, (x, y), "x, y")
     try:
         study = check_study(system, x.num * y.num, period, dt, options, label_options, block,
                             mapper, device, feature_options)  # no grid allocated
@@ -287,6 +307,7 @@ def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
     check_count("samples", samples)
     errors.check_count("seed", seed, 0, MAX_SEED)
     box.check(system)
+    check_sides(system, box.sides, "box")
     study = check_study(system, samples, period, dt, options, label_options, block, mapper,
                         device, feature_options)
     return study_definition(study, "attractors", block, box=box.text, samples=samples,
@@ -310,6 +331,7 @@ def check_continuation(system: System, parameter: str, values: Sequence[float], 
     errors.check_count("seed", seed, 0, MAX_SEED)
     check_value_count("param", len(values))
     box.check(system)
+    check_sides(system, box.sides, "box")
     settings = (period, dt, options, label_options, block, mapper, device, feature_options)
     study = check_study(system, samples + 16, *settings)
     for value in values:
