@@ -379,7 +379,7 @@ BAD_INPUTS = [
     (["--point", "LP", "--param", "speed_rpm", "--to", "12"],
      "error: param: 'speed_rpm' is the branch's own parameter"),
     (["--point", "LP", "--param", "forcing_amplitude", "--to", str(F_START)],
-     "error: stop: must differ from the branch's forcing_amplitude = 0.5"),
+     "error: stop: must differ from start"),
 ]
 """(arguments, start of the one error line): unknown --point, a point the branch lacks,
 unknown --param, the branch's own parameter, --to equal to the start value."""

@@ -489,6 +489,7 @@ def continue_curve(branch: xr.Dataset | str | Path, point: str, *, param: str, s
     options = options_with(options, CURVE_OPTIONS, ds=ds, ds_min=ds_min, ds_max=ds_max,
                            max_points=max_points, tol=tol)
     tol = options.tol
+    ContinuedRange.finite_stop(stop)
     source = "" if isinstance(branch, xr.Dataset) else str(branch)
     if not isinstance(branch, xr.Dataset):
         from analysis.io import open_result

@@ -110,10 +110,12 @@ def test_max_points_and_ds_min_end_with_their_status():
 @pytest.mark.parametrize(("param", "start", "stop", "message"), [
     ("sped", 1.0, 2.0, "param: 'sped' is not a parameter of 'balanced-rotor'; choose one of "),
     ("speed_rpm", 7000.0, 7000.0, "stop: must differ from start"),
-    ("speed_rpm", 7000.0, float("nan"), "stop: must be a finite number, got nan"),
+    ("speed_rpm", 7000.0, float("nan"), "speed_rpm: must be in [0, 1e+06] rpm, got nan"),
     ("speed_rpm", 7000.0, -5.0, "speed_rpm: must be in [0, 1e+06] rpm, got -5.0"),
 ])
 def test_the_range_is_checked_once_with_one_message_each(param, start, stop, message):
     with pytest.raises(InputError) as err:
         ContinuedRange.check(load_model("balanced-rotor"), param, start, stop)
     assert str(err.value).startswith(message)
+    with pytest.raises(InputError, match=r"^stop: must be a finite number, got nan$"):
+        ContinuedRange.finite_stop(float("nan"))

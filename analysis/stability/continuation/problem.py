@@ -105,8 +105,8 @@ class BranchProblem(Protocol):
 @dataclass(frozen=True)
 class ContinuedRange:
     """A runtime parameter ``param`` of ``model`` continued from ``start`` towards ``stop``
-    (its unit), checked once for every family (``check``): the parameter exists, both ends
-    are finite and differ, and ``stop`` is in the parameter's allowed range."""
+    (its unit), checked once for every family (``check``): the parameter exists, the ends
+    differ, and ``stop`` is a finite number in the parameter's allowed range."""
 
     model: Model
     param: str
@@ -123,12 +123,18 @@ class ContinuedRange:
                 f"is not a parameter of '{model.name}'"
             choices = ", ".join(n for n in model.parameter_names if n != exclude)
             raise InputError(f"param: '{param}' {why}; choose one of {choices}")
-        if not math.isfinite(stop):
-            raise InputError(f"stop: must be a finite number, got {stop!r}")
         if start == stop:
             raise InputError("stop: must differ from start")
-        model.parameters({param: stop})  # the range check of the end value
-        return cls(model, param, float(start), float(stop))
+        model.parameters({param: stop})  # the range check of the end value (NaN too)
+        return cls(model, param, float(start), cls.finite_stop(stop))
+
+    @staticmethod
+    def finite_stop(stop: float) -> float:
+        """``stop`` as a float, or ``InputError`` when it is not a finite number (the check a
+        caller may make before anything else, e.g. before opening a branch file)."""
+        if not (isinstance(stop, (int, float)) and math.isfinite(stop)):
+            raise InputError(f"stop: must be a finite number, got {stop!r}")
+        return float(stop)
 
     @property
     def index(self) -> int:
