@@ -381,8 +381,12 @@ class Model:
             if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or \
                     not b.fewest <= n <= b.most:
                 label = "n_balls" if len(bearings) == 1 else f"n_balls[{b.name}]"
+                why = (f"at most {b.most} balls fit the geometry"
+                       if balls_that_fit(self.defaults, b.name) is not None else
+                       "the model gives no ball and pitch diameters, so whether they fit "
+                       "cannot be checked")
                 raise InputError(f"{label}: must be an integer in [{b.fewest}, {b.most}] "
-                                 f"(at most {b.most} balls fit the geometry), got {n!r}")
+                                 f"({why}), got {n!r}")
         return Balls.of(self, counts)
 
     def structure_attrs(self, structure: Structure) -> dict[str, int]:
@@ -562,7 +566,9 @@ class System:
         spec's initial state) and parameter overrides by name."""
         m = load_model(model) if isinstance(model, (str, Path)) else model
         z = m.initial_state if state is None else m.check_state(state)
-        return cls(m, m.structure(n_balls), dict(m.parameters(parameters)), z)
+        structure, values = m.structure(n_balls), dict(m.parameters(parameters))
+        _check_fit(m, structure, values)
+        return cls(m, structure, values, z)
 
     def replace(self, n_balls: BallCounts = None, state: Any = None,
                 **parameters: float) -> System:
@@ -570,7 +576,9 @@ class System:
         merged = {**self.parameters, **parameters}
         structure = self.structure if n_balls is None else self.model.structure(n_balls)
         z = self.state if state is None else self.model.check_state(state)
-        return System(self.model, structure, self.model.parameters(merged), z)
+        values = self.model.parameters(merged)
+        _check_fit(self.model, structure, values)
+        return System(self.model, structure, values, z)
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -591,6 +599,35 @@ class System:
 
     def frequencies(self) -> Frequencies:
         return self.model.frequencies(self.structure, dict(self.parameters))
+
+
+def balls_that_fit(values: Mapping[str, float], bearing: str) -> tuple[int, float, float] | None:
+    """(balls that fit, ball diameter, pitch diameter) of ``bearing`` with the parameter
+    ``values`` (m; ``<name>_<bearing>`` before ``<name>``; the pitch diameter from the races
+    when it is not given): floor(π / asin(D_b / D_m)); None without the diameters."""
+    def get(name: str) -> float | None:
+        value = values.get(f"{name}_{bearing}", values.get(name))
+        return None if value is None else float(value)
+
+    d_b, d_m = get("ball_diameter"), get("pitch_diameter")
+    if d_m is None and None not in (races := (get("inner_race_diameter"),
+                                              get("outer_race_diameter"))):
+        d_m = sum(races) / 2  # type: ignore[arg-type]
+    if d_b is None or d_m is None or not 0 < d_b < d_m:
+        return None
+    return math.floor(math.pi / math.asin(d_b / d_m)), d_b, d_m
+
+
+def _check_fit(model: Model, structure: Structure, values: Mapping[str, float]) -> None:
+    """Raise InputError when the balls of a bearing do not fit its pitch circle with these
+    values (a ``--set ball_diameter=…`` or ``pitch_diameter`` the generated range does not
+    know)."""
+    for name, n in zip(model.bearing_names, structure, strict=True):
+        fit = balls_that_fit(values, name)
+        if fit is not None and n > fit[0]:
+            label = "n_balls" if len(structure) == 1 else f"n_balls[{name}]"
+            raise InputError(f"{label}: must be at most {fit[0]}: {fit[0]} balls of "
+                             f"{fit[1]:g} m fit on the pitch circle ({fit[2]:g} m), got {n}")
 
 
 def as_system(target: System | Model | str | Path, n_balls: BallCounts = None,
