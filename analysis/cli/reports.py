@@ -84,7 +84,7 @@ def run(
     """The default job: the paper's case for N_b = 6…10 (netCDF + figure per N_b, peak table)."""
     from analysis.integrate.simulate import check_run
     from analysis.reports.paper import PAPER_N_BALLS, check_one_bearing
-    from analysis.reports.report import peak_table_markdown, run_paper_case
+    from analysis.reports.report import explanation_note, peak_table_markdown, run_paper_case
 
     params = parse_sets(sets)
     check_out_dir(out_dir)
@@ -94,7 +94,7 @@ def run(
         check_run(model, nb, duration=duration, transient=transient, **params)
     results = run_paper_case(out_dir, model, n_balls or PAPER_N_BALLS, duration, transient,
                              progress=typer.echo, **params)
-    typer.echo("\n" + peak_table_markdown(results))
+    typer.echo("\n" + peak_table_markdown(results) + explanation_note(results))
     typer.echo(f"results in {out_dir}/ (nb<N>.nc, nb<N>.png, peaks.md, peaks.json)")
 
 
