@@ -14,6 +14,11 @@ units of a plain compiled RK4 run.
 
     python benchmarks/bench_chart.py [--speeds 200] [--workers N] [--executor processes|dask]
                                      [--reference-points 10] [--repeat 3] [--no-chart]
+                                     [--device cpu|gpu|auto]
+
+``--device gpu`` runs the chart's points on the GPU (one process; ``--reference-points 0``
+skips the serial reference): issue 33's 160 000-point chart is ``--speeds 20000 --device gpu
+--reference-points 0`` (target <= 30 s on an H200).
                                      [--save chart.nc]
 
 Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
@@ -126,6 +131,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--executor", default="processes")
     parser.add_argument("--reference-points", type=int, default=10)
+    parser.add_argument("--device", default="cpu", help="where the chart's points run")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-chart", action="store_true",
                         help="the serial reference only")
@@ -136,9 +142,18 @@ def main() -> None:
     y = Axis.parse("n_balls:5:12")
     full_x = Axis.parse("speed_rpm:1000:10000:200")
 
-    ref = serial_reference(full_x, y, args.reference_points, args.repeat)
+    if args.reference_points > 0:
+        report_reference(serial_reference(full_x, y, args.reference_points, args.repeat),
+                         args.repeat)
+    if args.no_chart:
+        return
+    chart_run(args, x, y)
+
+
+def report_reference(ref: dict, repeat: int) -> None:
+    """Print the serial reference's table and its verdict."""
     print(f"serial reference, {len(ref['rows'])} pairs of neighbouring points of the "
-          f"1600-point grid (median of {args.repeat} each; times per point):")
+          f"1600-point grid (median of {repeat} each; times per point):")
     print("| N_b | speed_rpm | simulated (s) | chart point, kernel (s) | alone (s) | "
           "compiled RK4, states only (s) | ratio | ratio alone |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -150,16 +165,19 @@ def main() -> None:
           f"{ref['rk4']:.4f} s for {ref['simulated']:.3f} s simulated; ratio "
           f"{ref['ratio']:.2f} (alone {ref['ratio_alone']:.2f}; target <= {RATIO_TARGET}: "
           f"{verdict})")
-    if args.no_chart:
-        return
 
+
+def chart_run(args: argparse.Namespace, x: Axis, y: Axis) -> None:
+    """The chart on ``args.workers`` workers (or the GPU), timed, with its verdict."""
+    if args.device != "cpu":
+        args.executor, args.workers = "serial", 1
     executor = make_executor(args.executor, args.workers)
     cpu_before = cpu_seconds()
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         try:
             chart = stability_chart(SETTING, x, y, Path(tmp) / "chart.nc", executor=executor,
-                                    progress=ProgressReporter("chart"))
+                                    progress=ProgressReporter("chart"), device=args.device)
         finally:
             executor.close()
         wall = time.perf_counter() - start
