@@ -226,3 +226,16 @@ def test_the_gpu_labels_states_as_the_cores_do(rotor):
     a, b = cpu.find(states), gpu.find(states)
     assert [x.nature for x in a.attractors] == [x.nature for x in b.attractors]
     np.testing.assert_array_equal(a.labels, b.labels)
+
+
+def test_distinct_rows_are_numpys_by_a_key_or_row_wise_past_2_to_the_62():
+    from analysis.stability.attractors.featurizing import distinct_rows
+
+    rng = np.random.default_rng(4)
+    small = rng.integers(-5, 5, size=(500, 8))
+    wide = np.array([[0] * 8, [2**40, 5, 2**30, 0, 0, 0, 0, 1], [0] * 8])
+    for cells in (small, wide):
+        unique, inverse = distinct_rows(cells)
+        expect, expect_inverse = np.unique(cells, axis=0, return_inverse=True)
+        np.testing.assert_array_equal(unique, expect)
+        np.testing.assert_array_equal(inverse, expect_inverse.ravel())

@@ -207,8 +207,15 @@ def recorder(smap: StroboscopicMap, device: str, block: int,
 def features(sections: np.ndarray, scale: Scale) -> np.ndarray:
     """(M, 2n) features of section points (M, K, n; SI): the centroid and the extent
     (max − min) of each coordinate, in orbit sizes (``scale``)."""
-    z = sections / scale.size
-    return np.concatenate([z.mean(axis=1), np.ptp(z, axis=1)], axis=1)
+    first = sections[:, 0]
+    low, high, total = first.copy(), first.copy(), first.copy()
+    for k in range(1, sections.shape[1]):  # one section at a time: no (M, K, n) temporaries
+        point = sections[:, k]
+        np.minimum(low, point, out=low)
+        np.maximum(high, point, out=high)
+        total += point
+    return np.concatenate([total / sections.shape[1] / scale.size, (high - low) / scale.size],
+                          axis=1)
 
 
 def periods(sections: np.ndarray, scale: Scale, options: FeatureOptions) -> np.ndarray:
@@ -228,13 +235,28 @@ def touching_groups(cells: np.ndarray) -> np.ndarray:
     the order of their first row. Memory: the distinct cells and their touching pairs."""
     if not len(cells):
         return np.zeros(0, dtype=np.int64)
-    unique, inverse = np.unique(cells, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
+    unique, inverse = distinct_rows(cells)
     pairs = cKDTree(unique).query_pairs(r=1.0, p=np.inf, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                        shape=(len(unique), len(unique)))
     _, component = connected_components(graph, directed=False)
     return by_first(component[inverse])
+
+
+def distinct_rows(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(cells, axis=0, return_inverse=True)`` (rows in lexicographic order), by
+    one int64 key per row when the cells' box has fewer than 2⁶² cells (a 1-D sort: 10⁶
+    rows in a tenth of a second, against seconds for the row-wise one)."""
+    low = cells.min(axis=0)
+    span = [int(v) for v in cells.max(axis=0) - low + 1]
+    if np.prod(span, dtype=object) >= 2**62:  # exact (Python integers)
+        unique, inverse = np.unique(cells, axis=0, return_inverse=True)
+        return unique, inverse.ravel()
+    weights = np.array([int(np.prod(span[i + 1:], dtype=object)) for i in range(len(span))],
+                       dtype=np.int64)
+    key = (cells - low) @ weights
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    return cells[first], inverse.ravel()
 
 
 def by_first(groups: np.ndarray) -> np.ndarray:
@@ -284,7 +306,7 @@ class FeaturizingMapper:
             i = int(ok[members[0]])
             label = g + 1
             self.found[label] = Found(
-                label=label, cells={row.tobytes() for row in np.unique(cells[members], axis=0)},
+                label=label, cells={row.tobytes() for row in distinct_rows(cells[members])[0]},
                 points=list(run.sections[i]), finder=i,
                 finder_state=np.append(states[i], 0.0), found_step=run.steps,
                 last_state=np.append(run.final[i], float(run.steps)))
