@@ -38,6 +38,7 @@ _API = {
     "SpeedProfile": "analysis.integrate.speed_profile",
     "waterfall": "analysis.signal.waterfall", "order_spectrum": "analysis.signal.orders",
     "angle_resample": "analysis.signal.orders",
+    "calibrate": "analysis.inference.abc",
 }
 __all__ = sorted(_API)
 
