@@ -34,7 +34,7 @@ DEFAULT_N_BALLS = (9,)
 SIMULATION = {'dt': 2e-06, 'duration': 1.2, 'transient': 0.2}
 INITIAL_STATE = (0.0, 0.0, 1e-05, 0.0, 0.0, 0.0, 0.0, 0.0)
 TERMS = (
-    'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} per ball (paper Eqs. 3–6); cage speed ω_cage = ω/2·(1 − D_b/D_m) (rolling without slip)',
+    'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^(3/2) per ball (paper Eqs. 3–6); cage speed ω_cage = ω/2·(1 − D_b/D_m) (rolling without slip)',
     "localized defect on ball 1, at spin angle defect_angle + ω_spin t: half-sine offset h_i(t) of the ball's deflection (δ_i → δ_i − h_i inside the contact law), depth min(defect_depth, the depth a ball reaches in a pit of defect_length) (modelgen/terms/defects.py)",
     'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',

@@ -33,7 +33,7 @@ DEFAULT_N_BALLS = (13,)
 SIMULATION = {'dt': 5e-06, 'duration': 1.2, 'transient': 0.2}
 INITIAL_STATE = (1.5e-05, 0.0, 0.0, 0.0)
 TERMS = (
-    'line contact of rollers with clearance, load K·max(0, x cos θ_i + y sin θ_i − γ_0)^{10/9} per roller (Palmgren); cage speed ω_cage = ω/2·(1 − D_b/D_m) (rolling without slip); K = 2^(−10/9)·K_c, K_c = 8.06e4 l^(8/9) N/mm^(10/9) per roller–race contact (Palmgren; l = roller_length; modelgen/terms/line_contact.py)',
+    'line contact of rollers with clearance, load K·max(0, x cos θ_i + y sin θ_i − γ_0)^(10/9) per roller (Palmgren); cage speed ω_cage = ω/2·(1 − D_b/D_m) (rolling without slip); K = 2^(−10/9)·K_c, K_c = 8.06e4 l^(8/9) N/mm^(10/9) per roller–race contact (Palmgren; l = roller_length; modelgen/terms/line_contact.py)',
     'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',
     'rotating unbalance P_u·(cos ωt, sin ωt)',

@@ -33,7 +33,7 @@ DEFAULT_N_BALLS = (6,)
 SIMULATION = {'dt': 1e-05, 'duration': 3.0, 'transient': 1.0}
 INITIAL_STATE = (1e-06, 1e-06, 0.0, 0.0)
 TERMS = (
-    'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} per ball (paper Eqs. 3–6); cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1)',
+    'Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^(3/2) per ball (paper Eqs. 3–6); cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1)',
     'centrifugal force F_c = ½ m_b D_m ω_cage² (Harris), m_b = ρ_b π D_b³/6, relieving the inner-race load of balls in contact only (loaded zone)',
     'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',

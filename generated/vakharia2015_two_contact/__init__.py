@@ -33,7 +33,7 @@ DEFAULT_N_BALLS = (6,)
 SIMULATION = {'dt': 1e-05, 'duration': 3.0, 'transient': 1.0}
 INITIAL_STATE = (1e-06, 1e-06, 0.0, 0.0)
 TERMS = (
-    'two-contact balls: inner and outer race contacts in series, δ_i + δ_o = x cos θ_i + y sin θ_i − γ_0, K_o δ_o^{3/2} = K_i δ_i^{3/2} + F_c, load Q_i = K_i δ_i^{3/2} on the rotor; cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1); K_i, K_o from Hertz point contact (groove conformities f_i, f_o, E, ν; modelgen/hertz.py); F_c = ½ m_b D_m ω_cage² (Harris), m_b = ρ_b π D_b³/6; Q_i solved per ball by 4 Newton steps',
+    'two-contact balls: inner and outer race contacts in series, δ_i + δ_o = x cos θ_i + y sin θ_i − γ_0, K_o δ_o^(3/2) = K_i δ_i^(3/2) + F_c, load Q_i = K_i δ_i^(3/2) on the rotor; cage speed ω_cage = ω·D_i/(D_i + D_o) (paper Eq. 1); K_i, K_o from Hertz point contact (groove conformities f_i, f_o, E, ν; modelgen/hertz.py); F_c = ½ m_b D_m ω_cage² (Harris), m_b = ρ_b π D_b³/6; Q_i solved per ball by 4 Newton steps',
     'linear viscous damping −c·(ẋ, ẏ)',
     'constant radial load P_r in +x',
     'rotating unbalance P_u·(cos ωt, sin ωt)',

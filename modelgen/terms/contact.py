@@ -94,7 +94,7 @@ class HertzContact(Term):
     needs: ClassVar[tuple[str, ...]] = ("speed_rpm",)
     attaches: ClassVar[tuple[Owner, ...]] = ("bearing",)
     summary: ClassVar[str] = (
-        "Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^{3/2} "
+        "Hertz contact with clearance, load k·max(0, x cos θ_i + y sin θ_i − γ_0)^(3/2) "
         "per ball (paper Eqs. 3–6)"
     )
 

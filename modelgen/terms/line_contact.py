@@ -52,7 +52,7 @@ class LineContact(HertzContact):
 
     summary: ClassVar[str] = (
         "line contact of rollers with clearance, load K·max(0, x cos θ_i + y sin θ_i − γ_0)"
-        "^{10/9} per roller (Palmgren)"
+        "^(10/9) per roller (Palmgren)"
     )
 
     def required_parameters(self) -> tuple[str, ...]:

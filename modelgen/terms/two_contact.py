@@ -101,8 +101,8 @@ class TwoContact(HertzContact):
 
     summary: ClassVar[str] = (
         "two-contact balls: inner and outer race contacts in series, δ_i + δ_o = "
-        "x cos θ_i + y sin θ_i − γ_0, K_o δ_o^{3/2} = K_i δ_i^{3/2} + F_c, load Q_i = "
-        "K_i δ_i^{3/2} on the rotor"
+        "x cos θ_i + y sin θ_i − γ_0, K_o δ_o^(3/2) = K_i δ_i^(3/2) + F_c, load Q_i = "
+        "K_i δ_i^(3/2) on the rotor"
     )
 
     def required_parameters(self) -> tuple[str, ...]:
