@@ -291,7 +291,7 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
         head = f"samples: {x.num * y.num} initial states"
         if not text.startswith(head):
             raise
-        raise InputError(f"x, y: a {x.num} x {y.num} grid ({x.num * y.num} initial states)"
+        raise InputError(f"x, y: a {x.num} x {y.num} grid: {x.num * y.num} initial states"
                          + text[len(head):].replace("use fewer", "use fewer grid values")
                          ) from None
     return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
