@@ -468,6 +468,9 @@ class CliCase:
     marks: tuple = field(default=())
     env: tuple[tuple[str, str], ...] = ()
     """Environment variables the command runs with (``BEARINGDYN_MODELS=…``)."""
+    fixed: tuple[str, ...] | None = None
+    """The corrected command, run in the same folder after the refusal: it must succeed
+    (nothing the refusal left may block it)."""
 
     def shown(self) -> str:
         prefix = "".join(f"{k}={v} " for k, v in self.env)
@@ -1248,6 +1251,110 @@ CLI_CASES += _cases("envelopes and noise", ("spectrum", *RUN), [
      ["--band: 'resonance' needs a structural resonance of the model", "this model has none"]),
 ], setup=_run_file())
 
+THIRD = "third round: judged before any store, work or allocation"
+ATTR = ("attractors", "vakharia2015", "--samples", "4", "--box", "x:-1e-6:1e-6", "-o", "a.nc",
+        "--max-periods", "40", "--revisits", "5", "--hits", "2", "--executor", "serial",
+        "--quiet")
+TORUS = ("torus", "vakharia2015", "--frequencies", "shaft,vc", "--harmonics", "4,2", "-o",
+         "t.nc", "--run", "tr.nc")
+
+
+def _speed_table(rows: int) -> Callable[[Path], None]:
+    return _spec_file("table.csv", "t_s,speed_rpm\n" + "".join(
+        f"{0.001 * i:g},{1000 + i}\n" for i in range(rows)))
+
+
+def _branch_of(model: str) -> Callable[[Path], None]:
+    """Setup: ``b.nc``, the smallest file ``attractors --branch`` takes as a branch, of
+    ``model``."""
+    def setup(folder: Path) -> None:
+        ds = xr.Dataset({"special": ("point", np.array(["", ""], dtype=object)),
+                         "speed_rpm": ("point", [5000.0, 5500.0])},
+                        attrs={"param": "speed_rpm", "model": model, "spec_sha256": "0" * 64})
+        ds.to_netcdf(folder / "b.nc", engine="h5netcdf")
+    return setup
+
+
+def _tampered_kind(folder: Path) -> None:
+    """Setup: ``run.nc``, a run whose ``kind`` attribute was edited to ``chart``."""
+    (folder / "good.nc").write_bytes(_sample_run_bytes("good"))
+    ds = xr.load_dataset(folder / "good.nc", engine="h5netcdf")
+    (folder / "good.nc").unlink()
+    ds.assign_attrs(kind="chart").to_netcdf(folder / "run.nc", engine="h5netcdf")
+
+
+def _no_kind(folder: Path) -> None:
+    """Setup: ``r.nc``, a bearingdyn result (it names its model) without a kind attribute
+    and without times (a chart whose kind was removed)."""
+    xr.Dataset({"nature": ("speed_rpm", np.zeros(2))},
+               attrs={"model": "vakharia2015"}).to_netcdf(folder / "r.nc", engine="h5netcdf")
+
+
+CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
+                      fixed=row[6] if len(row) > 6 else None) for row in [
+    ("attractors-seed-negative", THIRD, "a negative seed (was an internal error that left "
+     "OUT.parts and then refused the corrected seed)", (*ATTR, "--seed", "-1"),
+     ("seed: must be a whole number in [0, 9223372036854775807], got -1",), None,
+     (*ATTR, "--seed", "1")),
+    ("attractors-seed-2-70", THIRD, "a seed of 2**70 (the same)",
+     (*ATTR, "--seed", str(2**70)),
+     (f"seed: must be a whole number in [0, 9223372036854775807], got {2**70}",), None,
+     (*ATTR, "--seed", "1")),
+    ("attractors-box-1e300", THIRD, "initial states of +-1e300 m (were mapped as "
+     "'diverged')", (*ATTR[:5], "x:-1e300:1e300", *ATTR[6:]),
+     ("--box: x from -1e+300 to 1e+300 m reaches beyond the blow-up limit",), None, ATTR),
+    ("attractors-param-count-1e9", THIRD, "a --param count of 1e9 (was allocated first)",
+     (*ATTR, "--param", "speed_rpm:5000:6000:1000000000"),
+     ("--param: must be a whole number in [1, 100000] (values of the parameter), got "
+      "1000000000",)),
+    ("basins-grid-names-axes", BLAME, "a basins grid too large for memory (named 'samples')",
+     ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:100000", "--y", "y:-1e-5:1e-5:100000",
+      "-o", "b.nc"),
+     ("x, y: a 100000 x 100000 grid: 10000000000 initial states would need about",)),
+    ("attractors-branch-other-model", "accepted without a word (now judged)", "a "
+     "continuation branch of another model given to --branch",
+     (*ATTR, "--param", "speed_rpm:5000:5500:2", "--branch", "b.nc"),
+     ("--branch 'b.nc': the branch is of model 'duffing'; give a branch of model "
+      "'vakharia2015'",), _branch_of("duffing")),
+    ("attractors-workers-serial", "accepted without a word (now judged)", "--workers with "
+     "--executor serial", (*ATTR, "--workers", "2"),
+     ("--workers: --executor serial runs on one worker",)),
+    ("spectrum-noise-seed-alone", "accepted without a word (now judged)", "--noise-seed "
+     "without --noise", ("spectrum", *RUN, "--noise-seed", "3"),
+     ("--noise-seed: only with --noise SNR_DB",), _run_file(),
+     ("spectrum", *RUN, "--noise-seed", "3", "--noise", "20")),
+    ("torus-run-duration-after", THIRD, "a --run length refused only after the torus was "
+     "solved and written", (*TORUS, "--duration", "1e9"),
+     ("--duration: 1e+09 s at dt = 1e-05 s gives 100000000000000 samples; give between 2 "
+      "and 5e7",)),
+    ("speed-table-folder", BLAME, "a speed table that is a folder (was 'not found')",
+     (*SIM_SHORT, "--speed-rpm", "table.csv"),
+     ("--speed-rpm: the speed table 'table.csv' is a folder",), _folder("table.csv")),
+    ("speed-table-fifo", BLAME, "a speed table that is a pipe (was 'not found')",
+     (*SIM_SHORT, "--speed-rpm", "table.csv"),
+     ("--speed-rpm: the speed table 'table.csv' is a pipe (FIFO), not a plain file",),
+     _fifo("table.csv")),
+    ("speed-table-device", BLAME, "a speed table that is a device (was 'not found')",
+     (*SIM_SHORT, "--speed-rpm", "/dev/null"),
+     ("--speed-rpm: the speed table '/dev/null' is a device or socket",)),
+    ("speed-table-rows", THIRD, "a speed table over the row limit (was read whole first)",
+     (*SIM_SHORT, "--speed-rpm", "table.csv"),
+     ("speed table 'table.csv': must have 2 to 257 rows, got more than 257",),
+     _speed_table(300)),
+    ("speed-table-bytes", THIRD, "a speed table of 1,000,000 rows (16 MB; was read whole)",
+     (*SIM_SHORT, "--speed-rpm", "table.csv"),
+     ("--speed-rpm: the speed table 'table.csv' is ", "bytes; at most 1048576 bytes"),
+     _speed_table(1_000_000)),
+    ("plot-kind-tampered", BLAME, "a run whose kind attribute was edited to 'chart' (was a "
+     "KeyError inside plot)", ("plot", *RUN, "-o", "p.png"),
+     ("result file: 'run.nc': attribute kind says 'chart', but the file lacks the chart's",),
+     _tampered_kind),
+    ("bode-no-kind", BLAME, "a Bode plot of a netCDF file without a kind (was called "
+     "\"kind 'run'\")", ("plot", "r.nc", "--bode", "-o", "p.png"),
+     ("result file: 'r.nc' is not a sweep's diagram (it has no kind attribute)",),
+     _no_kind),
+]]
+
 _GENERATED: dict[str, bytes] = {}
 
 
@@ -1345,6 +1452,16 @@ def test_bad_command(case: CliCase, cli_outcomes):
     assert out.after == out.before, "a refused command writes, removes and changes nothing"
 
 
+@pytest.mark.parametrize("case", [pytest.param(c, id=c.id) for c in CLI_CASES if c.fixed])
+def test_the_corrected_command_then_runs(case: CliCase, cli_outcomes):
+    """Nothing a refusal leaves (a store folder, a temporary) blocks the corrected command,
+    run in the same folder after it."""
+    out = cli_outcomes[case.id]
+    assert out.returncode == 2, out.stderr
+    res = run_cli(*case.fixed, cwd=out.folder, env=dict(case.env))
+    assert res.returncode == 0, res.stderr
+
+
 def test_spec_errors_through_the_command_are_one_line(cli_outcomes):
     """The spec cases above load in-process; these two show the command's side: exit 2."""
     for name in ("spec-unknown-term", "spec-hostile-expression"):
@@ -1433,7 +1550,7 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "models and specs", "runs as input", "stability", "continuation", "sweeps", "curves",
           "jobs", "checked before any write", "accepted without a word (now judged)",
           "messages that name the right thing", "judged, not failed inside",
-          "half-written and damaged generated code", RUN_UPS, "envelopes and noise",
+          "half-written and damaged generated code", RUN_UPS, "envelopes and noise", THIRD,
           "numerical failures"]
 
 
