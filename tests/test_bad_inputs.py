@@ -1283,6 +1283,24 @@ def _tampered_kind(folder: Path) -> None:
     ds.assign_attrs(kind="chart").to_netcdf(folder / "run.nc", engine="h5netcdf")
 
 
+def _ramp_run(folder: Path) -> None:
+    """Setup: ``run.nc``, a 0.3 s run-up of the paper's model from 3000 to 5000 rpm (made
+    once per session)."""
+    with _RUN_LOCK:
+        if "ramp" not in _RUN_CACHE:
+            import tempfile
+
+            from analysis.integrate.simulate import simulate
+            from analysis.integrate.speed_profile import SpeedProfile
+
+            ds = simulate("vakharia2015", 6, duration=0.3, transient=0.0,
+                          speed_rpm=SpeedProfile.ramp(3000.0, 5000.0))
+            with tempfile.TemporaryDirectory() as tmp:
+                ds.to_netcdf(Path(tmp) / "ramp.nc", engine="h5netcdf")
+                _RUN_CACHE["ramp"] = (Path(tmp) / "ramp.nc").read_bytes()
+    (folder / "run.nc").write_bytes(_RUN_CACHE["ramp"])
+
+
 def _no_kind(folder: Path) -> None:
     """Setup: ``r.nc``, a bearingdyn result (it names its model) without a kind attribute
     and without times (a chart whose kind was removed)."""
@@ -1327,6 +1345,10 @@ CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
      "solved and written", (*TORUS, "--duration", "1e9"),
      ("--duration: 1e+09 s at dt = 1e-05 s gives 100000000000000 samples; give between 2 "
       "and 5e7",)),
+    ("waterfall-samples-per-rev-1e9", THIRD, "--samples-per-rev of 1e9 (was allocated "
+     "first)", ("waterfall", *RUN, "--orders", "--samples-per-rev", "1000000000"),
+     ("--samples-per-rev: at most 2499999 over the record's 20 revolutions",), _ramp_run,
+     ("waterfall", *RUN, "--orders", "--samples-per-rev", "64")),
     ("speed-table-folder", BLAME, "a speed table that is a folder (was 'not found')",
      (*SIM_SHORT, "--speed-rpm", "table.csv"),
      ("--speed-rpm: the speed table 'table.csv' is a folder",), _folder("table.csv")),
