@@ -564,11 +564,23 @@ def model_cards() -> list[tuple[str, str, str]]:
     return cards
 
 
+NAME_CELL = re.compile(r"^\| (`[^`|]+`) \|", re.M)
+"""A table row whose first cell is one name in code (the parameters of a model card)."""
+
+
+def unbroken_names(text: str) -> str:
+    """``text`` with the name in the first cell of every table row kept on one line (a
+    span with ``white-space: nowrap``): a narrow column then wraps the other cells, never a
+    parameter name mid-word (``contact_stiff|ness``)."""
+    return NAME_CELL.sub(r'| <span class="bd-name" style="white-space: nowrap">\1</span> |',
+                         text)
+
+
 def model_page(folder: str, name: str, text: str) -> str:
     note = (f"\n\n---\n\n*This page is `generated/{folder}/MODEL.md`, written by "
             f"`bearingdyn generate` from `modelgen/specs/{name}.toml`; see also "
             f"[how to cite a generated model](../index.md#how-to-cite-a-generated-model).*\n")
-    return text.rstrip() + note
+    return unbroken_names(text.rstrip()) + note
 
 
 def models_index(cards: list[tuple[str, str, str]]) -> str:
