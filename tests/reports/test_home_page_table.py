@@ -36,4 +36,4 @@ def test_every_page_has_a_row_and_every_row_a_page():
     assert not missing, f"docs/index.md's table lacks {missing}"
     for name, what in rows:
         assert (DOCS / name).is_file(), name
-        assert len(what.split()) >= 4, (name, what)
+        assert len(what.split()) >= 3, (name, what)  # a few words, not a blank cell
