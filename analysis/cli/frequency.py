@@ -245,19 +245,13 @@ def torus(
     invariant circle of the F1-period map at --points cage phases (RK4 with its AD
     Jacobian; accurate on contact), continued with --param without λ1."""
     from analysis.frequency.methods import TORUS, Request, method_of
-    from analysis.integrate.checks import check_seconds
     from analysis.model import as_system
 
     chosen = method_of(TORUS, method, "--method")
     resolution = _resolution(chosen, harmonics=harmonics, points=points)
-    check_seconds("--duration", duration)
     system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
                                               **parse_sets(sets)), param, start, stop)
-    if run:  # the run's length judged before any torus is solved
-        from analysis.frequency.torus.dataset import check_torus_run
-
-        with option_names("duration", "dt"):
-            check_torus_run(system, duration, dt)
+    _check_run(system, run, duration, dt)
     with option_names(*API_FIELDS):
         request = Request(resolution, frequencies=frequencies, param=param, start=start,
                           stop=stop, max_points=max_points, ds_max=ds_max,
@@ -275,6 +269,19 @@ def torus(
             plot and (plot, lambda: torus_figure(data, duration, dt)),
             {"stop_report": str(data.attrs["stop_report"])}
             if "stop_report" in data.attrs else None, also)
+
+
+def _check_run(system, run: Path | None, duration: float, dt: float | None) -> None:
+    """--duration, and with --run the run's samples at --dt, judged before any torus is
+    solved."""
+    from analysis.integrate.checks import check_seconds
+
+    check_seconds("--duration", duration)
+    if run:
+        from analysis.frequency.torus.dataset import check_torus_run
+
+        with option_names("duration", "dt"):
+            check_torus_run(system, duration, dt)
 
 
 def _resolution(chosen, **given):
