@@ -30,7 +30,7 @@ two-pass run's bit for bit and non-chaotic points classify alike.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache
 
 import casadi as ca
@@ -53,7 +53,7 @@ from analysis.integrate.kernels import (
     run_members,
     section_step,
 )
-from analysis.integrate.plan import RunPlan
+from analysis.integrate.plan import RunPlan, check_times
 from analysis.integrate.simulate import (
     blow_up_limit,
     check_bounded,
@@ -341,21 +341,27 @@ class _KernelPoint:
 
 
 def _kernel_point(system: System, duration: float, transient: float, dt: float,
-                  section: str | None) -> _KernelPoint:
-    """Plan one point on the kernels: the run checked with the step ``dt`` (``RunPlan``),
-    then its step made the largest h <= dt dividing the section period, so the section
-    points fall on steps; the record's sections are those of t = k·T in [transient,
-    duration], the tangent's transient (``lyapunov.default_lengths``) whole sections before
-    them."""
+                  section: str | None, full_check: bool = True) -> _KernelPoint:
+    """Plan one point on the kernels: the run checked with the step ``dt`` (``RunPlan.make``;
+    without ``full_check`` only its times, as a grid's inner points after ``check_grid``
+    checked its corners: the RK4 stability check costs 50 ms a point), then its step made
+    the largest h <= dt dividing the section period, so the section points fall on steps;
+    the record's sections are those of t = k·T in [transient, duration], the tangent's
+    transient (``lyapunov.default_lengths``) whole sections before them."""
     model = system.model
-    checked = RunPlan.make(system, duration=duration, transient=transient, dt=dt,
-                           warn=lambda message: None)
-    section = section or default_section(completed_attrs(system, **checked.settings()))
-    period = period_of(completed_attrs(system, **checked.settings()), section)
+    if full_check:
+        checked = RunPlan.make(system, duration=duration, transient=transient, dt=dt,
+                               warn=lambda message: None)
+    else:  # times only: the grid's corners had the whole check (``grid.check_grid``)
+        check_times(duration, transient, dt)
+        checked = RunPlan(system, dt, duration, transient)
+        checked.check_kept()
+    attrs = completed_attrs(system, **checked.settings())
+    section = section or default_section(attrs)
+    period = period_of(attrs, section)
     h, every = section_step(period, dt)
-    run = RunPlan.make(system, duration=duration, transient=transient, dt=h,
-                       warn=lambda message: None)
-    attrs = completed_attrs(system, **run.settings())
+    run = replace(checked, dt=h)  # h <= dt passes the checks dt passed (none repeated)
+    attrs["dt"] = h
     first = -(-run.first // every)
     count = run.n_steps // every - first + 1
     averaged = count - count % BLOCKS
@@ -380,13 +386,16 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
 
     Against ``one_pass`` (interpolated sections, h = dt, renormalised every
     ``RENORM_EVERY`` steps) non-chaotic points keep their class, and λ1 stays within its
-    interval (``tests/integrate/test_kernel_chart.py``). Without a CPU build (an operation
+    interval (``tests/integrate/test_kernel_chart.py``). The first and last point get the
+    whole run check (``RunPlan.make``), the others their times only (a chart's grid is
+    checked at its corners first, ``grid.check_grid``). Without a CPU build (an operation
     the writer does not know, no compiler) the points run one by one (``one_pass``); on the
     GPU that is an error (``Unsupported``, ``CompileError``)."""
     results: list = [None] * len(systems)
     groups: dict[tuple, list[tuple[int, _KernelPoint]]] = {}
     for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):
-        point = _kernel_point(system, duration, transient, dt, section)
+        point = _kernel_point(system, duration, transient, dt, section,
+                              full_check=i in (0, len(systems) - 1))
         groups.setdefault((id(system.model), system.structure), []).append((i, point))
     for group in groups.values():
         points = [point for _, point in group]
