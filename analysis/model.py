@@ -478,8 +478,8 @@ class Model:
         ``values`` (default the spec's). Found by the model's structure, not by parameter
         names: e.g. the housing of the 6205 defect models (8 kHz).
 
-        >>> [round(f) for f in load_model("model_6205_outer_defect").support_resonances()]
-        [8000]
+        >>> round(load_model("model_6205_outer_defect").support_resonances()[0])
+        8000
         >>> load_model("vakharia2015").support_resonances()
         ()
         """
