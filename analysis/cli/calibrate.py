@@ -49,7 +49,8 @@ def calibrate(
         help="Shaft revolutions recorded per member (a multiple of 10).")] = 100,
     dt: Annotated[float | None, typer.Option(
         "--dt", help="Largest RK4 step, s (default: the spec's).")] = None,
-    block: Annotated[int, typer.Option(help="Parameter sets per executor task.")] = 64,
+    block: Annotated[int | None, typer.Option(
+        help="Parameter sets per executor task (default: 64 on cpu, a round on gpu).")] = None,
     executor: ExecutorOption = "serial",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,

@@ -314,16 +314,19 @@ def prepare(
     quantile: float = 0.5,
     settings: RunSettings | None = None,
     device: str = "cpu",
-    block: int = 64,
+    block: int | None = None,
 ) -> Problem:
     """Check every input of a calibration before any work (``InputError``, one line naming
     the field): the model, the target (``Target``, a built-in name, a TOML path), the
     priors (``Prior`` or ``NAME:LO:HI[:log]``), the options, the cost (refused above
-    ``MAX_CORE_HOURS``) and the RK4 step at every corner of the priors."""
+    ``MAX_CORE_HOURS``) and the RK4 step at every corner of the priors. ``block``: sets per
+    executor task (None: 64 on the CPU, a whole round on the GPU: one kernel call per row)."""
     from analysis.inference.priors import parse_prior
 
     mdl = load_model(model) if not isinstance(model, Model) else model
     pri = check_priors([p if isinstance(p, Prior) else parse_prior(p) for p in priors], mdl)
+    if block is None:
+        block = 64 if device == "cpu" else samples
     options = Options(samples, rounds, seed, quantile, block, device,
                       settings or RunSettings())
     options.check()
