@@ -41,7 +41,7 @@ from the worker (a Dask cluster on several machines needs a shared file system f
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -225,9 +225,13 @@ def ensemble_points(setting: Setting, systems: list[System],
         plans = []
         for i in indices:
             h, every = section_step(setting.period(systems[i]), dt)
-            run = setting.plan(systems[i]) if h == dt else RunPlan.make(
-                systems[i], duration=setting.seconds(systems[i]),
-                transient=setting.transient, dt=h, warn=lambda message: None)
+            if i in (indices[0], indices[-1]):  # the whole check (the grid's at its corners)
+                checked = setting.plan(systems[i], warn=lambda message: None)
+            else:  # times only: 50 ms a value saved
+                checked = RunPlan(systems[i], dt, setting.seconds(systems[i]),
+                                  setting.transient)
+                checked.check_kept()
+            run = replace(checked, dt=h)  # h <= dt passes what dt passed
             first = max(1, -(-run.first // every))
             plans.append((h, every, first, run.first, run.n_steps))
         schedule = Schedule([(f - 1) * e for _, e, f, *_ in plans], [e for _, e, *_ in plans],
