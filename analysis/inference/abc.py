@@ -91,7 +91,7 @@ class Options:
     def check(self) -> None:
         for name, value, low, high in (("samples", self.samples, 2, MAX_SAMPLES),
                                        ("rounds", self.rounds, 1, MAX_ROUNDS),
-                                       ("block", self.block, 1, 100_000),
+                                       ("block", self.block, 1, MAX_SAMPLES),
                                        ("seed", self.seed, 0, 2**32 - 1)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
                     not low <= value <= high:

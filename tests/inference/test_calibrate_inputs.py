@@ -113,3 +113,24 @@ def test_target_needs_an_observation():
     model = load_model("vakharia2015")
     with pytest.raises(InputError, match="observes nothing"):
         parse_target({"rows": [{"n_balls": 7}]}, model)
+
+
+def test_a_run_that_blew_up_is_the_class_diverged_and_a_miss():
+    """A member whose record is not finite (or that the kernel flags) is ``diverged``: kept
+    in the round and counted as a missed row, never dropped."""
+    import numpy as np
+
+    from analysis.inference import simulate as sim
+    from analysis.inference.abc import row_marks
+    from analysis.model import as_system
+
+    model = load_model("vakharia2015")
+    target = load_target("paper-table2", model)
+    system = as_system(model, 6)
+    samples = np.full((400, 4), 1e-6)
+    samples[300:] = np.nan
+    row = sim._member_row(system, samples, np.nan, np.nan, 1e-5, 30, 0, 9000,
+                          sim.RunSettings(), ("x", "y"))
+    assert row.nature == "diverged" and row.diverged_at == pytest.approx(0.09)
+    assert row_marks(target.rows[0], row) == (False, False)
+    assert class_matches(("diverged",), row.nature)
