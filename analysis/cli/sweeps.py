@@ -73,7 +73,8 @@ def sweep(
         raise InputError("--device: the member kernels run the values of a --no-follow sweep "
                          "(a followed sweep is one trajectory); add --no-follow")
     ex = executor_of(executor, workers, scheduler)
-    if not quiet:  # the cost, said before it is paid (a followed sweep: one run at a time)
+    if not quiet and direction in ("up", "down", "both"):  # the cost, said before it is
+        # paid (a followed sweep: one run at a time); another direction is refused below
         typer.echo("\n".join(grid_cost(setting, axis, workers=1 if follow else workers_of(ex),
                                         members_per_point=2 if direction == "both" else 1,
                                         lyapunov=False).lines()), err=True)
