@@ -109,14 +109,21 @@ def amplitude_spectrum(ds: xr.Dataset, var: str = "x", window: str = "hann") -> 
     )
 
 
+BEAT_BELOW = 0.25
+"""A difference kX − n·VC is named (a beat) only below this fraction of the shaft frequency:
+a slow modulation of two nearly equal lines, not any difference of two forcings."""
+
+
 def _combination_label(m: int, n: int, bearing: str = "", base: str = "X") -> str:
     shaft = base if abs(m) == 1 else f"{abs(m)}{base}"
     if n == 0:
         return shaft
     symbol = f"VC[{bearing}]" if bearing else "VC"
-    vc = symbol if n == 1 else f"{n}{symbol}"
+    vc = symbol if abs(n) == 1 else f"{abs(n)}{symbol}"
     if m == 0:
         return vc
+    if n < 0:  # the beat of a shaft harmonic just above a VC harmonic: 4X-VC
+        return f"{shaft}-{vc}"
     return f"{vc}{'+' if m > 0 else '-'}{shaft}"
 
 
@@ -124,20 +131,24 @@ def frequency_names(f_hz: float, shaft_hz: float, vc_hz: float | dict[str, float
                     tol_hz: float, max_shaft_order: int = 4, max_vc_order: int = 3,
                     base: str = "X") -> list[tuple[str, int, int, str | None]]:
     """Every name m·X + n·VC of ``f_hz`` within ``tol_hz`` (Hz), best first: the candidates
-    and their order are those of :func:`name_frequency`, which returns the first."""
+    and their order are those of :func:`name_frequency`, which returns the first.
+
+    n may be negative when m is positive for a beat: ``kX-nVC`` below ``BEAT_BELOW`` of the
+    shaft frequency, a shaft harmonic and a VC harmonic close to each other (at N_b = 10,
+    4X − VC = 1.1 Hz on the paper's model: a slow modulation, not a forcing of its own)."""
     vcs = vc_hz if isinstance(vc_hz, dict) else ({"": float(vc_hz)} if vc_hz else {})
     vcs = {name: float(f) for name, f in vcs.items() if f > 0}
     found: list[tuple[tuple, str, int, int, str | None]] = []
     for rank, (bearing, vc) in enumerate(vcs.items() or [("", 0.0)]):
-        for n in range(max_vc_order + 1 if vc > 0 else 1):
+        for n in range(-max_vc_order if vc > 0 else 0, max_vc_order + 1 if vc > 0 else 1):
             for m in range(-max_shaft_order, max_shaft_order + 1):
                 combination = m * shaft_hz + n * vc
-                if combination <= 0:
+                if combination <= 0 or (n < 0 and combination >= BEAT_BELOW * shaft_hz):
                     continue
                 distance = abs(f_hz - combination)
                 if distance > tol_hz:
                     continue
-                key = (abs(m) + n, distance, n, abs(m), rank if n else 0)
+                key = (abs(m) + abs(n), distance, abs(n), abs(m), rank if n else 0)
                 found.append((key, _combination_label(m, n, bearing, base), m, n,
                               (bearing or None) if n else None))
     found.sort(key=lambda item: item[0])
@@ -191,6 +202,14 @@ _TIE = 1e-6
 names it): exact coincidences such as 9·FTF = BPFO stay with the simpler name."""
 
 
+HALF_ORDERS = (1, 3, 5)
+"""Odd multiples of half a defect frequency named in the fault vocabulary (``BPFO/2``,
+``3BPFO/2``, ``5BPFO/2``; ``VC/2``, … without a defect): the lines of a period-2 response,
+the period doubling by which the paper's model goes to chaos (each ball pass alternates
+between two loads, so the envelope repeats every second pass). A half-order line is never
+a defect's own frequency; it says the response has doubled its period."""
+
+
 def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]],
                 tol_hz: float, max_harmonic: int = 4, max_sideband: int = 2,
                 defects: tuple[str, ...] | None = None) -> list[tuple[str, int | None]]:
@@ -206,6 +225,8 @@ def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]
     exist are the varying compliance VC (= BPFO for a fixed outer race) and its combinations
     with X, named ``VC``, ``2VC``, ``VC+X``, … and ``kX``. The nearest candidate names the
     line (distances equal within 1e-6 of the tolerance: the lower order n + m, k for kX).
+    The odd half orders ``F/2``, ``3F/2``, ``5F/2`` of each family (:data:`HALF_ORDERS`, of
+    order n + 1) name the lines of a period-2 response.
     Returns (label, shaft order k for a pure shaft harmonic else None).
     """
     found: list[tuple[tuple, str, int | None]] = []
@@ -239,6 +260,9 @@ def fault_names(f_hz: float, shaft_hz: float, faults: dict[str, dict[str, float]
             named, mods = [("BPFO", "VC")], [("X", shaft_hz)]
         reach = max_sideband * max(shaft_hz, ftf)
         for name, symbol in named:
+            for n in HALF_ORDERS:  # a period-2 response: BPFO/2, 3BPFO/2, 5BPFO/2
+                consider(n + 1, n * table[name] / 2, f"{'' if n == 1 else n}{symbol}{tag}/2",
+                         None)
             for n in orders(table[name], reach):
                 centre = n * table[name]
                 head = f"{'' if n == 1 else n}{symbol}{tag}"
