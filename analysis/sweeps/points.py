@@ -60,7 +60,12 @@ from analysis.integrate.simulate import (
     extremes,
 )
 from analysis.model import Model, Structure, System
-from analysis.provenance import completed_attrs, displacement_names, to_dataset
+from analysis.provenance import (
+    completed_attrs,
+    displacement_names,
+    state_variable_attrs,
+    to_dataset,
+)
 from analysis.signal.poincare import period_of, poincare_section
 from analysis.stability.classify import (
     Classification,
@@ -437,20 +442,35 @@ def _scalar_point(system: System, duration: float, transient: float, dt: float,
         return exc
 
 
+def _section_dataset(point: _KernelPoint, sections: np.ndarray) -> xr.Dataset:
+    """The Poincaré points of a kernel point as ``poincare_section`` returns them (the states
+    at t_k = k·T are samples, taken exactly): dimension k, coordinates k and t (s), the
+    state variables with their attrs, the run's attrs with ``section``,
+    ``section_period_s`` and ``phase`` 0; built directly (20 ms a point less)."""
+    model = point.system.model
+    k = np.arange(point.first, point.first + point.count)
+    attrs = {**point.attrs, "section": str(point.section), "section_period_s": point.period,
+             "phase": 0.0}
+    data = {name: ("k", sections[:, i], {key: str(value) for key, value
+                                         in state_variable_attrs(model, name).items()})
+            for i, name in enumerate(model.state_names)}
+    return xr.Dataset(data, coords={"k": ("k", k),
+                                    "t": ("k", (0.0 + k) * point.period, {"units": "s"})},
+                      attrs=attrs)
+
+
 def _kernel_result(point: _KernelPoint, sections: np.ndarray, logs: np.ndarray,
                    ptp_values: np.ndarray) -> PointResult:
-    """A kernel point's verdict: its section points (states at t = k·T, taken exactly by
-    ``poincare_section``), amplitudes and λ1 from the section logs."""
+    """A kernel point's verdict: its section points (states at t = k·T), amplitudes and
+    λ1 from the section logs."""
     model = point.system.model
-    times = (0.0 + np.arange(point.first, point.first + point.count)) * point.period
-    run = to_dataset(times, sections.T, point.attrs, model)
     interval = point.every * point.h
     lam = float(running_mean(logs[None, :], interval)[0, -1])
     ci = float(batch_ci95(logs[None, :], interval)[0])
     ptp = dict(zip(model.state_names, ptp_values.tolist(), strict=True))
-    points = poincare_section(run, point.section)
+    points = _section_dataset(point, sections)
     return PointResult(classify_section(points, ptp, lambda: (lam, ci)), lam, ci, ptp,
-                       displacement_names(run), points)
+                       displacement_names(point.attrs), points)
 
 
 def _chart_result(out: PointResult) -> dict:

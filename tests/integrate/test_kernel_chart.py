@@ -89,3 +89,24 @@ def test_section_step_divides_the_period():
         assert h <= dt and steps * h == pytest.approx(period, rel=1e-12)
         assert period / (steps - 1) > dt or steps == 1
     assert section_step(0.015, 1e-5) == (1e-5, 1500)  # whole steps: dt itself
+
+
+def test_section_points_are_poincare_section_of_the_samples():
+    """The points built directly equal ``poincare_section`` of the same states as a run
+    sampled at t = k·T (values, coordinates and attrs)."""
+    import xarray as xr
+
+    from analysis.provenance import to_dataset
+    from analysis.signal.poincare import poincare_section
+    from analysis.sweeps import points as P
+
+    setting = Setting("vakharia2015", None, {}, transient=0.1, samples=20, lyapunov=True)
+    for speed in (3000.0, 4321.0):
+        system = setting.system_at(n_balls=8, speed_rpm=speed)
+        point = P._kernel_point(system, setting.seconds(system), setting.transient,
+                                setting.step(), None)
+        states = np.random.default_rng(0).standard_normal((point.count, 4))
+        times = (0.0 + np.arange(point.first, point.first + point.count)) * point.period
+        want = poincare_section(to_dataset(times, states.T, point.attrs, system.model),
+                                point.section)
+        xr.testing.assert_identical(want, P._section_dataset(point, states))
