@@ -58,11 +58,9 @@ def simulate(
     from analysis.provenance import state_names
 
     params, profile = run_speed(speed_rpm, sets)
-    if profile is not None:
-        params["speed_rpm"] = profile
     start = time.perf_counter()
     options = dict(duration=duration, transient=transient, dt=dt, save_every=save_every,
-                   compiled=not no_compile, **params)
+                   compiled=not no_compile, speed_profile=profile, **params)
     balls = parse_n_balls(n_balls)
     if method == "rk4":
         simulate_to_file(model, output, balls, **options)

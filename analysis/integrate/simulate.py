@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.errors import Interrupt, SimulationError
+from analysis.errors import InputError, Interrupt, SimulationError
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.plan import Method, RunPlan
 from analysis.integrate.speed_profile import SpeedProfile
@@ -42,6 +42,7 @@ def simulate(
     rtol: float = 1e-10,
     atol: float = 1e-16,
     compiled: bool = True,
+    speed_profile: SpeedProfile | None = None,
     **parameters: float,
 ) -> xr.Dataset:
     """Integrate a system and return its motion after ``transient``.
@@ -61,19 +62,20 @@ def simulate(
         the system's, else the spec's; the paper's 1e-6 m for its model).
     compiled: run RK4 as compiled C (built once per model and balls, then cached; see
         ``analysis.integrate.compiled``); ``False``: the CasADi virtual machine (same results).
-    **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``;
-        ``speed_rpm`` may be a ``SpeedProfile`` (a run-up or coast-down:
-        ``SpeedProfile.ramp(1000, 10000)``, ``SpeedProfile.table(t, rpm)``,
-        ``read_table(path)``; see ``analysis.integrate.speed_profile``), recorded in the
-        attrs (``speed_profile``, ``speed_profile_t``, ``speed_profile_rpm``; ``speed_rpm``
-        and the frequencies are then those at t = 0). A constant profile is the constant
-        speed: the same run, bit for bit.
+    speed_profile: the speed the shaft follows, a field of the run (``RunPlan.profile``): a
+        run-up or coast-down (``SpeedProfile.ramp(1000, 10000)``,
+        ``SpeedProfile.table(t, rpm)``, ``read_table(path)``; see
+        ``analysis.integrate.speed_profile``), recorded in the attrs (``speed_profile``,
+        ``speed_profile_t``, ``speed_profile_rpm``; ``speed_rpm`` and the frequencies are
+        then those at t = 0). A constant profile is the constant speed: the same run, bit
+        for bit. ``speed_rpm=SpeedProfile(…)`` is read as this keyword.
+    **parameters: runtime parameter overrides, e.g. ``speed_rpm=5000, damping=100``.
 
     Returns an ``xarray.Dataset`` with one variable per state (units and meaning in its
     attributes) over ``t`` (s) and the run's provenance in ``attrs``.
     """
     run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
-                   method, save_every, rtol, atol, in_memory=True)
+                   method, save_every, rtol, atol, in_memory=True, profile=speed_profile)
     if method == "rk4":
         plan = run.plan
         states = _run_rk4(run.system, run.p, run.z0, plan.dt, save_every, plan.n_saved,
@@ -127,13 +129,17 @@ class _Run:
 
 
 def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt, method,
-             save_every, rtol, atol, in_memory: bool) -> _Run:
+             save_every, rtol, atol, in_memory: bool,
+             profile: SpeedProfile | None = None) -> _Run:
     """Every check of a run (``RunPlan.make``), before any step is taken; a speed
     profile's (``plan.check_profile``) after the plan's. A ``SpeedProfile`` given as
     ``speed_rpm`` is taken off the parameters: the profile is a field of the run plan."""
     parameters = dict(parameters)
-    profile = parameters.pop("speed_rpm") if isinstance(parameters.get("speed_rpm"),
-                                                        SpeedProfile) else None
+    if isinstance(parameters.get("speed_rpm"), SpeedProfile):
+        if profile is not None:
+            raise InputError("speed_rpm: a speed profile given twice (speed_rpm and "
+                             "speed_profile); give it once")
+        profile = parameters.pop("speed_rpm")
     system = as_system(system, n_balls, initial_state, **parameters)
     plan = RunPlan.make(system, duration=duration, transient=transient, dt=dt, method=method,
                         save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory,
@@ -149,11 +155,11 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
 def check_run(system: System | Model | str | Path, n_balls: BallCounts = None, *,
               duration: float | None = None, transient: float | None = None,
               dt: float | None = None, method: Method = "rk4", save_every: int = 1,
-              **parameters: float) -> None:
+              speed_profile: SpeedProfile | None = None, **parameters: float) -> None:
     """Every check ``simulate`` makes before a step is taken, and nothing else: a job of
     several runs (``bearingdyn run``) validates all of them before it writes anything."""
     _prepare(system, n_balls, None, parameters, duration, transient, dt, method, save_every,
-             1e-10, 1e-16, in_memory=False)
+             1e-10, 1e-16, in_memory=False, profile=speed_profile)
 
 
 def simulate_to_file(
@@ -168,6 +174,7 @@ def simulate_to_file(
     initial_state: Sequence[float] | None = None,
     compiled: bool = True,
     chunk: int = 100_000,
+    speed_profile: SpeedProfile | None = None,
     **parameters: float,
 ) -> Path:
     """``simulate`` with fixed-step RK4, streamed to the netCDF file ``path`` block by block:
@@ -179,7 +186,7 @@ def simulate_to_file(
     from analysis.io import atomic_write
 
     run = _prepare(system, n_balls, initial_state, parameters, duration, transient, dt,
-                   "rk4", save_every, 1e-10, 1e-16, in_memory=False)
+                   "rk4", save_every, 1e-10, 1e-16, in_memory=False, profile=speed_profile)
     model = run.system.model
     size = run.plan.n_saved + 1 - run.plan.first
 
