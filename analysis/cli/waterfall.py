@@ -93,4 +93,4 @@ def _print(wf, tracks: dict, spectrum, peaks) -> None:
                    f"{spectrum.attrs['order_bin']:.3g}):")
         for p in peaks:
             typer.echo(f"{'':>{width}} {p.order:8.4f} {p.amplitude:11.3e} {unit:<4} "
-                       f"{p.name or ''}")
+                       f"{p.text}")

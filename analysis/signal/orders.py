@@ -222,14 +222,40 @@ def order_spectrum(ds: xr.Dataset, var: str | None = None,
 @dataclass(frozen=True)
 class OrderPeak:
     """A peak of an order spectrum: its ``order``, ``amplitude`` (unit of the variable)
-    and the named line within ``tolerance`` orders (None: unnamed)."""
+    and the named line within ``tolerance`` orders (None: unnamed), with the named line's
+    own order ``named_order``, the spectrum's ``bin`` (orders) and every other name within
+    the tolerance (``also``)."""
 
     order: float
     amplitude: float
     name: str | None
+    named_order: float | None = None
+    bin: float = 0.0
+    also: tuple[str, ...] = ()
+
+    @property
+    def in_its_bin(self) -> bool:
+        """The peak is within half a bin of the named line's order: the name is the line's,
+        not only the nearest combination."""
+        return self.named_order is not None and \
+            bool(abs(self.order - self.named_order) <= 0.5 * self.bin)
+
+    @property
+    def text(self) -> str:
+        """The name as printed: ``VC+2X``, or ``within a bin of VC+2X (5.189)`` for a
+        peak off its line by more than half a bin (the record cannot tell them apart, nor
+        say they are one), with ``or`` and the other names within the tolerance."""
+        if self.name is None:
+            return ""
+        names = " or ".join((self.name, *self.also))
+        if self.in_its_bin or self.named_order is None:
+            return names
+        return f"within a bin of {names} ({self.named_order:.4g})"
 
     def as_dict(self) -> dict:
-        return {"order": self.order, "amplitude": self.amplitude, "name": self.name}
+        return {"order": self.order, "amplitude": self.amplitude, "name": self.name,
+                "named_order": self.named_order, "also": list(self.also),
+                "in_its_bin": self.in_its_bin, "text": self.text}
 
 
 def order_peaks(spectrum: xr.DataArray, max_peaks: int = 8,
@@ -263,10 +289,14 @@ def order_peaks(spectrum: xr.DataArray, max_peaks: int = 8,
             shift = 0.5 * (a - c) / (a - 2 * b + c)
             order += step * shift if abs(shift) <= 0.5 else 0.0
         names = frequency_names(order * shaft, shaft, vcs, tol_hz=tol * shaft)
-        name = names[0][0] if names else None
-        if name is None:
+        if names:
+            (name, m, n, bearing), also = names[0], tuple(other[0] for other in names[1:])
+            vc = vcs.get(bearing or "", 0.0)
+            named: float | None = (m * shaft + n * vc) / shaft
+        else:
             near = sorted((line for line in faults if abs(line.order - order) <= tol),
                           key=lambda line: abs(line.order - order))
-            name = near[0].name if near else None
-        out.append(OrderPeak(order, float(values[k]), name))
+            name, named = (near[0].name, near[0].order) if near else (None, None)
+            also = tuple(line.name for line in near[1:])
+        out.append(OrderPeak(order, float(values[k]), name, named, step, also))
     return out
