@@ -40,6 +40,8 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=2500)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--target", default="paper-table2",
+                        help="paper-table2, or paper-table2-torus (N_b = 10 read as a torus)")
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--executor", default="serial")
     parser.add_argument("--workers", type=int, default=None)
@@ -53,13 +55,14 @@ def main() -> None:
     args = parser.parse_args()
     samples = 64 if args.quick else args.samples
     block = args.block or (samples if args.device == "gpu" else 256)
-    problem = prepare("vakharia2015", "paper-table2", PRIORS, samples=samples,
+    problem = prepare("vakharia2015", args.target, PRIORS, samples=samples,
                       rounds=args.rounds, seed=args.seed, device=args.device, block=block,
                       settings=RunSettings(transient_revolutions=args.transient_revolutions,
                                            revolutions=args.revolutions))
     cost = problem.estimate()
     args.out.mkdir(parents=True, exist_ok=True)
-    output = args.out / "paper-calibration.nc"
+    stem = args.target.replace("paper-table2", "paper-calibration")
+    output = args.out / f"{stem}.nc"
     executor = make_executor(args.executor, args.workers)
     start = time.perf_counter()
     try:
@@ -70,11 +73,11 @@ def main() -> None:
         executor.close()
     wall = time.perf_counter() - start
     doc = to_json(cal, str(output))
-    (args.out / "paper-calibration.json").write_text(json.dumps(doc, indent=1))
+    (args.out / f"{stem}.json").write_text(json.dumps(doc, indent=1))
     from analysis.reports.calibration_plots import corner_figure
     from analysis.reports.plots import save_figure
 
-    save_figure(corner_figure(to_dataset(cal)), args.out / "paper-calibration.png")
+    save_figure(corner_figure(to_dataset(cal)), args.out / f"{stem}.png")
     runs = int(cost["simulations"])
     summary = {"sets": samples * args.rounds, "rows": len(problem.target.rows), "runs": runs,
                "wall_s": round(wall, 1), "runs_per_s": round(runs / wall, 2),

@@ -49,7 +49,7 @@ n >= 2 (the paper's "multi-orbit periodic" as a subharmonic orbit), ``periodic-<
 ``periodic-1``) exactly n; ``diverged``: the run blew up (a class of its own in
 calibration, never dropped)."""
 
-BUILT_IN = {"paper-table2": "paper-table2.toml"}
+BUILT_IN = {"paper-table2": "paper-table2.toml", "paper-table2-torus": "paper-table2-torus.toml"}
 """Targets shipped with the package (``analysis/inference/targets/``)."""
 
 MAX_SHAFT_ORDER, MAX_VC_ORDER = 4, 3
