@@ -30,7 +30,8 @@ from analysis.cli.common import (
 def calibrate(
     model: ModelArgument,
     target: Annotated[str, typer.Option(
-        "--target", help="A built-in target (paper-table2) or a target TOML file "
+        "--target", help="A built-in target (paper-table2, paper-table2-torus) or a target "
+                         "TOML file "
                          "(docs: Which parameters did the paper use?).")],
     prior: Annotated[list[str], typer.Option(
         "--prior", help="NAME:LO:HI or NAME:LO:HI:log, a calibrated parameter's uniform "
