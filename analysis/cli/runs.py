@@ -402,8 +402,21 @@ def _special_figure(option: str, result: Path, var: list[str] | None):
     typer.echo(f"full spectrum of {x} + i·{y} ({frequency_words(ds.attrs)}): "
                f"+ forward whirl, - backward")
     typer.echo(f"{'whirl':>8} {'frequency (Hz)':>15} {'amplitude':>14}  label")
+    unit = ds[x].attrs.get("units", "")
     for p in peaks:
-        unit = ds[x].attrs.get("units", "")
         typer.echo(f"{p.whirl:>8} {p.signed_frequency_hz:15.2f} {p.amplitude:10.3e} "
                    f"{unit:<4} {p.name}")
+    _echo_unnamed(ds, x, y, unit)
     return full_spectrum_figure(ds, x, y, peaks)
+
+
+def _echo_unnamed(ds, x: str, y: str, unit: str) -> None:
+    """The strongest unnamed lines of a full spectrum and why they have no name."""
+    from analysis.signal.full_spectrum import unnamed_lines, unnamed_reason
+
+    by_reason: dict[str, list[str]] = {}
+    for p in unnamed_lines(ds, x, y):
+        by_reason.setdefault(str(unnamed_reason(p, ds)), []).append(
+            f"{p.signed_frequency_hz:.2f} Hz ({p.amplitude:.3g} {unit})")
+    for reason, lines in by_reason.items():
+        typer.echo(f"strongest unnamed lines: {', '.join(lines)}: {reason}")

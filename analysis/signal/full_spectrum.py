@@ -160,5 +160,38 @@ def full_spectrum_peaks(ds: xr.Dataset, x: str | None = None, y: str | None = No
     return kept[:max_peaks]
 
 
-__all__ = ["WHIRLS", "WhirlPeak", "full_spectrum", "full_spectrum_peaks", "orbit_pair",
-           "whirl_components"]
+UNNAMED_SEARCH = 40
+"""Lines searched for the strongest unnamed ones (``unnamed_lines``)."""
+UNNAMED_WHY = ("no m·X + n·VC (|m| ≤ 4, n ≤ 3) lies within 1.5 bins: the broadband part "
+               "of a chaotic or quasi-periodic response (or a free vibration of the rotor on "
+               "its balls), which no forcing of the model names")
+"""Why a line of a full spectrum has no name."""
+
+
+def unnamed_lines(ds: xr.Dataset, x: str | None = None, y: str | None = None,
+                  count: int = 5, min_relative_height: float = 0.01) -> list[WhirlPeak]:
+    """The ``count`` strongest lines of the full spectrum (among its ``UNNAMED_SEARCH``
+    largest, each at least ``min_relative_height`` of the largest) that have no name: in a
+    chaotic spectrum the lines a reader asks about first. ``UNNAMED_WHY`` says why they have
+    none, ``unnamed_reason`` for one line."""
+    peaks = full_spectrum_peaks(ds, x, y, max_peaks=UNNAMED_SEARCH,
+                                min_relative_height=min_relative_height)
+    return [p for p in peaks if p.label is None][:count]
+
+
+def unnamed_reason(peak: Peak, ds: xr.Dataset) -> str | None:
+    """A word on why ``peak`` has no name (None when it has one): below the record's
+    resolution (under two bins, 2/T), or not a combination of the model's forcings
+    (``UNNAMED_WHY``)."""
+    if peak.label is not None:
+        return None
+    n = ds.sizes.get("t", 0)
+    span = n * time_step(ds) if n > 1 else 0.0  # the record's length T: bins of 1/T
+    if span > 0 and peak.frequency_hz < 2.0 / span:
+        return (f"below two bins of the {span:.4g} s record (a drift or a beat slower than "
+                "the record resolves)")
+    return UNNAMED_WHY
+
+
+__all__ = ["UNNAMED_WHY", "WHIRLS", "WhirlPeak", "full_spectrum", "full_spectrum_peaks",
+           "orbit_pair", "unnamed_lines", "unnamed_reason", "whirl_components"]
