@@ -10,8 +10,9 @@ Provenance: a figure function calls ``stamp(fig, result)`` with the result it dr
 figure file is written by ``analysis.reports.plots.save_figure``, which passes
 ``file_metadata(fig, format)`` to ``savefig``: a PNG carries the model, the spec path, its
 SHA-256 and the versions as text chunks (``model``, ``spec_file``, ``spec_sha256``,
-``bearingdyn_version``, ``Software``), a PDF or SVG the same in its ``Subject`` or
-``Description``."""
+``bearingdyn_version``, ``Software``) and every other value the result's attributes hold
+(each parameter, the balls, the step: what the .nc carries), a PDF or SVG the same in its
+``Subject`` or ``Description``."""
 
 from __future__ import annotations
 
@@ -46,12 +47,46 @@ def close(fig: Figure) -> None:
 def stamp(fig: Figure, source: Any) -> Figure:
     """Record on ``fig`` the provenance of the result it draws (``source``: a Dataset or
     DataArray, or a mapping of attrs): model, spec path, SHA-256 and the version that
-    computed it (``PROVENANCE_KEYS``). Returns ``fig``."""
+    computed it (``PROVENANCE_KEYS``) first, then every other attribute the result file
+    holds as one value (each parameter in SI units, the balls, the step, the frequencies, …;
+    an array of up to ``MAX_ARRAY_VALUES`` values as its list, a longer one left out), so a
+    figure's file carries what its .nc carries. Returns ``fig``."""
     attrs = getattr(source, "attrs", source)
     if isinstance(attrs, Mapping):
-        fig.bearingdyn_provenance = {key: str(attrs[key]) for key in PROVENANCE_KEYS
-                                     if key in attrs}
+        found = {key: str(attrs[key]) for key in PROVENANCE_KEYS if key in attrs}
+        for key, value in attrs.items():
+            text = _attribute_text(value)
+            if str(key) not in found and text is not None and _latin1(str(key)):
+                found[str(key)] = text
+        fig.bearingdyn_provenance = found
     return fig
+
+
+MAX_ARRAY_VALUES = 64
+"""Longest array attribute a figure's file carries (a speed table's points)."""
+
+
+def _attribute_text(value: Any) -> str | None:
+    """An attribute as the text a file's metadata holds: numbers with every digit (``repr``
+    of a float), strings as they are, short arrays as lists; None for anything else."""
+    import numpy as np
+
+    if isinstance(value, (str, bool, int, float, np.integer, np.floating, np.bool_)):
+        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(value)
+    if isinstance(value, (list, tuple, np.ndarray)):
+        flat = np.asarray(value).ravel()
+        if flat.size <= MAX_ARRAY_VALUES and flat.dtype.kind in "biuf":
+            return "[" + ", ".join(repr(float(v)) for v in flat) + "]"
+    return None
+
+
+def _latin1(key: str) -> bool:
+    """A PNG text key: 1 to 79 Latin-1 characters."""
+    try:
+        key.encode("latin-1")
+    except UnicodeEncodeError:
+        return False
+    return 0 < len(key) < 80
 
 
 def figure_provenance(fig: Figure) -> dict[str, str]:
