@@ -181,7 +181,10 @@ def response_figure(data):
     ax.grid(True, alpha=0.3)
     if param:
         ax.set_xlabel(f"{param} ({data[param].attrs.get('units', '')})")
-    ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({unit})")
+    from analysis.reports.plots import scaled_axis  # µm for m, as every figure (issue 32)
+
+    shown = scaled_axis(ax.yaxis, unit, float(np.nanmax(np.abs(amp), initial=0.0)))
+    ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({shown})")
     ax.set_title(f"{data.attrs['model']}: harmonic balance, period {data.attrs['period']}, "
                  f"H = {data.attrs['harmonics']}", fontsize=9)
     return canvas.finish(fig, data)
