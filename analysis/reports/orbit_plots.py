@@ -21,12 +21,27 @@ from analysis.signal.full_spectrum import (
 from analysis.signal.orbit import Orbit, orbits
 
 
-def plot_orbit(ax, orbit: Orbit) -> None:
+def plot_orbit(ax, orbit: Orbit, speed_rpm: np.ndarray | None = None):
     """One orbit on ``ax`` in µm (for m): the path, the clearance circle (dashed, when the
     orbit is a bearing's), the once-per-revolution marks (black dots) and the first and
-    last marks named; equal scales on both axes."""
+    last marks named; equal scales on both axes. ``speed_rpm`` (one per path sample: a
+    run-up) colours the path by the shaft speed (``SPEED_CMAP``) instead of one colour, so
+    the orbit of each speed can be told from the others; returns that line collection (for
+    its colour bar), else None."""
     factor, unit = unit_scale(orbit.unit)
-    ax.plot(orbit.x * factor, orbit.y * factor, lw=0.6, color="C0", label="orbit")
+    coloured = None
+    if speed_rpm is not None and len(speed_rpm) == len(orbit.x) > 1:
+        from matplotlib.collections import LineCollection
+
+        points = np.column_stack([orbit.x * factor, orbit.y * factor])
+        segments = np.stack([points[:-1], points[1:]], axis=1)
+        coloured = LineCollection(segments, cmap=SPEED_CMAP, linewidths=0.6,
+                                  label="orbit, coloured by shaft speed")
+        coloured.set_array(0.5 * (speed_rpm[:-1] + speed_rpm[1:]))
+        ax.add_collection(coloured)
+        ax.autoscale_view()
+    else:
+        ax.plot(orbit.x * factor, orbit.y * factor, lw=0.6, color="C0", label="orbit")
     if orbit.mark_x.size:
         ax.plot(orbit.mark_x * factor, orbit.mark_y * factor, "o", ms=3, color="k",
                 label=f"once per revolution ({orbit.mark_x.size} marks)")
@@ -45,6 +60,23 @@ def plot_orbit(ax, orbit: Orbit) -> None:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
               frameon=False)  # below the axes: never over the orbit
+    return coloured
+
+
+SPEED_CMAP = "viridis"
+"""Colours of a run-up's orbit by shaft speed (perceptually uniform, colour-blind safe)."""
+
+
+def run_speeds(ds: xr.Dataset) -> np.ndarray | None:
+    """The shaft speed (rpm) at each sample of a run whose speed follows a profile (a
+    run-up or coast-down), None at constant speed."""
+    from analysis.integrate.speed_profile import profile_of
+
+    profile = profile_of(ds.attrs)
+    if profile is None:
+        return None
+    t = np.asarray(ds["t"].values, dtype=float)
+    return profile.speed(t, float(ds.attrs.get("duration", t[-1])))
 
 
 def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> Figure:
@@ -56,13 +88,18 @@ def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> 
     rows = math.ceil(len(found) / columns)
     fig, axes = plt.subplots(rows, columns, figsize=(4.6 * columns, 4.4 * rows + 0.5),
                              layout="constrained", squeeze=False)
+    speeds = run_speeds(ds)
     for ax, orbit in zip(axes.ravel(), found, strict=False):
-        plot_orbit(ax, orbit)
+        coloured = plot_orbit(ax, orbit, speeds)
+        if coloured is not None:
+            fig.colorbar(coloured, ax=ax, label="shaft speed (rpm)", shrink=0.8)
     for ax in axes.ravel()[len(found):]:
         ax.set_visible(False)
     t = ds["t"].values
-    fig.suptitle(f"{run_title(ds)}; orbit over t = {float(t[0]):.4g}…{float(t[-1]):.4g} s",
-                 fontsize=10)
+    over = (f"speeds {float(speeds[0]):.0f}…{float(speeds[-1]):.0f} rpm, "
+            if speeds is not None else "")
+    fig.suptitle(f"{run_title(ds)}; orbit over {over}t = {float(t[0]):.4g}…"
+                 f"{float(t[-1]):.4g} s", fontsize=10)
     return plt.finish(fig, ds)
 
 
