@@ -415,7 +415,8 @@ def chart_figure(ds: xr.Dataset) -> Figure:
     handles = [Patch(color=NATURE_COLORS[k], label=NATURE_NAMES[k]) for k in present]
     if "multistable" in ds:
         handles.append(_mark_multistable(axes[0], ds, xname, yname, edges))
-    axes[0].legend(handles=handles, fontsize=8, loc="upper right")
+    axes[0].legend(handles=handles, fontsize=8, loc="upper center",  # outside the cells
+                   bbox_to_anchor=(0.5, -0.14), ncol=min(3, len(handles)), frameon=False)
     axes[0].set_title("nature of the response", fontsize=9)
     lam = ds.lyapunov.transpose(yname, xname).values
     top = float(np.nanmax(np.abs(lam))) if np.isfinite(lam).any() else 1.0

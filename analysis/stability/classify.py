@@ -89,15 +89,18 @@ class Nature:
 
 
 NATURES: tuple[Nature, ...] = (
-    Nature(0, "failed", "failed (the run blew up)", "#9e9e9e"),
-    Nature(1, "periodic-1", "periodic-1", "#2a9d8f"),
-    Nature(2, "periodic-2", "periodic-2", "#8ab17d"),
-    Nature(3, "periodic-n", "periodic-n (n ≥ 3)", "#e9c46a"),
-    Nature(4, "quasi-periodic", "quasi-periodic", "#5e7fd6"),
-    Nature(5, "chaotic", "chaotic", "#e76f51"),
+    Nature(0, "failed", "failed (the run blew up)", "#cccccc"),
+    Nature(1, "periodic-1", "periodic-1", "#009e73"),
+    Nature(2, "periodic-2", "periodic-2", "#56b4e9"),
+    Nature(3, "periodic-n", "periodic-n (n ≥ 3)", "#f0e442"),
+    Nature(4, "quasi-periodic", "quasi-periodic", "#0072b2"),
+    Nature(5, "chaotic", "chaotic", "#d55e00"),
 )
 """The chart classes, once: codes, names and colours (failed: the point's run blew up or its
-solver failed, its ``nature`` says how: ``failed: blew up at t = 0.52 s``)."""
+solver failed, its ``nature`` says how: ``failed: blew up at t = 0.52 s``). The colours are
+Okabe and Ito's colour-blind-safe set (and a light grey): every two stay apart for normal vision
+and for protanopia, deuteranopia and tritanopia (``tests/reports/test_chart_colours.py``
+measures it)."""
 NATURE_CODES: dict[str, int] = {n.key: n.code for n in NATURES}
 """Integer code of each class key (``periodic-n``: n >= 3)."""
 NATURE_COLORS: dict[int, str] = {n.code: n.color for n in NATURES}
