@@ -630,6 +630,15 @@ def _pitch_text(ds: xr.Dataset, pitch: float) -> str:
     return f"one pitch = {degrees}"
 
 
+def coefficient_name(coordinates: list[str]):
+    """``name(row, column)`` of a coefficient: ``k_xy`` when every coordinate is one letter
+    (a one-body model), else ``k[x_rotor, y_housing]`` so that the names stay apart
+    (``k_x_rotorx_rotor`` reads as one word)."""
+    if all(len(c) == 1 for c in coordinates):
+        return lambda row, column: f"k_{row}{column}"
+    return lambda row, column: f"k[{row}, {column}]"
+
+
 def stiffness_figure(ds: xr.Dataset) -> Figure:
     """Linearised coefficients over one cage pitch (``analysis.stability.statics``): the
     direct stiffnesses and the static equilibrium against the cage angle ψ (degrees, over
@@ -645,6 +654,7 @@ def stiffness_figure(ds: xr.Dataset) -> Figure:
     def closed(values):
         return np.append(values, values[:1])
 
+    name = coefficient_name(coords)
     kinds = [kind for kind in ("m", "rad") if any(units.get(c, "m") == kind for c in coords)]
     fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds) + 0.6),
                              layout="constrained", squeeze=False, sharex=True)
@@ -655,9 +665,9 @@ def stiffness_figure(ds: xr.Dataset) -> Figure:
         for n, (i, c) in enumerate(chosen):
             colour = f"C{n}"
             axes[row, 0].plot(angle, closed(ds.stiffness.values[:, i, i]) * factor, ".-",
-                              lw=1, ms=3, color=colour, label=f"k_{c}{c}")
+                              lw=1, ms=3, color=colour, label=name(c, c))
             axes[row, 0].axhline(float(ds.stiffness_mean.values[i, i]) * factor, ls="--",
-                                 lw=0.8, color=colour, label=f"k_{c}{c} mean over the pitch")
+                                 lw=0.8, color=colour, label=f"{name(c, c)} mean over the pitch")
             pos_factor = unit_scale(kind)[0]
             axes[row, 1].plot(angle, closed(ds.position.values[:, i]) * pos_factor, ".-",
                               lw=1, ms=3, color=colour, label=c)
