@@ -54,20 +54,68 @@ def _amplitude_unit(ds: xr.Dataset, variables) -> tuple[float, str]:
     return unit_scale(unit) if largest < 1e-3 else (1.0, unit)
 
 
+PERIOD_TOLERANCE = 1e-3
+"""A value's response is periodic when its section samples repeat after n ≤ ``MAX_PERIOD``
+within this fraction of the diagram's largest section spread (``classify``'s tolerance)."""
+MAX_PERIOD = 16
+
+
+def periodic_values(ds: xr.Dataset, d: int) -> np.ndarray:
+    """Per value of the swept parameter (the diagram's order), whether the response of
+    direction ``d`` is periodic: its section samples (every state variable of the diagram
+    with a ``k`` axis) repeat with a period n ≤ ``MAX_PERIOD``
+    (``analysis.stability.classify.repeat_period``). A value whose 1X amplitude and phase
+    are not those of a periodic response (quasi-periodic, chaotic) is False; so is one
+    without samples."""
+    from analysis.stability.classify import repeat_period
+
+    param = ds.attrs["param"]
+    names = [str(v) for v in ds.data_vars if ds[v].dims == ("direction", param, "k")
+             and str(ds[v].attrs.get("units", "")) in ("m", "rad")]
+    if not names:
+        return np.ones(ds.sizes[param], dtype=bool)
+    samples = np.stack([ds[v].isel(direction=d).values for v in names], axis=-1)
+    finite = np.isfinite(samples)
+    spread = max((float(np.max(column[ok]) - np.min(column[ok]))  # over the whole sweep
+                  for column, ok in zip(np.moveaxis(samples, -1, 0), np.moveaxis(finite, -1, 0),
+                                        strict=True) if ok.any()), default=0.0)
+    size = max(spread, 1e-300)
+    out = np.zeros(samples.shape[0], dtype=bool)
+    for i, points in enumerate(samples):
+        points = points[np.all(np.isfinite(points), axis=1)]
+        out[i] = repeat_period(points, size, PERIOD_TOLERANCE, MAX_PERIOD) is not None
+    return out
+
+
 def _ordered(ds: xr.Dataset, param: str, d: int, v: str):
-    """(parameter values, amplitude, lag unwrapped along the sweep in rad) of direction
-    ``d``, in increasing parameter, NaN values dropped."""
+    """(parameter values, amplitude, lag unwrapped along the sweep in rad, periodic) of
+    direction ``d``, in increasing parameter, NaN values dropped (``periodic``:
+    ``periodic_values``)."""
     values = ds[param].values.astype(float)
     amp = ds[f"amplitude1x_{v}"].isel(direction=d).values
     lag = ds[f"phase1x_{v}"].isel(direction=d).values
+    periodic = periodic_values(ds, d)
     order = np.argsort(values)
-    values, amp, lag = values[order], amp[order], lag[order]
+    values, amp, lag, periodic = values[order], amp[order], lag[order], periodic[order]
     keep = np.isfinite(amp) & np.isfinite(lag)
-    values, amp, lag = values[keep], amp[keep], lag[keep]
+    values, amp, lag, periodic = values[keep], amp[keep], lag[keep], periodic[keep]
     if lag.size:
         lag = np.unwrap(lag)
         lag -= 2 * math.pi * math.floor(lag[0] / (2 * math.pi))  # the first in [0, 2π)
-    return values, amp, lag
+    return values, amp, lag, periodic
+
+
+NOT_PERIODIC = "not periodic (no period ≤ 16 on the section): 1X is one line of many"
+"""The legend of the marks on values whose response is not periodic."""
+
+
+def _mark_not_periodic(ax, x, y, periodic, marked: list) -> None:
+    """Grey rings on the points of ``ax`` whose response is not periodic; the legend entry
+    once (``marked`` holds whether it was given)."""
+    if np.any(~periodic):
+        ax.plot(x[~periodic], y[~periodic], "o", ms=7, mfc="none", mec="0.35", mew=1.0,
+                label=None if marked else NOT_PERIODIC)
+        marked.append(True)
 
 
 def _title(ds: xr.Dataset, what: str) -> str:
@@ -82,20 +130,24 @@ def bode_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None = 
     (degrees after the shaft's zero angle, unwrapped along the sweep) of ``variables``
     (default: every
     recorded displacement that moves) against the swept parameter; up- and down-sweeps
-    dashed apart."""
+    dashed apart; values whose response is not periodic ringed (``periodic_values``: their
+    1X is one line of a broader spectrum, not the response)."""
     variables = phasor_variables(ds, variables, path)
     param = ds.attrs["param"]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True,
                                       layout="constrained")
     factor, unit = _amplitude_unit(ds, variables)
+    marked: list = []
     for i, v in enumerate(variables):
         for d, direction in enumerate(ds.direction.values):
-            values, amp, lag = _ordered(ds, param, d, v)
+            values, amp, lag, periodic = _ordered(ds, param, d, v)
             style = dict(color=f"C{i}", ls="-" if d == 0 else "--", lw=1.3, marker=".",
                          ms=3)
             label = v + (f" (sweep {direction})" if ds.sizes["direction"] > 1 else "")
             top.plot(values, amp * factor, label=label, **style)
             bottom.plot(values, np.degrees(lag), **style)
+            _mark_not_periodic(top, values, amp * factor, periodic, marked)
+            _mark_not_periodic(bottom, values, np.degrees(lag), periodic, [True])
     top.set_ylabel(f"1X amplitude ({unit})")
     bottom.set_ylabel("1X phase lag (degrees)")
     grid_axis(bottom.xaxis, ds, param)
@@ -130,12 +182,14 @@ def polar_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None =
         ax.set_theta_direction(-1)  # lag grows clockwise: against a counter-clockwise shaft
         ax.set_rlabel_position(200)
         factor, unit = _amplitude_unit(ds, (v,))
+        marked: list = []
         for d, direction in enumerate(ds.direction.values):
-            values, amp, lag = _ordered(ds, param, d, v)
+            values, amp, lag, periodic = _ordered(ds, param, d, v)
             if not values.size:
                 continue
             ax.plot(lag, amp * factor, ".-", lw=1.0, ms=3, color=f"C{d}",
                     label=f"sweep {direction}")
+            _mark_not_periodic(ax, lag, amp * factor, periodic, marked)
             for j in sorted({0, values.size - 1, int(np.argmax(amp))}):
                 ax.annotate(f"{values[j]:.6g}", (lag[j], amp[j] * factor), xytext=(4, 4),
                             textcoords="offset points", fontsize=7)
@@ -147,4 +201,4 @@ def polar_figure(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | None =
     return plt.finish(fig, ds)
 
 
-__all__ = ["bode_figure", "phasor_variables", "polar_figure"]
+__all__ = ["bode_figure", "periodic_values", "phasor_variables", "polar_figure"]
