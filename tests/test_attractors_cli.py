@@ -51,9 +51,20 @@ def test_attractors_json_layout_for_fractions_and_for_a_continuation(cli, tmp_pa
               "-o", "c.nc", "--plot", "c.png", "--quiet", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     out = json.loads(res.stdout)
-    assert [list(v) for v in out["values"]] == [["speed_rpm", "attractors"]] * 3
+    assert [list(v) for v in out["values"]] == [["speed_rpm", "attractors", "transitions",
+                                                  "notes"]] * 3
     ids = [[a["id"] for a in v["attractors"]] for v in out["values"]]
     assert ids[0] == [1, 2] and ids[1] == [1, 2]  # kept from value to value
+    ds = open_result(tmp_path / "c.nc")
+    for k, v in enumerate(out["values"][:-1]):  # each basin's states go somewhere
+        labels = {str(a["id"]) for a in v["attractors"]}
+        assert labels <= set(v["transitions"]) | {"-2", "-1"}
+        for row in v["transitions"].values():
+            assert sum(row.values()) == pytest.approx(1.0)
+        assert ds.transition.isel(value=k).sum("to").dropna("attractor").values == \
+            pytest.approx(1.0)
+    assert out["values"][-1]["transitions"] == {}
+    assert ds.attrs["match_distance"] == 0.25
     assert (tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
 
 
@@ -86,6 +97,11 @@ BAD = [
       "speed_rpm:12:15:0"], "--param: N must be a whole number >= 1, got 0"),
     (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--param",
       "omega:1:2:3"], "param: 'omega' is not a parameter of model 'duffing'"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--param",
+      "speed_rpm:12:15:3", "--match-threshold", "0"],
+     "match-threshold: must be a number > 0 (orbit sizes), got 0.0"),
+    (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--param",
+      "speed_rpm:12:15:3", "--match-threshold", "nan"], "match-threshold: must be a number"),
     (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--revisits", "0"],
      "revisits: must be a whole number >= 1, got 0"),
     (["attractors", "duffing", "--samples", "10", "--box", "x:-3:3", "--branch",

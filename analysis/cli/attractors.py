@@ -115,21 +115,17 @@ def _run(make, run):
 
 
 def _echo_table(ds, output: Path) -> None:
-    """One line per attractor: id, class, basin fraction, λ1, amplitudes."""
-    from analysis.stability.attractors import existence
+    """One line per attractor: id, class, basin fraction, λ1, amplitudes; then the
+    boundary measures (basins) and, when states did not settle, why and what to raise. A
+    continuation: each attractor's range, the fractions (± standard error) at every value,
+    where each basin's states go at the next value, and the doubts about the matches."""
+    from analysis.stability.attractors.dataset import unsettled
 
-    kind = ds.attrs["kind"]
-    if kind == "attractor-continuation":
-        param = ds.attrs["param"]
-        typer.echo(f"wrote {output}: attractors at {ds.sizes['value']} values of {param}")
-        ranges = existence(ds)
-        for i, (low, high) in ranges.items():
-            natures = sorted({str(n) for n in ds.nature.sel(attractor=i).values if str(n)})
-            typer.echo(f"  attractor {i} ({', '.join(natures)}): {param} from {low:g} to "
-                       f"{high:g}")
+    if ds.attrs["kind"] == "attractor-continuation":
+        _echo_continuation(ds, output)
         return
-    typer.echo(f"wrote {output}: {ds.sizes['attractor']} attractor(s) on the "
-               f"{ds.attrs['section']} section")
+    found = int((ds.attractor.values > 0).sum())
+    typer.echo(f"wrote {output}: {found} attractor(s) on the {ds.attrs['section']} section")
     names = [str(s) for s in ds.state.values][: max(1, ds.sizes["state"] // 2)]
     for i in ds.attractor.values:
         row = ds.sel(attractor=i)
@@ -141,6 +137,56 @@ def _echo_table(ds, output: Path) -> None:
             head += (f"  λ1 = {float(row.lambda1):.4g} ± {float(row.lambda1_ci95):.2g} 1/s"
                      f"  amplitude {amp}")
         typer.echo(head)
+    if "basin_entropy" in ds.attrs:
+        a = ds.attrs
+        fractal = " (> ln 2: the boundary is fractal)" \
+            if float(a["boundary_basin_entropy"]) > 0.6931471805599453 else ""
+        typer.echo(f"  boundary: basin entropy {float(a['basin_entropy']):.3g}, boundary "
+                   f"basin entropy {float(a['boundary_basin_entropy']):.3g} nats"
+                   f"{fractal} ({int(a['entropy_box'])}-cell boxes, "
+                   f"{100 * float(a['boundary_boxes']):.1f} % on a boundary); uncertainty "
+                   f"exponent {float(a['uncertainty_exponent']):.3g} (1: smooth boundary, "
+                   "< 1: fractal, near 0: riddled)")
+    for line in unsettled(ds):
+        typer.echo(f"  {line}")
+
+
+def _echo_continuation(ds, output: Path) -> None:
+    """The text of an attractor continuation (see ``_echo_table``)."""
+    from analysis.stability.attractors import existence
+    from analysis.stability.attractors.dataset import transition_json
+
+    param = ds.attrs["param"]
+    typer.echo(f"wrote {output}: attractors at {ds.sizes['value']} values of {param}")
+    for i, (low, high) in existence(ds).items():
+        natures = sorted({str(n) for n in ds.nature.sel(attractor=i).values if str(n)})
+        typer.echo(f"  attractor {i} ({', '.join(natures)}): {param} from {low:g} to "
+                   f"{high:g}")
+    typer.echo(f"  basin fractions (% ± standard error, {int(ds.attrs['samples'])} states "
+               "per value) and where each basin's states go at the next value:")
+    for k, value in enumerate(ds.value.values):
+        here = ds.isel(value=k)
+        shares = ", ".join(
+            f"{_label(ds, int(i))} {100 * float(here.fraction.sel(attractor=i)):.1f} ± "
+            f"{100 * float(here.fraction_stderr.sel(attractor=i)):.1f}"
+            for i in ds.attractor.values[here.present.values])
+        typer.echo(f"    {value:g}: {shares or 'none'}")
+        moves = transition_json(ds, k)
+        if moves and k + 1 < ds.sizes["value"]:
+            text = "; ".join(f"{_label(ds, int(a))} → " + ", ".join(
+                f"{_label(ds, int(b))} {p:.2f}" for b, p in row.items())
+                for a, row in moves.items())
+            typer.echo(f"      to {ds.value.values[k + 1]:g}: {text}")
+        notes = str(ds.match_notes.values[k]) if "match_notes" in ds else ""
+        for note in filter(None, notes.split("\n")):
+            typer.echo(f"      warning: {note}")
+
+
+def _label(ds, i: int) -> str:
+    """An id as the text names it: the number, or diverged/undecided/failed."""
+    from analysis.stability.attractors.mapper import SPECIAL_LABELS
+
+    return SPECIAL_LABELS[i] if i < 0 else str(i)
 
 
 @app.command()
@@ -209,6 +255,11 @@ def attractors(
         "--param", help="NAME:LO:HI:N: continue the attractors over N values of a runtime "
                         "parameter (its own unit, rpm for speed_rpm).")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random initial states.")] = 0,
+    match_threshold: Annotated[float, typer.Option(
+        "--match-threshold", help="With --param: largest distance between the section "
+                                  "points of two attractors at consecutive values, in orbit "
+                                  "sizes, that still makes them one id; larger matches are "
+                                  "warned about.")] = 0.25,
     branch: Annotated[list[Path] | None, typer.Option(
         "--branch", help="Continuation branch file(s) (`bearingdyn continue`) drawn on the "
                          "--param figure.")] = None,
@@ -240,6 +291,7 @@ def attractors(
     executor), matched across values. Resumable: re-run the same command to continue."""
     from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Box, Range
+    from analysis.stability.attractors.continuation import check_threshold
     from analysis.sweeps.attractor_blocks import (
         check_branch_of,
         check_continuation,
@@ -254,6 +306,7 @@ def attractors(
     along = Range.parse(param, "--param", with_num=True) if param is not None else None
     if along is not None:
         check_value_count("--param", along.num)  # before its values are made
+        check_threshold(match_threshold)
     branches = [_branch(path) for path in branch or []]
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
@@ -275,6 +328,7 @@ def attractors(
             on_damaged=_recomputing))
     else:
         say = None if quiet else (lambda line: typer.echo(line, err=True))
+        settings["match_distance"] = match_threshold
         check_continuation(system, along.coordinate, along.points, sides, samples,
                            **settings)
         _say_cost(quiet or as_json, system, (samples + 16) * along.num, executor, workers,

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from analysis.reports import canvas as plt
 from analysis.reports.plots import SPECIAL_MARKERS, cell_edges, run_title, scale_of, scaled_axis
+from analysis.stability.attractors.dataset import unsettled
 
 SPECIAL_COLORS = {-1: "#9e9e9e", -2: "#ffffff", -3: "#000000"}
 """Colours of the labels that are not attractors: diverged (grey), undecided (white),
@@ -91,6 +92,13 @@ def basins_figure(ds: xr.Dataset) -> Figure:
                     ms=8, mfc="k", mec="w", mew=0.8)
     ax.legend(handles=handles, fontsize=8, loc="upper right", framealpha=0.9,
               title="attractor: class, basin share", title_fontsize=8)
+    advice = unsettled(ds)
+    if advice:
+        import textwrap
+
+        ax.text(0.5, 0.5, "\n".join(textwrap.fill(line, 70) for line in advice),
+                transform=ax.transAxes, ha="center", va="center", fontsize=8,
+                bbox={"facecolor": "#fff3cd", "edgecolor": "#b08800"})
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(f"basins of attraction on the {ds.attrs['section']} section "
@@ -119,8 +127,9 @@ def fractions_figure(ds: xr.Dataset) -> Figure:
 def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> Figure:
     """Top: the amplitude of the first state of each attractor against the parameter, with
     continuation branches (``branches``: files of ``bearingdyn continue``; stable solid,
-    unstable dashed, special points marked) overlaid. Bottom: the basin fractions as
-    stacked bands."""
+    unstable dashed, special points marked) overlaid. Bottom: each attractor's basin
+    fraction with its standard error (bars), drawn only at the values where it exists (a
+    line joins consecutive values only)."""
     param = str(ds.attrs["param"])
     unit = str(ds.value.attrs.get("units", ""))
     first = str(ds.state.values[0])
@@ -144,19 +153,33 @@ def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> 
                  mec="k", mew=0.4, label=f"attractor {i}: {', '.join(natures)}")
     top.set_ylabel(f"amplitude of {first} ({amp_unit})")
     top.legend(fontsize=8)
-    fractions = np.nan_to_num(ds.fraction.transpose("attractor", "value").values)
-    bottom.stackplot(values, fractions, colors=[attractor_color(i) for i in ids],
-                     labels=[f"{i}" if i > 0 else str(ds.nature.sel(attractor=i).values[
-                         ds.present.sel(attractor=i).values][0]) for i in ids],
-                     edgecolor="k", lw=0.3)
-    bottom.set_ylim(0, 1)
-    bottom.set_ylabel("basin fraction")
+    for i in ids:
+        _fraction_line(bottom, ds, i)
+    bottom.set_ylim(-0.02, 1.02)
+    bottom.set_ylabel("basin fraction (± standard error)")
     bottom.set_xlabel(f"{param} ({scaled_axis(bottom.xaxis, unit)})" if unit else param)
     bottom.legend(fontsize=8, loc="upper right", title="attractor", title_fontsize=8)
     fig.suptitle(f"{ds.attrs['model']}: attractors along {param} "
                  f"({int(ds.attrs['samples'])} random states per value, "
                  f"{ds.attrs['section']} section)", fontsize=10)
     return fig
+
+
+def _fraction_line(ax, ds: xr.Dataset, i: int) -> None:
+    """Attractor ``i``'s basin fraction ± its standard error at the values where it is
+    present; consecutive values joined, absences left as gaps (never interpolated)."""
+    values = ds.value.values
+    here = ds.present.sel(attractor=i).values
+    if not here.any():
+        return
+    f = ds.fraction.sel(attractor=i).values
+    se = ds.fraction_stderr.sel(attractor=i).values
+    name = f"{i}" if i > 0 else str(ds.nature.sel(attractor=i).values[here][0])
+    color = attractor_color(i)
+    shown = np.where(here, f, np.nan)  # NaN breaks the line where it is absent
+    ax.plot(values, shown, "-", color=color if i != -2 else "#666666", lw=1.2)
+    ax.errorbar(values[here], f[here], yerr=se[here], fmt="o", ms=4, capsize=3,
+                color=color if i != -2 else "#666666", mec="k", mew=0.4, label=name)
 
 
 def _overlay_branch(ax, br: xr.Dataset, factor: float, named: set[str]) -> None:

@@ -17,12 +17,30 @@ takes the id of a previous one when
 
 Anything else is a new attractor with a new id. A matched attractor keeps its id from value
 to value, so its existence range and its fraction along the parameter can be read off.
+
+**Saying how sure a match is.** ``match_distance`` is the matching threshold (the API
+keyword; ``--match-threshold`` on the command line). Every match is checked against it and
+each doubt is a note of the step (``Step.notes``), stored and printed:
+
+- a seed-matched pair farther apart than the threshold (the parameter step is coarse for
+  this attractor: its ids may be swapped; take a finer step or a larger threshold);
+- a match between attractors of different periods (kept as one id because the previous
+  attractor's seed landed on it: a period doubling, or a swap; said, never silent);
+- a previous attractor that vanished while a new one appeared within ten thresholds of it
+  (perhaps the same attractor moved farther than the threshold: raise it, or refine).
+
+**Transitions.** The random initial states are the same at every value (the stream
+``(seed, 0)``: common random numbers), so where the states of each attractor's basin go at
+the next value is counted exactly: ``transitions`` gives, for consecutive values, the
+fraction of the states of each basin (and of the diverged and undecided states) that reach
+each attractor at the next value (the tipping probabilities of Kaszás, Feudel & Tél 2019,
+Attractors.jl's ``tipping_probabilities``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -50,6 +68,16 @@ def set_distance(a: np.ndarray, b: np.ndarray, scale: Scale) -> float:
     return float(max(cKDTree(b).query(a)[0].max(), cKDTree(a).query(b)[0].max()))
 
 
+def check_threshold(match_distance: float) -> float:
+    """``InputError`` unless the matching threshold is a finite number > 0 (orbit
+    sizes)."""
+    if (isinstance(match_distance, bool) or not isinstance(match_distance, (int, float))
+            or not np.isfinite(match_distance) or match_distance <= 0):
+        raise InputError(f"match-threshold: must be a number > 0 (orbit sizes), got "
+                         f"{match_distance!r}")
+    return float(match_distance)
+
+
 @dataclass
 class Step:
     """The attractors at one value of the parameter, with their global ids."""
@@ -62,6 +90,8 @@ class Step:
     """The random initial states among the result's labels (the rest are seeds)."""
     study: AttractorStudy
     """The study at this value (its System, map and scale)."""
+    notes: list[str] = field(default_factory=list)
+    """Doubts about this value's matches (see the module), one sentence each."""
 
     def attractors(self) -> list[tuple[int, Attractor]]:
         """(global id, attractor) pairs."""
@@ -75,15 +105,38 @@ class Step:
         out = {self.ids.get(k, k): v for k, v in self.result.fractions(mask).items()}
         return out
 
+    def random_labels(self) -> np.ndarray:
+        """The global id (or DIVERGED/UNDECIDED/FAILED) of each random initial state."""
+        labels = self.result.labels[self.random]
+        return np.array([self.ids.get(int(k), int(k)) for k in labels], dtype=np.int64)
+
+
+def transitions(before: np.ndarray, after: np.ndarray) -> dict[int, dict[int, float]]:
+    """The tipping probabilities between two labellings of the same initial states: for
+    each label ``a`` of ``before``, label ``b`` -> the fraction of the states labelled ``a``
+    that ``after`` labels ``b`` (each row sums to 1)."""
+    before, after = np.asarray(before), np.asarray(after)
+    if before.shape != after.shape:
+        raise ValueError("the two labellings must be of the same states")
+    out: dict[int, dict[int, float]] = {}
+    for a in np.unique(before):
+        mine = after[before == a]
+        targets, counts = np.unique(mine, return_counts=True)
+        out[int(a)] = {int(b): float(c) / len(mine) for b, c in zip(targets, counts,
+                                                                    strict=True)}
+    return out
+
 
 def match(previous: list[tuple[int, Attractor]], seeded: dict[int, int],
           found: list[Attractor], scale: Scale, next_id: int,
-          match_distance: float = MATCH_DISTANCE) -> tuple[dict[int, int], int]:
+          match_distance: float = MATCH_DISTANCE,
+          notes: list[str] | None = None) -> tuple[dict[int, int], int]:
     """Global ids of the attractors ``found`` at a new value (see the module).
 
     ``previous``: (global id, attractor) at the last value; ``seeded``: global id of a
     previous attractor -> the new attractor id its seed landed on (or a label <= 0);
-    ``next_id``: the first unused global id. Returns (found id -> global id, next unused
+    ``next_id``: the first unused global id; ``notes``: a list that receives the doubts
+    about the matches (see the module). Returns (found id -> global id, next unused
     id)."""
     old = dict(previous)
     distance = {(g, a.id): set_distance(old[g].points, a.points, scale)
@@ -99,7 +152,39 @@ def match(previous: list[tuple[int, Attractor]], seeded: dict[int, int],
     for a in found:
         if a.id not in ids:
             ids[a.id], next_id = next_id, next_id + 1
+    if notes is not None:
+        notes.extend(doubts(old, {a.id: a for a in found}, ids, distance, match_distance))
     return ids, next_id
+
+
+def doubts(old: dict[int, Attractor], found: dict[int, Attractor], ids: dict[int, int],
+           distance: dict[tuple[int, int], float], match_distance: float) -> list[str]:
+    """The sentences ``match`` adds to a step's notes (see the module)."""
+    out = []
+    for j, g in sorted(ids.items(), key=lambda item: item[1]):
+        if g not in old:
+            continue
+        d, a, b = distance[g, j], old[g], found[j]
+        if d > match_distance:
+            out.append(f"attractor {g} moved {d:.3g} orbit sizes, more than the matching "
+                       f"threshold {match_distance:g}: it kept its id because the previous "
+                       "one's state landed on it; the ids may be swapped (take a finer "
+                       "parameter step or a larger --match-threshold)")
+        if a.nature != b.nature and (a.period or b.period):
+            out.append(f"attractor {g} changed from {a.nature} to {b.nature}: kept as one "
+                       "id because the previous one's state landed on it (a period doubling "
+                       "or a swap; check with a finer step)")
+    lost = [g for g in old if g not in ids.values()]
+    new = [j for j, g in ids.items() if g not in old]
+    for g in lost:
+        near = [(distance[g, j], j) for j in new if distance[g, j] <= 10 * match_distance]
+        if near:
+            d, j = min(near)
+            out.append(f"attractor {g} vanished and attractor {ids[j]} appeared "
+                       f"{d:.3g} orbit sizes from it, beyond the matching threshold "
+                       f"{match_distance:g}: perhaps one attractor (take a finer step or "
+                       "a larger --match-threshold)")
+    return out
 
 
 def continue_attractors(
@@ -123,9 +208,10 @@ def continue_attractors(
 ) -> list[Step]:
     """The attractors of ``system`` at each of ``values`` of ``parameter`` (its own unit:
     rpm for ``speed_rpm``), found from the previous value's attractors plus ``samples``
-    random initial states in ``box`` (``seed``: the random generator's seed; the states
-    at value i are drawn from the stream ``(seed, i)``), matched across values (see the
-    module). ``period``, ``dt``, ``options``, ``label_options``: as ``AttractorStudy``;
+    random initial states in ``box`` (``seed``: the random generator's seed; the same
+    states, from the stream ``(seed, 0)``, at every value), matched across values (see the
+    module) with the threshold ``match_distance`` (orbit sizes, > 0). ``period``, ``dt``,
+    ``options``, ``label_options``: as ``AttractorStudy``;
     ``blocks``: how each value's states are cut and mapped (``study.Blocks``; default: the
     study's own block size, in this process); ``mapper``, ``device``, ``feature_options``:
     as ``study.make_study``, resolved at each value."""
@@ -133,9 +219,10 @@ def continue_attractors(
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
                          f"{', '.join(system.model.parameter_names)}")
+    check_threshold(match_distance)
     steps: list[Step] = []
     next_id = 1
-    for i, value in enumerate(values):
+    for value in values:
         here = system.replace(**{parameter: float(value)})
         previous = steps[-1].attractors() if steps else []
         study = make_study(here, samples + len(previous), period=period, dt=dt,
@@ -143,13 +230,16 @@ def continue_attractors(
                            device=device, feature_options=feature_options,
                            block=None if blocks is None else blocks.size)
         seeds = np.array([a.representative for _, a in previous]).reshape(-1, here.n_state)
-        random = box.sample(here, samples, np.random.default_rng([seed, i]))
+        random = box.sample(here, samples, np.random.default_rng([seed, 0]))
         result = study.find(np.concatenate([seeds, random]), blocks=blocks)
         seeded = {g: int(result.labels[k]) for k, (g, _) in enumerate(previous)}
+        notes: list[str] = []
         ids, next_id = match(previous, seeded, result.attractors, study.scale, next_id,
-                             match_distance)
-        steps.append(Step(float(value), result, ids, slice(len(seeds), None), study))
+                             match_distance, notes)
+        steps.append(Step(float(value), result, ids, slice(len(seeds), None), study, notes))
         if progress is not None:
             found = ", ".join(f"{ids[a.id]}: {a.nature}" for a in result.attractors)
             progress(f"{parameter} = {value:g}: {found or 'no attractor'}")
+            for note in notes:
+                progress(f"  warning: {note}")
     return steps

@@ -3,11 +3,18 @@
 Three kinds (attr ``kind``):
 
 - ``basins``: ``basin`` (Y, X), the attractor id of every initial state of a grid over two
-  state coordinates (dims named after them), and the attractors' table;
+  state coordinates (dims named after them), and the attractors' table; the boundary
+  measures (``boundary``): the attrs ``basin_entropy``, ``boundary_basin_entropy`` (nats),
+  ``boundary_boxes``, ``entropy_box`` (cells) and ``uncertainty_exponent``, and
+  ``uncertain_fraction`` over ``epsilon`` (grid cells);
 - ``attractors``: the table with each attractor's basin fraction among ``samples`` random
   initial states of a box, ``label`` (sample) and ``initial_state`` (sample, state);
 - ``attractor-continuation``: the table at every value of a parameter (dims ``value``,
-  ``attractor``), ids matched across values.
+  ``attractor``), ids matched across values; ``transition`` (value, attractor, to): the
+  fraction of the random states of each basin at a value that reach attractor ``to`` at
+  the next value (NaN at the last value and for rows without states); ``match_notes``
+  (value): the doubts about the matches at that value (``continuation``, one per line), and
+  the attr ``match_distance`` (the matching threshold, orbit sizes);
 
 The table (dim ``attractor``, coordinate ``attractor`` = the id; ``DIVERGED`` = −1 and
 ``UNDECIDED`` = −2 when such states occur): ``nature`` (periodic-n, quasi-periodic, chaotic,
@@ -26,13 +33,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict
+from itertools import pairwise
 
 import numpy as np
 import xarray as xr
 
 from analysis.model import System
 from analysis.provenance import completed_attrs, plain, provenance, state_variable_attrs
-from analysis.stability.attractors.continuation import Step
+from analysis.stability.attractors.boundary import Boundary, boundary_measures
+from analysis.stability.attractors.continuation import Step, transitions
 from analysis.stability.attractors.label import Attractor
 from analysis.stability.attractors.mapper import SPECIAL_LABELS
 from analysis.stability.attractors.sampling import Box, Range
@@ -135,7 +144,35 @@ def basins_dataset(study: AttractorStudy, result: Result, x: Range, y: Range) ->
                    {"long_name": "attractor id (-1 diverged, -2 undecided)"})
     ds.attrs = study_attrs(study, "basins", basin_x=x.coordinate, basin_y=y.coordinate,
                            periods_integrated=result.periods)
+    if min(grid.shape) >= 2:
+        add_boundary(ds, boundary_measures(grid))
     return ds
+
+
+def add_boundary(ds: xr.Dataset, b: Boundary) -> None:
+    """The boundary measures of a basins Dataset, stored in it (see the module)."""
+    ds["uncertain_fraction"] = ("epsilon", b.uncertain,
+                                {"long_name": "fraction of epsilon-uncertain initial states"})
+    ds["epsilon"] = ("epsilon", b.epsilons, {"units": "grid cells"})
+    ds.attrs.update(basin_entropy=b.basin_entropy, boundary_basin_entropy=b.boundary_entropy,
+                    boundary_boxes=b.boundary_boxes, entropy_box=b.box,
+                    uncertainty_exponent=b.exponent)
+
+
+def boundary_json(ds: xr.Dataset) -> dict | None:
+    """A basins Dataset's boundary measures as JSON (None when it has none)."""
+    if "basin_entropy" not in ds.attrs:
+        return None
+    return {"basin_entropy": plain(float(ds.attrs["basin_entropy"]), finite=True),
+            "boundary_basin_entropy": plain(float(ds.attrs["boundary_basin_entropy"]),
+                                            finite=True),
+            "boundary_boxes": plain(float(ds.attrs["boundary_boxes"]), finite=True),
+            "box_cells": int(ds.attrs["entropy_box"]),
+            "uncertainty_exponent": plain(float(ds.attrs["uncertainty_exponent"]),
+                                          finite=True),
+            "uncertain_fraction": {str(int(e)): float(f) for e, f in
+                                   zip(ds.epsilon.values, ds.uncertain_fraction.values,
+                                       strict=True)}}
 
 
 def fractions_dataset(study: AttractorStudy, result: Result, states: np.ndarray, box: Box,
@@ -152,9 +189,27 @@ def fractions_dataset(study: AttractorStudy, result: Result, states: np.ndarray,
     return ds
 
 
+def transition_array(steps: Sequence[Step], ids: Sequence[int]) -> np.ndarray:
+    """(value, attractor, to): the tipping probabilities from each value to the next
+    (``continuation.transitions`` of the random states' labels; NaN where none)."""
+    index = {i: k for k, i in enumerate(ids)}
+    out = np.full((len(steps), len(ids), len(ids)), np.nan)
+    for k, (here, there) in enumerate(pairwise(steps)):
+        for a, row in transitions(here.random_labels(), there.random_labels()).items():
+            if a not in index:
+                continue
+            out[k, index[a]] = 0.0
+            for b, p in row.items():
+                if b in index:
+                    out[k, index[a], index[b]] = p
+    return out
+
+
 def continuation_dataset(study: AttractorStudy, steps: Sequence[Step], parameter: str,
-                         box: Box, samples: int, seed: int) -> xr.Dataset:
-    """The ``attractor-continuation`` Dataset: the table at each value, one id axis."""
+                         box: Box, samples: int, seed: int,
+                         match_distance: float | None = None) -> xr.Dataset:
+    """The ``attractor-continuation`` Dataset: the table at each value, one id axis, the
+    transitions between consecutive values and the notes on the matches."""
     system = study.system
     longest = max([len(a.points) for s in steps for a in s.result.attractors] + [1])
     tables = [table(system, [a for _, a in s.attractors()],
@@ -169,6 +224,12 @@ def continuation_dataset(study: AttractorStudy, steps: Sequence[Step], parameter
                          np.array([[i in set(t.attractor.values.tolist()) for i in ids]
                                    for t in tables]))
     merged = merged.assign_coords(value=[s.value for s in steps])
+    merged = merged.assign_coords(to=np.array(ids, dtype=np.int64))
+    merged["transition"] = (("value", "attractor", "to"), transition_array(steps, ids),
+                            {"long_name": "fraction of the basin's random states that reach "
+                                          "attractor 'to' at the next value"})
+    merged["match_notes"] = ("value", np.array(["\n".join(s.notes) for s in steps],
+                                               dtype=str))
     merged["value"].attrs = {"long_name": parameter,
                              "units": system.model.units.get(parameter, "")}
     merged["state_units"] = ("state", [system.model.state_units[k]
@@ -177,6 +238,8 @@ def continuation_dataset(study: AttractorStudy, steps: Sequence[Step], parameter
                                samples=samples, seed=seed,
                                box=box.text,
                                periods_integrated=sum(s.result.periods for s in steps))
+    if match_distance is not None:
+        merged.attrs["match_distance"] = float(match_distance)
     return merged
 
 
@@ -203,18 +266,41 @@ def attractor_json(ds: xr.Dataset) -> list[dict]:
 
 def study_json(ds: xr.Dataset) -> dict:
     """The ``--json`` of ``basins`` and ``attractors`` (``{"attractors": [...],
-    "provenance": {...}}``) and of a continuation (``{"values": [{PARAM: value,
-    "attractors": [...]}, ...], "provenance": {...}}``: at each value the attractors
-    present there)."""
+    "provenance": {...}}``; basins add ``"boundary"``, ``boundary_json``) and of a
+    continuation (``{"values": [{PARAM: value, "attractors": [...], "transitions": {FROM:
+    {TO: fraction}}, "notes": [...]}, ...], "provenance": {...}}``: at each value the
+    attractors present there, where their basins' states go at the next value (none at
+    the last) and the doubts about the matches)."""
     if ds.attrs.get("kind") != "attractor-continuation":
-        return {"attractors": attractor_json(ds), "provenance": provenance(ds)}
+        out = {"attractors": attractor_json(ds), "provenance": provenance(ds)}
+        if ds.attrs.get("kind") == "basins":
+            out["boundary"] = boundary_json(ds)
+        out["settled"] = settled_json(ds)
+        return out
     param = str(ds.attrs["param"])
     values = []
     for k, value in enumerate(ds.value.values):
         here = ds.isel(value=k)
         here = here.sel(attractor=here.attractor[here.present.values])
-        values.append({param: float(value), "attractors": attractor_json(here)})
+        notes = str(ds.match_notes.values[k]) if "match_notes" in ds else ""
+        values.append({param: float(value), "attractors": attractor_json(here),
+                       "transitions": transition_json(ds, k),
+                       "notes": notes.split("\n") if notes else []})
     return {"values": values, "provenance": provenance(ds)}
+
+
+def transition_json(ds: xr.Dataset, k: int) -> dict[str, dict[str, float]]:
+    """Row ``k`` of a continuation's ``transition``: ``{FROM: {TO: fraction}}`` (ids as
+    strings; rows and entries without states left out)."""
+    if "transition" not in ds:
+        return {}
+    out = {}
+    for a, row in zip(ds.attractor.values, ds.transition.values[k], strict=True):
+        kept = {str(int(b)): float(p) for b, p in zip(ds.to.values, row, strict=True)
+                if np.isfinite(p) and p > 0}
+        if kept:
+            out[str(int(a))] = kept
+    return out
 
 
 def existence(ds: xr.Dataset) -> dict[int, tuple[float, float]]:
@@ -225,3 +311,53 @@ def existence(ds: xr.Dataset) -> dict[int, tuple[float, float]]:
         if int(i) > 0 and len(where):
             out[int(i)] = (float(where.min()), float(where.max()))
     return out
+
+
+UNSETTLED = 0.5
+"""Share of undecided initial states from which a study says that most did not settle."""
+
+
+def unsettled(ds: xr.Dataset) -> list[str]:
+    """Sentences for a ``basins`` or ``attractors`` Dataset in which at least ``UNSETTLED``
+    of the states stayed undecided (none otherwise): how many, why where it can be known
+    (a section that is not a map: more than one forcing frequency) and which setting to
+    raise."""
+    from analysis.stability.attractors.mapper import UNDECIDED
+
+    if UNDECIDED not in ds.attractor.values:
+        return []
+    share = float(ds.fraction.sel(attractor=UNDECIDED))
+    if share < UNSETTLED:
+        return []
+    attrs = ds.attrs
+    found = int((ds.attractor.values > 0).sum())
+    head = ("nothing settled" if found == 0 or share >= 0.999
+            else "most initial states did not settle")
+    out = [f"{head}: {100 * share:.1f} % of the initial states were still searching after "
+           f"{attrs.get('mapper_max_periods', '?')} forcing periods (undecided)"
+           + (f"; the {found} attractor(s) found hold the rest" if found else "")]
+    if str(attrs.get("mapper", "recurrence")) == "features":
+        out.append("raise --transient-periods (the states are still moving when recorded) "
+                   "or --sections")
+        return out
+    if not int(attrs.get("one_forcing", 1)):
+        out.append(f"why: the {attrs.get('section', '')} section is not a map of this "
+                   "system (it has more than one forcing frequency: unbalance and cage, or "
+                   "several bearings, in general incommensurate), so a trajectory's "
+                   "section points drift and rarely revisit their cells; a quasi-periodic "
+                   "motion needs many periods to recur")
+        out.append("use --mapper features (needs no recurrence), or raise --max-periods "
+                   f"(now {attrs.get('mapper_max_periods', '?')}) and lower --resolution "
+                   f"(now {attrs.get('mapper_resolution', '?')}: coarser cells recur "
+                   "sooner)")
+        return out
+    out.append(f"raise --max-periods (now {attrs.get('mapper_max_periods', '?')}), or lower "
+               f"--resolution (now {attrs.get('mapper_resolution', '?')}: coarser cells "
+               f"recur sooner) or --revisits (now {attrs.get('mapper_revisits', '?')})")
+    return out
+
+
+def settled_json(ds: xr.Dataset) -> dict:
+    """``{"settled": bool, "advice": [...]}`` of ``unsettled``."""
+    advice = unsettled(ds)
+    return {"settled": not advice, "advice": advice}

@@ -21,7 +21,11 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.integrate.flow import Period
 from analysis.model import System
-from analysis.stability.attractors.continuation import MATCH_DISTANCE, continue_attractors
+from analysis.stability.attractors.continuation import (
+    MATCH_DISTANCE,
+    check_threshold,
+    continue_attractors,
+)
 from analysis.stability.attractors.dataset import (
     basins_dataset,
     continuation_dataset,
@@ -129,8 +133,10 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                         feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """The attractors at each of ``values`` of ``parameter``, seeded from the previous
     value's and ``samples`` random states in ``box``, matched across values
-    (``continuation.continue_attractors``)."""
+    (``continuation.continue_attractors``; ``match_distance``: the matching threshold,
+    orbit sizes)."""
     check_count("samples", samples)
+    check_threshold(match_distance)
     box.check(system)
     study = make_study(system, samples + 16, period=period, dt=dt, options=options,
                        label_options=label_options, mapper=mapper, device=device,
@@ -142,5 +148,6 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                                 progress=progress, blocks=Blocks(block, runner),
                                 mapper=mapper, device=device,
                                 feature_options=feature_options)
-    ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed)
+    ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed,
+                              match_distance)
     return blocks_attrs(ds, block, [s.result for s in steps], steps[0].study)
