@@ -113,6 +113,16 @@ def file_metadata(fig: Figure, fmt: str) -> dict[str, str] | None:
     return None
 
 
+def footnote(fig: Figure, text: str, fontsize: float = 6.5) -> None:
+    """``text`` as a footnote under everything else of ``fig`` (a constrained-layout
+    figure): wrapped to the figure's width and set as the figure's bottom label, for which
+    the layout makes room, so it never covers an axis label or the tick labels however
+    many lines it takes."""
+    label = fig.supxlabel(text, fontsize=fontsize, color="0.3", x=0.01, ha="left",
+                          va="bottom")
+    fit_text(label, 0.97 * fig.bbox.width)  # lines measured with the figure's renderer
+
+
 def _wrapped(text: str, width_px: float, measure) -> str:
     """``text`` with line breaks after ", " or "; " (else spaces) so that each line measures
     at most ``width_px`` (``measure(line)`` in pixels); a word longer than the width keeps

@@ -3,8 +3,6 @@ and the labelled envelope spectrum. Functions return figures; saving is the call
 
 from __future__ import annotations
 
-import textwrap
-
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
@@ -75,9 +73,7 @@ def envelope_figure(spectrum: xr.DataArray, peaks: list[Peak], band: Band,
     ax.set_title(f"envelope spectrum, band {band.low_hz:.0f}–{band.high_hz:.0f} Hz ({how}, "
                  f"K = {band.kurtosis:.3g}){note}{noise}\n{fault_words(attrs)}", fontsize=8)
     if band.note:
-        fig.text(0.01, 0.005, textwrap.fill(band.note, 150), fontsize=6.5, va="bottom",
-                 color="0.3")
-        fig.get_layout_engine().set(rect=(0, 0.06, 1, 0.94))
+        plt.footnote(fig, band.note)
     fig.suptitle(run_title(xr.Dataset(attrs=attrs)), fontsize=10)
     return plt.finish(fig, attrs)  # titles that fit, no offsets, the run's provenance
 
