@@ -137,7 +137,10 @@ def _echo_table(ds, output: Path) -> None:
             head += (f"  λ1 = {float(row.lambda1):.4g} ± {float(row.lambda1_ci95):.2g} 1/s"
                      f"  amplitude {amp}")
         typer.echo(head)
-    if "basin_entropy" in ds.attrs:
+    if "basin_entropy" in ds.attrs and float(ds.attrs["boundary_boxes"]) == 0:
+        typer.echo("  boundary: none on this grid (every box of "
+                   f"{int(ds.attrs['entropy_box'])} cells holds one label)")
+    elif "basin_entropy" in ds.attrs:
         a = ds.attrs
         fractal = " (> ln 2: the boundary is fractal)" \
             if float(a["boundary_basin_entropy"]) > 0.6931471805599453 else ""
