@@ -174,15 +174,15 @@ def _echo_continuation(ds, output: Path) -> None:
             f"{100 * float(here.fraction_stderr.sel(attractor=i)):.1f}"
             for i in ds.attractor.values[here.present.values])
         typer.echo(f"    {value:g}: {shares or 'none'}")
+        notes = str(ds.match_notes.values[k]) if "match_notes" in ds else ""
+        for note in filter(None, notes.split("\n")):
+            typer.echo(f"      warning (matched from {ds.value.values[k - 1]:g}): {note}")
         moves = transition_json(ds, k)
         if moves and k + 1 < ds.sizes["value"]:
             text = "; ".join(f"{_label(ds, int(a))} → " + ", ".join(
                 f"{_label(ds, int(b))} {p:.2f}" for b, p in row.items())
                 for a, row in moves.items())
             typer.echo(f"      to {ds.value.values[k + 1]:g}: {text}")
-        notes = str(ds.match_notes.values[k]) if "match_notes" in ds else ""
-        for note in filter(None, notes.split("\n")):
-            typer.echo(f"      warning: {note}")
 
 
 def _label(ds, i: int) -> str:

@@ -158,7 +158,7 @@ def continuation_figure(ds: xr.Dataset, branches: Sequence[xr.Dataset] = ()) -> 
     bottom.set_ylim(-0.02, 1.02)
     bottom.set_ylabel("basin fraction (± standard error)")
     bottom.set_xlabel(f"{param} ({scaled_axis(bottom.xaxis, unit)})" if unit else param)
-    bottom.legend(fontsize=8, loc="upper right", title="attractor", title_fontsize=8)
+    bottom.legend(fontsize=8, loc="best", title="attractor", title_fontsize=8)
     fig.suptitle(f"{ds.attrs['model']}: attractors along {param} "
                  f"({int(ds.attrs['samples'])} random states per value, "
                  f"{ds.attrs['section']} section)", fontsize=10)
