@@ -61,7 +61,7 @@ def is_shipped(path: Path) -> bool:
     """Whether ``path`` is one of the package's own spec files."""
     try:
         return path.resolve().parent == shipped_spec_dir().resolve()
-    except OSError:
+    except (OSError, RuntimeError):  # RuntimeError: a symbolic link loop (Python < 3.13)
         return False
 
 
