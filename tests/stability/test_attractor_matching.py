@@ -54,6 +54,19 @@ def test_a_match_across_periods_is_said_never_silent():
     assert any("changed from periodic-1 to periodic-2" in n for n in notes)
 
 
+def test_a_seed_landing_on_an_unrelated_period_does_not_merge_the_two():
+    previous = [(1, attractor(1, 0.0, 1))]
+    period3 = Attractor(1, "periodic-3", 3, -1.0, 0.1, {}, np.zeros(2),
+                        np.array([[0.0, 0.0], [0.05, 0.0], [0.1, 0.0]]), "")
+    notes: list[str] = []
+    ids, _ = match(previous, {1: 1}, [period3, attractor(2, 0.1, 1)], SCALE, 2, 0.25, notes)
+    assert ids == {1: 2, 2: 1}  # the period-1 orbit keeps its id, by distance
+    assert any("landed on a periodic-3 attractor: not taken as the same" in n for n in notes)
+    notes = []
+    ids, _ = match(previous, {1: 1}, [period3], SCALE, 2, 0.25, notes)
+    assert ids == {1: 2}  # within the threshold, but of another period: a new id
+
+
 def test_a_vanished_attractor_beside_a_new_one_is_noted_and_a_threshold_joins_them():
     previous = [(1, attractor(1, 0.0))]
     notes: list[str] = []

@@ -8,7 +8,10 @@ box; the random states give each attractor's basin fraction. An attractor at the
 takes the id of a previous one when
 
 1. **basin overlap**: the previous attractor's seed landed on it (the new attractor lies in
-   the old one's basin, followed continuously), the pairs taken in order of the distance
+   the old one's basin, followed continuously) and their periods are equal or one period
+   doubling apart (``related``: a period-1 orbit whose state lands on a period-3 orbit
+   after a coarse step is not that orbit; said in the notes), the pairs taken in order of
+   the distance
    between their section sets, each id used once (when an attractor vanishes at a fold its
    seed falls onto another one that already has a closer predecessor: it does not steal
    that id);
@@ -25,7 +28,9 @@ each doubt is a note of the step (``Step.notes``), stored and printed:
 - a seed-matched pair farther apart than the threshold (the parameter step is coarse for
   this attractor: its ids may be swapped; take a finer step or a larger threshold);
 - a match between attractors of different periods (kept as one id because the previous
-  attractor's seed landed on it: a period doubling, or a swap; said, never silent);
+  attractor's seed landed on it and the periods are one doubling apart, or one side is not
+  periodic: a bifurcation, or a swap; said, never silent), and a seed landing refused
+  because the periods are not so related;
 - a previous attractor that vanished while a new one appeared within ten thresholds of it
   (perhaps the same attractor moved farther than the threshold: raise it, or refine).
 
@@ -143,8 +148,17 @@ def match(previous: list[tuple[int, Attractor]], seeded: dict[int, int],
                 for g in old for a in found}
     ids: dict[int, int] = {}
     used: set[int] = set()
-    overlap = sorted((distance[g, j], g, j) for g, j in seeded.items() if j > 0)
-    loose = sorted((d, g, j) for (g, j), d in distance.items() if d <= match_distance)
+    new = {a.id: a for a in found}
+    overlap = sorted((distance[g, j], g, j) for g, j in seeded.items()
+                     if j > 0 and related(old[g], new[j]))
+    if notes is not None:
+        notes.extend(f"attractor {g}'s state landed on a {new[j].nature} attractor: not "
+                     f"taken as the same ({old[g].nature} and {new[j].nature} are not one "
+                     "period doubling apart); matched by distance instead"
+                     for g, j in sorted(seeded.items())
+                     if j > 0 and not related(old[g], new[j]))
+    loose = sorted((d, g, j) for (g, j), d in distance.items()
+                   if d <= match_distance and related(old[g], new[j]))
     for _, g, j in [*overlap, *loose]:
         if j not in ids and g not in used:
             ids[j] = g
@@ -153,18 +167,30 @@ def match(previous: list[tuple[int, Attractor]], seeded: dict[int, int],
         if a.id not in ids:
             ids[a.id], next_id = next_id, next_id + 1
     if notes is not None:
-        notes.extend(doubts(old, {a.id: a for a in found}, ids, distance, match_distance))
+        notes.extend(doubts(old, new, ids, distance, match_distance, seeded))
     return ids, next_id
 
 
+def related(a: Attractor, b: Attractor) -> bool:
+    """Whether a seed landing from ``a`` on ``b`` may make them one id: their periods equal
+    or one period doubling apart (a non-periodic side: allowed, and noted)."""
+    if a.period is None or b.period is None:
+        return True
+    return b.period in (a.period, 2 * a.period) or a.period == 2 * b.period
+
+
 def doubts(old: dict[int, Attractor], found: dict[int, Attractor], ids: dict[int, int],
-           distance: dict[tuple[int, int], float], match_distance: float) -> list[str]:
+           distance: dict[tuple[int, int], float], match_distance: float,
+           seeded: dict[int, int]) -> list[str]:
     """The sentences ``match`` adds to a step's notes (see the module)."""
     out = []
     for j, g in sorted(ids.items(), key=lambda item: item[1]):
         if g not in old:
             continue
         d, a, b = distance[g, j], old[g], found[j]
+        why = ("the previous one's state landed on it" if seeded.get(g) == j else
+               f"their section points lie within the matching threshold ({d:.3g} orbit "
+               "sizes)")
         if d > match_distance:
             out.append(f"attractor {g} moved {d:.3g} orbit sizes, more than the matching "
                        f"threshold {match_distance:g}: it kept its id because the previous "
@@ -172,12 +198,13 @@ def doubts(old: dict[int, Attractor], found: dict[int, Attractor], ids: dict[int
                        "parameter step or a larger --match-threshold)")
         if a.nature != b.nature and (a.period or b.period):
             out.append(f"attractor {g} changed from {a.nature} to {b.nature}: kept as one "
-                       "id because the previous one's state landed on it (a period doubling "
-                       "or a swap; check with a finer step)")
+                       f"id because {why} (a bifurcation, or a swap; check with a finer "
+                       "step)")
     lost = [g for g in old if g not in ids.values()]
     new = [j for j, g in ids.items() if g not in old]
     for g in lost:
-        near = [(distance[g, j], j) for j in new if distance[g, j] <= 10 * match_distance]
+        near = [(distance[g, j], j) for j in new
+                if distance[g, j] <= 10 * match_distance and related(old[g], found[j])]
         if near:
             d, j = min(near)
             out.append(f"attractor {g} vanished and attractor {ids[j]} appeared "
