@@ -75,11 +75,29 @@ def simulate(
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "
                    f"{', '.join(state_names(attrs))}")
+    if profile is not None:
+        typer.echo(kept_speeds(attrs, t))
     if profile is None:  # a bearing that carries no load (issue 32)
         from analysis.stability.statics import static_load_note
 
         if (note := static_load_note(model, balls, **params)) is not None:
             typer.echo(note)
+
+
+def kept_speeds(attrs, t: tuple[float, float]) -> str:
+    """One line: the speeds (rpm) a ramped run's file holds over its times ``t`` (s), and
+    those its transient dropped (issue 32: a 1 s transient silently dropped 1000–3250 rpm
+    of a run-up)."""
+    from analysis.integrate.speed_profile import profile_of
+
+    profile = profile_of(attrs)
+    knots = attrs["speed_profile_t"]
+    n = profile.speed([0.0, t[0], t[1]], float(knots[-1]))
+    line = f"kept speeds {n[1]:.0f} → {n[2]:.0f} rpm (t = {t[0]:g}…{t[1]:g} s)"
+    if t[0] > 0:
+        line += (f"; the transient dropped {n[0]:.0f} → {n[1]:.0f} rpm (--transient 0 "
+                 "keeps the whole ramp)")
+    return line
 
 
 EnvelopeOption = Annotated[bool, typer.Option(
