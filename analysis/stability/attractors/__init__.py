@@ -12,10 +12,13 @@ Built on the stroboscopic map of an ensemble of initial states
 * ``continuation``: global continuation, attractors matched across parameter values by
   basin overlap and section-set distance (Datseris, Rossi & Wagemakers 2023);
 * ``dataset``: the results as Datasets and JSON;
+* ``boundary``: how uncertain a basin picture is (basin entropy, boundary basin entropy,
+  uncertainty exponent);
 * ``studies``: ``basins``, ``basin_fractions`` and ``global_continuation``, the three studies
   of the command line.
 """
 
+from analysis.stability.attractors.boundary import Boundary, boundary_measures
 from analysis.stability.attractors.dataset import existence, study_json
 from analysis.stability.attractors.label import Attractor, LabelOptions
 from analysis.stability.attractors.mapper import (
@@ -30,7 +33,7 @@ from analysis.stability.attractors.studies import basin_fractions, basins, globa
 from analysis.stability.attractors.study import AttractorStudy, Result
 
 __all__ = [
-    "DIVERGED", "UNDECIDED", "Attractor", "AttractorStudy", "Box", "LabelOptions",
+    "DIVERGED", "UNDECIDED", "Attractor", "AttractorStudy", "Boundary", "Box", "LabelOptions",
     "MapperOptions", "Range", "RecurrenceMapper", "Result", "Scale", "basin_fractions",
-    "basins", "existence", "global_continuation", "grid_states", "study_json",
+    "basins", "boundary_measures", "existence", "global_continuation", "grid_states", "study_json",
 ]
