@@ -148,10 +148,18 @@ def _echo_table(ds, output: Path) -> None:
                    f"basin entropy {float(a['boundary_basin_entropy']):.3g} nats"
                    f"{fractal} ({int(a['entropy_box'])}-cell boxes, "
                    f"{100 * float(a['boundary_boxes']):.1f} % on a boundary); uncertainty "
-                   f"exponent {float(a['uncertainty_exponent']):.3g} (1: smooth boundary, "
-                   "< 1: fractal, near 0: riddled)")
+                   f"exponent {_exponent(float(a['uncertainty_exponent']))}")
     for line in unsettled(ds):
         typer.echo(f"  {line}")
+
+
+def _exponent(alpha: float) -> str:
+    """The uncertainty exponent as the text says it."""
+    import math
+
+    if math.isnan(alpha):
+        return "not measured (the grid is too small for two values of ε)"
+    return f"{alpha:.3g} (1: smooth boundary, < 1: fractal, near 0: riddled)"
 
 
 def _echo_continuation(ds, output: Path) -> None:
