@@ -58,7 +58,7 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.frequency.periodic.harmonic import MEMORY_BUDGET, blas_threads
 from analysis.frequency.torus.equations import (
     TorusSystem,
@@ -97,15 +97,7 @@ def check_points(points: object, n_state: int, what: str = "points") -> int:
     """N as a whole number >= ``MIN_POINTS`` whose dense Newton matrices
     (``CIRCLE_MATRICES`` of (n N)² doubles) fit ``MEMORY_BUDGET``; ``InputError`` (one line)
     before any work otherwise."""
-    if isinstance(points, str):
-        try:
-            points = int(points.strip())
-        except ValueError:
-            raise InputError(f"{what}: must be a whole number >= {MIN_POINTS}, got "
-                             f"{points!r}") from None
-    if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or \
-            points < MIN_POINTS:
-        raise InputError(f"{what}: must be a whole number >= {MIN_POINTS}, got {points!r}")
+    points = check_count(what, points, MIN_POINTS, text=True)
     most = math.isqrt(MEMORY_BUDGET // (8 * CIRCLE_MATRICES)) // n_state
     if points > most:
         raise InputError(f"{what}: {points} circle points of {n_state} states need about "

@@ -55,7 +55,7 @@ import casadi as ca
 import numpy as np
 import scipy.fft
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.frequency.periodic.harmonic import MAX_UNKNOWNS, MEMORY_BUDGET
 from analysis.integrate.flow import Period
 from analysis.model import Model, System
@@ -137,19 +137,11 @@ def check_torus_harmonics(harmonics: object, n_state: int,
     if len(pair) != 2:
         raise InputError(f"{what}: give two numbers of harmonics H1,H2 (each >= 1), got "
                          f"{harmonics!r}")
-    values = []
-    for h in pair:
-        if isinstance(h, str):
-            try:
-                h = int(h.strip())
-            except ValueError:
-                raise InputError(f"{what}: each of H1,H2 must be a whole number >= 1, got "
-                                 f"{harmonics!r}") from None
-        if isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1:
-            raise InputError(f"{what}: each of H1,H2 must be a whole number >= 1, got "
-                             f"{harmonics!r}")
-        values.append(int(h))
-    h1, h2 = values
+    try:
+        h1, h2 = (check_count(what, h, 1, text=True) for h in pair)
+    except InputError:
+        raise InputError(f"{what}: each of H1,H2 must be a whole number >= 1, got "
+                         f"{harmonics!r}") from None
     unknowns = torus_size(n_state, (h1, h2))
     need = torus_bytes(n_state, (h1, h2))
     if unknowns > MAX_UNKNOWNS or need > MEMORY_BUDGET:
