@@ -232,7 +232,7 @@ def _print_peaks(ds, variables, peaks) -> None:
 
 def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> None:
     """`spectrum --envelope`: per variable the band, then the named envelope peaks."""
-    from analysis.signal.envelope import envelope_peaks, envelope_spectrum
+    from analysis.signal.envelope import envelope_peaks, envelope_spectrum, names_withheld
     from analysis.signal.spectrum import fault_frequencies
 
     faults = fault_frequencies(ds.attrs)
@@ -266,7 +266,9 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
                        f"({how}, kurtosis {chosen.kurtosis:.3g}, {chosen.edge_s * 1e3:.3g} ms "
                        "of filter start-up left out at each end)")
             _print_peaks(ds, variables, peaks)
-            if any(w in n for p in peaks for n in (p.label or "", *p.also)
+            if withheld := names_withheld(chosen, ds.attrs):
+                typer.echo(withheld)
+            elif any(w in n for p in peaks for n in (p.label or "", *p.also)
                    for w in ("BPFO", "VC")) or "holds the structural" in chosen.note:
                 typer.echo(f"note: {chosen.note}")
         typer.echo("lines are named only 15 dB or more above the median of the 100 bins "

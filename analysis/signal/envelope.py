@@ -188,7 +188,10 @@ def kurtogram_of(ds: xr.Dataset, var: str | None = None,
 
 
 def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None,
-          resonance: bool = False) -> Band:
+          resonance: bool | None = False) -> Band:
+    """The band of largest kurtosis; ``resonance`` True: among those holding a structural
+    resonance (refused without one); None (the default band, issue 32): among those when
+    the model has a resonance inside a searched band, else among all."""
     floor = (default_min_width(ds, spectrum.fs) if min_width_hz is None
              else float(min_width_hz))
     found = kg.kurtogram(np.zeros(0), spectrum.fs, floor, spectrum=spectrum)
@@ -197,17 +200,20 @@ def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None,
                          f"Nyquist frequency {spectrum.fs / 2:g} Hz of this record; give "
                          "--band LO:HI")
     k = found.kurtosis
-    if resonance:
+    if resonance is not False:
         resonances = structural_resonances(ds.attrs)
         holds = np.array([any(lo <= f <= hi for f in resonances)
                           for lo, hi in zip(found.low_hz, found.high_hz, strict=True)])
-        if not holds.any():
+        if resonance is None:
+            resonance = bool(holds.any())
+        if resonance is True and not holds.any():
             raise InputError(f"--band: {RESONANCE!r} needs a structural resonance of the "
                              "model inside a searched band (a sprung body's <body>_stiffness "
                              "and <body>_mass); " + ("this model has none" if not resonances
                              else f"{', '.join(f'{f:g}' for f in resonances)} Hz lie outside "
                              "the searched range"))
-        k = np.where(holds, k, -np.inf)
+        if resonance:
+            k = np.where(holds, k, -np.inf)
     i = int(np.argmax(k))
     return _with_note(Band(float(found.low_hz[i]), float(found.high_hz[i]),
                            float(found.kurtosis[i]), RESONANCE if resonance else "kurtosis"),
@@ -224,7 +230,8 @@ def envelope(ds: xr.Dataset, var: str | None = None,
              band: tuple[float, float] | str | None = None,
              min_width_hz: float | None = None) -> tuple[xr.Dataset, Band]:
     """The Hilbert envelope of ``ds[var]`` band-passed to ``band`` (Hz; None: chosen by
-    kurtosis; ``"resonance"``: the band of largest kurtosis among those holding a structural
+    kurtosis, among the bands holding a structural resonance where the model has one inside
+    the search; ``"resonance"``: the band of largest kurtosis among those holding a structural
     resonance), as a run-like dataset with the variable ``<var>_envelope`` (the unit of
     ``var``) on the part of ``t`` clear of the filter's edges (cut to a fast FFT length),
     the run's attrs plus ``band_hz`` and ``envelope_of``, and the band used."""
@@ -234,7 +241,8 @@ def envelope(ds: xr.Dataset, var: str | None = None,
     if band is None or isinstance(band, str):
         if band is not None and band != RESONANCE:
             raise InputError(f"--band: must be LO:HI in Hz or {RESONANCE!r}, got {band!r}")
-        chosen = _best(ds, spectrum, min_width_hz, resonance=band == RESONANCE)
+        chosen = _best(ds, spectrum, min_width_hz, resonance=True if band == RESONANCE
+                       else None)
     else:
         low, high = check_band(band, fs, len(values))
         k = float(spectrum.kurtosis([(low, high)])[0])
@@ -277,4 +285,20 @@ def envelope_peaks(ds: xr.Dataset, var: str | None = None,
     name = str(env.attrs["state_names"])
     peaks = find_peaks(env, name, max_peaks=max_peaks,
                        min_relative_height=min_relative_height, vocabulary="fault")
+    if names_withheld(chosen, ds.attrs):
+        peaks = [replace(p, label=None, shaft_order=None, vc_order=None, also=())
+                 for p in peaks]
     return peaks, chosen
+
+
+def names_withheld(chosen: Band, attrs: dict) -> str:
+    """Why the envelope lines of ``chosen`` stay unnamed ('' : they are named): the model
+    has a structural resonance and the band holds none, so no fault rings there (issue
+    32: a noise-free run's femtometre band named fault lines)."""
+    resonances = structural_resonances(attrs)
+    if chosen.resonances_hz or not resonances:
+        return ""
+    return (f"no fault line named: the band {chosen.low_hz:g}:{chosen.high_hz:g} Hz holds no "
+            f"structural resonance ({', '.join(f'{f:.0f}' for f in resonances)} Hz "
+            f"{'lie' if len(resonances) > 1 else 'lies'} outside it); use "
+            "--band resonance or a band holding one")
