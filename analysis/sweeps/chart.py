@@ -6,9 +6,11 @@ Each point is computed in one pass (``analysis.sweeps.points``: states and tange
 neighbouring points of the same balls as members of one call of the member kernels,
 ``analysis.integrate.kernels``, on every core or the GPU: ``device``);
 ``chart_point_two_pass`` is the former two-pass point, kept for comparison. A chart runs
-through one executor (``analysis.sweeps.executors``) and stores each finished point at once
-(``analysis.sweeps.store``, written by the calling process as points arrive): re-running an
-interrupted command computes only the missing points.
+through one executor (``analysis.sweeps.executors``) and stores each finished group of
+points at once as one block (``analysis.sweeps.store``: one ``block-<first key>`` entry
+holding the group's keys and each field stacked, written by the calling process as groups
+arrive; a block is whole or absent): re-running an interrupted command computes only the
+missing points. Entries of one point (charts stored before blocks) are read as well.
 
 A setting without a section classifies each point on its model's own section
 (``classify.default_section``: vc for a balanced rotor in one bearing) and records
@@ -175,7 +177,13 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                              "options": asdict(ics.options)}
     store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
     try:
-        done = store.done()
+        done = set(store.points())
+        stored = [len(done)]
+
+        def keep(group: list[tuple], results: list[tuple[str, dict]]) -> None:
+            store.save_block(results)
+            stored[0] += len(results)
+
         tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
@@ -184,9 +192,7 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         run_with_progress(executor, partial(_chart_group_task, device=device,
                                             threads=threads),
                           _chart_groups(setting, tasks, GROUP_POINTS[device]),
-                          lambda: len(store.done()),
-                          len(x.values) * len(y.values), progress,
-                          lambda group, results: [store.save(*r) for r in results])
+                          lambda: stored[0], len(x.values) * len(y.values), progress, keep)
         ds = _assemble_chart(store, setting, x, y, ics)
         save_dataset(ds, output)
         store.remove()
@@ -199,7 +205,8 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
 def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,
                     ics: Ics | None = None) -> xr.Dataset:
     shape = (len(y.values), len(x.values))
-    first = store.load(f"{0:04d}-{0:04d}")
+    stored = store.points()
+    first = stored[f"{0:04d}-{0:04d}"]
     extra = ("n_attractors", "multistable", "diverged_share") if ics is not None else ()
     fields = ("nature_code", "period", "lyapunov", "ci95",
               *(f for f in first if f.startswith("amplitude_")), "graph_ratio", *extra)
@@ -208,7 +215,7 @@ def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,
     codes = np.full((*shape, ics.count if ics is not None else 0), -1, dtype=np.int64)
     for iy in range(shape[0]):
         for ix in range(shape[1]):
-            point = store.load(f"{iy:04d}-{ix:04d}")
+            point = stored[f"{iy:04d}-{ix:04d}"]
             for f in fields:
                 arrays[f][iy, ix] = point[f]
             nature[iy, ix] = str(point["nature"])

@@ -15,6 +15,9 @@ definition is refused. When every point is done the sweep assembles the final ne
   ``on_damaged`` and computed again. An unreadable ``sweep.json`` is rewritten only when
   no point is stored; otherwise the folder is refused (its points cannot be matched to a
   definition).
+- **Blocks.** ``save_block`` stores several points as one entry (``block-<first key>``:
+  their ``keys`` and each field stacked), whole or absent like a point; ``points`` reads
+  entries of both kinds back point by point, ``point_count`` counts them.
 - **Resuming is said, not guessed.** ``command`` (beside ``sweep.json``) records the command
   line that started the sweep; a re-run with another definition is refused naming it and
   the fields that differ. A sweep stopped part way (Ctrl-C, SIGTERM, an error) leaves its
@@ -43,6 +46,8 @@ import numpy as np
 from analysis.errors import InputError, check_count
 
 MANIFEST = "sweep.json"
+BLOCK = "block-"
+"""The key of a block of points: ``block-`` and its first point's key."""
 LOCK = "lock"
 COMMAND = "command"
 """The file (in ``OUTPUT.parts``) holding the command line that started the sweep."""
@@ -125,7 +130,7 @@ class PointStore:
             shown = ", ".join(differ[:4]) + (", …" if len(differ) > 4 else "")
             raise InputError(
                 f"output: {self.folder} holds an unfinished sweep with a different "
-                f"definition ({len(self.done())} points stored; differs in {shown}); "
+                f"definition ({self.point_count()} points stored; differs in {shown}); "
                 f"{self.stored_command_text()}, or delete the folder")
         if stored != json.loads(text):  # none yet, or one of no stored point: replaced
             self.folder.mkdir(parents=True, exist_ok=True)
@@ -193,7 +198,7 @@ class PointStore:
         None when the folder is gone (nothing was kept)."""
         if not self.folder.exists():
             return None
-        kept = len(self.done())
+        kept = self.point_count()
         count = f"{kept} of {total}" if total is not None else f"{kept}"
         return f"{count} {what} kept in {self.folder}; run the same command to resume"
 
@@ -226,6 +231,35 @@ class PointStore:
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+
+    def save_block(self, points: list[tuple[str, dict[str, Any]]]) -> None:
+        """Store ``(key, values)`` points (the same fields, each of one shape) as one entry:
+        ``keys`` and every field stacked over the points, in one atomic write."""
+        fields = points[0][1].keys()
+        if any(values.keys() != fields for _, values in points):
+            raise ValueError("a block's points must have the same fields")
+        block = {"keys": np.array([key for key, _ in points])}
+        for name in fields:
+            block[name] = np.stack([np.asarray(values[name]) for _, values in points])
+        self.save(BLOCK + points[0][0], block)
+
+    def points(self) -> dict[str, dict[str, np.ndarray]]:
+        """Every stored point, key → values, from entries of one point and blocks alike."""
+        found: dict[str, dict[str, np.ndarray]] = {}
+        for name in sorted(self.done()):
+            entry = self.load(name)
+            if not name.startswith(BLOCK):
+                found[name] = entry
+                continue
+            fields = [f for f in entry if f != "keys"]
+            for j, key in enumerate(entry["keys"].tolist()):
+                found[key] = {f: entry[f][j] for f in fields}
+        return found
+
+    def point_count(self) -> int:
+        """How many points are stored (a block counts its points)."""
+        return sum(len(self.load(name)["keys"]) if name.startswith(BLOCK) else 1
+                   for name in self.done())
 
     def load(self, key: str) -> dict[str, np.ndarray]:
         with np.load(self.folder / f"{key}.npz", allow_pickle=False) as data:
