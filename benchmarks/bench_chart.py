@@ -21,6 +21,12 @@ skips the serial reference): issue 33's 160 000-point chart is ``--speeds 20000 
 --reference-points 0`` (target <= 30 s on an H200).
                                      [--save chart.nc]
 
+``--host-points G`` (default 32, 0 skips) first times the host side of one group of G
+points after its one ``run_members`` call (the call itself replayed, not timed): the
+per-point path (a Dataset per point, ``chart_row``, one store entry written, fsynced and
+read back per point) against the chart's (``chart_points``: a ``SectionView`` per point;
+``PointStore.save_block``: one entry per group; ``points``), in ms per point.
+
 Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
 ``--quick`` is ``--speeds 10`` (80 points) for an estimate.
 """
@@ -40,10 +46,12 @@ import numpy as np
 from analysis.integrate.compiled import Runner, library
 from analysis.model import as_system
 from analysis.reports.progress import ProgressReporter
+from analysis.sweeps import points as chart_module
 from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.executors import make_executor
 from analysis.sweeps.grid import Axis, Setting
-from analysis.sweeps.points import chart_point, chart_points
+from analysis.sweeps.points import chart_point, chart_points, chart_row, kernel_points
+from analysis.sweeps.store import PointStore
 
 SETTING = Setting("vakharia2015", None, {}, transient=1.0, samples=200, lyapunov=True)
 WALL_TARGET = 150.0
@@ -123,6 +131,50 @@ def serial_reference(x: Axis, y: Axis, count: int, repeat: int) -> dict:
             "simulated": sum(r[2] for r in rows) / len(rows)}
 
 
+def host_side(count: int, repeat: int) -> dict[str, float]:
+    """ms per point of the host side after one ``run_members`` call for ``count`` points
+    (N_b 8, speeds spread over 1000-10000 rpm): ``per_point`` (a Dataset per point, a
+    store entry per point written and read back) and ``block`` (the chart's path); the
+    kernel call runs once and is replayed. Best of ``repeat``."""
+    systems = [SETTING.system_at(n_balls=8, speed_rpm=v)
+               for v in np.linspace(1000.0, 10000.0, count)]
+    durations = [SETTING.seconds(system) for system in systems]
+    real, kept = chart_module.run_members, []
+
+    def replay(*args, **kwargs):
+        if not kept:
+            kept.append(real(*args, **kwargs))
+        return kept[0]
+
+    def per_point(store: PointStore) -> None:
+        rows = [chart_row(p) for p in kernel_points(systems, durations, SETTING.transient,
+                                                    SETTING.step(), SETTING.section)]
+        for i, row in enumerate(rows):
+            store.save(f"0000-{i:04d}", row)
+        for i in range(len(rows)):
+            store.load(f"0000-{i:04d}")
+
+    def block(store: PointStore) -> None:
+        rows = chart_points(SETTING, systems)
+        store.save_block([(f"0000-{i:04d}", row) for i, row in enumerate(rows)])
+        store.points()
+
+    chart_module.run_members = replay
+    times: dict[str, list[float]] = {"per_point": [], "block": []}
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            chart_points(SETTING, systems)  # the kernel call, kept for the replays
+            for k in range(repeat):
+                for name, fn in (("per_point", per_point), ("block", block)):
+                    store = PointStore(Path(tmp) / f"{name}{k}.nc", {"kind": "bench"},
+                                       lock=True)
+                    times[name].append(timed(fn, store) / count * 1e3)
+                    store.remove()
+    finally:
+        chart_module.run_members = real
+    return {name: min(values) for name, values in times.items()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -133,6 +185,8 @@ def main() -> None:
     parser.add_argument("--reference-points", type=int, default=10)
     parser.add_argument("--device", default="cpu", help="where the chart's points run")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--host-points", type=int, default=32,
+                        help="points of the host-side timing (0: skip it)")
     parser.add_argument("--no-chart", action="store_true",
                         help="the serial reference only")
     parser.add_argument("--save", type=Path, help="also write the chart to this netCDF file")
@@ -142,6 +196,13 @@ def main() -> None:
     y = Axis.parse("n_balls:5:12")
     full_x = Axis.parse("speed_rpm:1000:10000:200")
 
+    if args.host_points > 0:
+        host = host_side(args.host_points, args.repeat)
+        print(f"host side after the kernel call, {args.host_points} points (best of "
+              f"{args.repeat}, load {os.getloadavg()[0]:.1f}): per point (Dataset, one "
+              f"store entry each) {host['per_point']:.2f} ms/point; chart's (SectionView, "
+              f"one block) {host['block']:.2f} ms/point; "
+              f"{host['per_point'] / host['block']:.1f}x")
     if args.reference_points > 0:
         report_reference(serial_reference(full_x, y, args.reference_points, args.repeat),
                          args.repeat)

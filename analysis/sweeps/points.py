@@ -509,7 +509,9 @@ def _kernel_result(point: _KernelPoint, sections: np.ndarray, logs: np.ndarray,
                        displacement_names(point.attrs), points)
 
 
-def _chart_result(out: PointResult) -> dict:
+def chart_row(out: PointResult) -> dict:
+    """The chart's fields of a point: class, its code and period, λ1 and its interval
+    (1/s), the graph ratio and the amplitudes (half peak-to-peak, SI units)."""
     result = out.classification
     return {"nature": result.nature, "nature_code": nature_code(result.nature),
             "period": result.period or 0, "lyapunov": out.lyapunov, "ci95": out.ci95,
@@ -522,7 +524,7 @@ def chart_point(setting: Setting, system: System) -> dict:
     (``setting.system_at``), in one pass (see the module docstring), classified on
     ``setting.section`` (None: the model's own, ``default_section``);
     ``chart.chart_point_two_pass`` is the same in two."""
-    return _chart_result(one_pass(system, setting.seconds(system), setting.transient,
+    return chart_row(one_pass(system, setting.seconds(system), setting.transient,
                                   setting.step(), setting.section, tangent=setting.lyapunov))
 
 
@@ -546,4 +548,4 @@ def chart_points(setting: Setting, systems: list[System], device: str = "cpu",
     else:
         outs = kernel_points(systems, durations, setting.transient, dt, setting.section,
                              device, threads, datasets=False)
-    return [out if isinstance(out, SimulationError) else _chart_result(out) for out in outs]
+    return [out if isinstance(out, SimulationError) else chart_row(out) for out in outs]

@@ -1,6 +1,6 @@
 """The chart's host side after the member kernels: ``chart_points`` classifies each point on
 a ``SectionView`` of its section arrays (no Dataset), with results identical to the
-Dataset path (``kernel_points(datasets=True)``, ``_chart_result`` of each)."""
+Dataset path (``kernel_points(datasets=True)``, ``chart_row`` of each)."""
 
 from __future__ import annotations
 
@@ -45,8 +45,8 @@ def test_section_view_gives_the_dataset_path_results(monkeypatch):
         assert all(isinstance(p.points, xr.Dataset) for p in full)
         rows = chart.chart_points(setting, systems)
         for a, b, row in zip(light, full, rows, strict=True):
-            assert _identical(chart._chart_result(a), chart._chart_result(b))
-            assert _identical(row, chart._chart_result(b))
+            assert _identical(chart.chart_row(a), chart.chart_row(b))
+            assert _identical(row, chart.chart_row(b))
             assert a.classification == b.classification
             view = a.points
             for name in b.points.data_vars:
