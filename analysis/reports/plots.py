@@ -99,6 +99,10 @@ AMBIGUOUS_MARK = "*"
 """Appended to a label that another combination matches within the tolerance."""
 LABEL_STEP_PT = 7.0
 """Vertical step (points) by which a peak label is moved up until it overlaps no other."""
+MAX_LABEL_STEPS = 4
+"""Steps a label may climb: beyond them labels would stack into a tower and the axes' top
+would be raised to hold it (stretching the data into the bottom of the axes), so the label
+of a smaller peak with no room within them is left out (the printed table still names it)."""
 
 
 def plot_spectrum(ax, ds: xr.Dataset, var: str, peaks: list[Peak] | None = None,
@@ -178,18 +182,19 @@ def label_box(note, renderer):
 def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> None:
     """Move peak labels up (in steps of ``LABEL_STEP_PT``, a leader line to the peak) until
     no two labels of an axes overlap each other or the legend, the larger peaks' labels
-    placed first; a label at an edge is aligned to stay inside the axes, whose top is raised
-    until every label fits below it. Draws the
+    placed first, at most ``MAX_LABEL_STEPS`` steps (a smaller peak's label with no room
+    is left out); a label at an edge is aligned to stay inside the axes, whose top is
+    raised until every label fits below it. Draws the
     figure once to fix the layout, then freezes it (so that the saved figure keeps the
     positions the labels were checked at)."""
     fig.canvas.draw()
     fig.set_layout_engine("none")
     renderer = fig.canvas.get_renderer()
     for ax in fig.axes:
-        notes = peak_labels(ax)
-        if not notes:
+        if not peak_labels(ax):
             continue
         for _ in range(6):
+            notes = peak_labels(ax)  # without the labels left out on an earlier pass
             legend = ax.get_legend()
             placed = [legend.get_window_extent(renderer).padded(pad_px)] if legend else []
             for note in notes:
@@ -200,12 +205,16 @@ def separate_peak_labels(fig: Figure, pad_px: float = 1.5, tries: int = 40) -> N
                     note.set_horizontalalignment("left")
                 elif box.x1 > ax.bbox.x1:
                     note.set_horizontalalignment("right")
-                for _ in range(tries):
+                for _ in range(min(tries, MAX_LABEL_STEPS) + 1):
                     box = label_box(note, renderer).padded(pad_px)
                     if not any(box.overlaps(other) for other in placed):
+                        placed.append(box)
                         break
                     note.xyann = (0.0, note.xyann[1] + LABEL_STEP_PT)
-                placed.append(label_box(note, renderer).padded(pad_px))
+                else:  # a smaller peak's label with no room within the stack: left out
+                    note.remove()
+            if not placed:
+                break
             overflow = max(b.y1 for b in placed) - ax.bbox.y1
             if overflow <= 0:
                 break
