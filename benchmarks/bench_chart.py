@@ -24,8 +24,9 @@ skips the serial reference): issue 33's 160 000-point chart is ``--speeds 20000 
 ``--host-points G`` (default 32, 0 skips) first times the host side of one group of G
 points after its one ``run_members`` call (the call itself replayed, not timed): the
 per-point path (a Dataset per point, ``chart_row``, one store entry written, fsynced and
-read back per point) against the chart's (``chart_points``: a ``SectionView`` per point;
-``PointStore.save_block``: one entry per group; ``points``), in ms per point.
+read back per point) against the chart's (``chart_points``: a group's rows classified with
+numpy over its points; ``PointStore.save_block``: one entry per group; ``points``), in ms
+per point.
 
 Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
 ``--quick`` is ``--speeds 10`` (80 points) for an estimate.
@@ -200,7 +201,7 @@ def main() -> None:
         host = host_side(args.host_points, args.repeat)
         print(f"host side after the kernel call, {args.host_points} points (best of "
               f"{args.repeat}, load {os.getloadavg()[0]:.1f}): per point (Dataset, one "
-              f"store entry each) {host['per_point']:.2f} ms/point; chart's (SectionView, "
+              f"store entry each) {host['per_point']:.2f} ms/point; chart's (numpy rows, "
               f"one block) {host['block']:.2f} ms/point; "
               f"{host['per_point'] / host['block']:.1f}x")
     if args.reference_points > 0:

@@ -81,6 +81,7 @@ from analysis.stability.lyapunov import (
     running_mean,
     tangent_block,
 )
+from analysis.sweeps.classes import chart_classes
 from analysis.sweeps.grid import Setting
 
 RENORM_EVERY = 100
@@ -236,9 +237,8 @@ class PointResult:
     """Peak-to-peak of every state variable over the record (SI units)."""
     displacements: tuple[str, ...]
     """The first body's translations (``analysis.provenance.displacement_names``)."""
-    points: xr.Dataset | SectionView
-    """The Poincaré points of the classification (``poincare_section`` of the record; a
-    ``SectionView`` of the same arrays from ``kernel_points(datasets=False)``)."""
+    points: xr.Dataset
+    """The Poincaré points of the classification (``poincare_section`` of the record)."""
 
 
 @dataclass
@@ -396,9 +396,10 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
     whole run check (``RunPlan.make``), the others their times only (a chart's grid is
     checked at its corners first, ``grid.check_grid``). Without a CPU build (an operation
     the writer does not know, no compiler) the points run one by one (``one_pass``); on the
-    GPU that is an error (``Unsupported``, ``CompileError``). Without ``datasets`` each
-    result's ``points`` is a ``SectionView`` of the section arrays instead of an
-    ``xr.Dataset`` (the chart needs only the verdict: 1.6 ms a point less)."""
+    GPU that is an error (``Unsupported``, ``CompileError``). Without ``datasets`` a point's
+    result is its chart row (``chart_row``'s fields) instead of a ``PointResult``, the
+    points of equal section counts classified together (``_kernel_rows``: no Dataset, the
+    class with numpy over the points; identical rows, ``tests/sweeps/test_chart_host.py``)."""
     results: list = [None] * len(systems)
     groups: dict[tuple, list[tuple[int, _KernelPoint]]] = {}
     for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):
@@ -424,17 +425,64 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
             for i, _ in group:  # no CPU build: the scalar blocks, point by point
                 results[i] = _scalar_point(systems[i], durations[i], transient, dt, section)
             continue
-        units = None if datasets else _units(points[0].system.model)
+        kept = []
         for j, (i, point) in enumerate(group):
             if out.diverged_at[j] >= 0:
                 results[i] = blow_up_error(point.system, int(out.diverged_at[j]), point.h,
                                            out.final[j])
-                continue
-            total = point.skip + point.count
-            results[i] = _kernel_result(point, out.sections[j, point.skip:total],
-                                        out.logs[j, total - point.averaged:total],
-                                        out.high[j] - out.low[j], units)
+            elif not datasets:
+                kept.append((j, i))
+            else:
+                total = point.skip + point.count
+                results[i] = _kernel_result(point, out.sections[j, point.skip:total],
+                                            out.logs[j, total - point.averaged:total],
+                                            out.high[j] - out.low[j])
+        by_count: dict[int, list[tuple[int, int]]] = {}
+        for j, i in kept:
+            by_count.setdefault(points[j].count, []).append((j, i))
+        for members in by_count.values():
+            rows = _kernel_rows([points[j] for j, _ in members], out, [j for j, _ in members])
+            for (_, i), row in zip(members, rows, strict=True):
+                results[i] = row
     return results
+
+
+def _kernel_rows(points: list[_KernelPoint], out, rows: list[int]) -> list[dict]:
+    """The chart rows (``chart_row``'s fields) of kernel points of one model holding the
+    same number of section points, members ``rows`` of the kernel result ``out``: λ1 and
+    its interval point by point, the class with numpy over the points
+    (``classes.chart_classes``)."""
+    model, attrs = points[0].system.model, [p.attrs for p in points]
+    sections = np.stack([out.sections[j, p.skip:p.skip + p.count]
+                         for j, p in zip(rows, points, strict=True)])
+    ptp = out.high[rows] - out.low[rows]
+    lam, ci = np.empty(len(points)), np.empty(len(points))
+    for m, (j, p) in enumerate(zip(rows, points, strict=True)):
+        total, interval = p.skip + p.count, p.every * p.h
+        logs = out.logs[j, total - p.averaged:total][None, :]
+        lam[m] = float(running_mean(logs, interval)[0, -1])
+        ci[m] = float(batch_ci95(logs, interval)[0])
+    period = np.array([p.period for p in points])
+    times = np.stack([(0.0 + np.arange(p.first, p.first + p.count)) * p.period
+                      for p in points])
+    graph = np.array([a.get("unbalance_force", 0.0) > 0 and a.get("vc_hz", 0) > 0
+                      and str(p.section) == "shaft" for a, p in zip(attrs, points,
+                                                                   strict=True)])
+    vc_hz = np.array([float(a.get("vc_hz", 0)) for a in attrs])
+    natures, periods, ratios = chart_classes(sections, ptp, model.state_names,
+                                             _units(model), period, times, graph, vc_hz,
+                                             lam, ci)
+    shown = displacement_names(attrs[0])
+    index = [model.state_names.index(v) for v in shown]
+    found = []
+    for m, nature in enumerate(natures):
+        half = ptp[m].tolist()
+        found.append({"nature": nature, "nature_code": nature_code(nature),
+                      "period": periods[m].item(), "lyapunov": lam[m].item(),
+                      "ci95": ci[m].item(), "graph_ratio": ratios[m].item() or np.nan,
+                      **{f"amplitude_{v}": half[k] / 2 for v, k in zip(shown, index,
+                                                                       strict=True)}})
+    return found
 
 
 def _scalar_point(system: System, duration: float, transient: float, dt: float,
@@ -463,48 +511,22 @@ def _section_dataset(point: _KernelPoint, sections: np.ndarray) -> xr.Dataset:
                       attrs=attrs)
 
 
-class _Variable:
-    """One state variable of a ``SectionView``: ``values`` and ``attrs`` as a Dataset's."""
-
-    def __init__(self, values: np.ndarray, units: str):
-        self.values, self.attrs = values, {"units": units}
-
-
-class SectionView:
-    """The Poincaré points of a kernel point as ``classify.classify_section`` reads them
-    (``attrs``, ``view[name].values`` and ``.attrs["units"]``, ``view.t.values``, in s),
-    the same arrays and attrs as ``_section_dataset``'s without building a Dataset."""
-
-    def __init__(self, point: _KernelPoint, sections: np.ndarray, units: dict[str, str]):
-        k = np.arange(point.first, point.first + point.count)
-        self.attrs = {**point.attrs, "section": str(point.section),
-                      "section_period_s": point.period, "phase": 0.0}
-        self._data = {name: _Variable(sections[:, i], units[name])
-                      for i, name in enumerate(point.system.model.state_names)}
-        self.t = _Variable((0.0 + k) * point.period, "s")
-
-    def __getitem__(self, name: str) -> _Variable:
-        return self._data[name]
-
-
 def _units(model: Model) -> dict[str, str]:
-    """The ``units`` attr of every state variable's section points (``_section_dataset``)."""
+    """The unit of every state variable (their section points' ``units`` attr)."""
     return {name: str(state_variable_attrs(model, name)["units"])
             for name in model.state_names}
 
 
 def _kernel_result(point: _KernelPoint, sections: np.ndarray, logs: np.ndarray,
-                   ptp_values: np.ndarray, units: dict[str, str] | None = None
-                   ) -> PointResult:
-    """A kernel point's verdict: its section points (states at t = k·T; with ``units`` a
-    ``SectionView``, else a Dataset), amplitudes and λ1 from the section logs."""
+                   ptp_values: np.ndarray) -> PointResult:
+    """A kernel point's verdict: its section points (states at t = k·T), amplitudes and
+    λ1 from the section logs."""
     model = point.system.model
     interval = point.every * point.h
     lam = float(running_mean(logs[None, :], interval)[0, -1])
     ci = float(batch_ci95(logs[None, :], interval)[0])
     ptp = dict(zip(model.state_names, ptp_values.tolist(), strict=True))
-    points = (_section_dataset(point, sections) if units is None
-              else SectionView(point, sections, units))
+    points = _section_dataset(point, sections)
     return PointResult(classify_section(points, ptp, lambda: (lam, ci)), lam, ci, ptp,
                        displacement_names(point.attrs), points)
 
@@ -548,4 +570,5 @@ def chart_points(setting: Setting, systems: list[System], device: str = "cpu",
     else:
         outs = kernel_points(systems, durations, setting.transient, dt, setting.section,
                              device, threads, datasets=False)
-    return [out if isinstance(out, SimulationError) else chart_row(out) for out in outs]
+    return [out if isinstance(out, SimulationError | dict) else chart_row(out)
+            for out in outs]

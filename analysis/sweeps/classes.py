@@ -1,0 +1,102 @@
+"""The chart's verdicts of many points at once: ``classify.classify_section``'s class, period
+and graph ratio, computed with numpy over the members of one kernel call that hold the same
+number of section points (``points.chart_points``).
+
+The steps are ``classify_section``'s, element for element: the section points normalised as
+``classify._normalised_points`` does (velocities over the section's angular frequency,
+positions of another unit rescaled to the orbit size), the smallest repeat period n <= 16
+with every |P_{k+n} − P_k| < 1e-3 of the orbit size (``classify.repeat_period``), then for a
+point forced at X and VC on the shaft section the graph ratio (``classify.graph_ratio``: the
+same seed, so the same random pairs for every point of K samples), then λ1 against its
+interval and the chaos floor. Only the fields of a chart's point are produced (class,
+period, graph ratio); ``tests/sweeps/test_classes.py`` checks them equal to
+``classify_section``'s on kernel points and on a few hundred varied section sets.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from analysis.stability.classify import GRAPH_RATIO
+
+
+def normalised(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
+               units: dict[str, str], period: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``sections`` (m × K × n states, SI units, the order of ``names``) normalised as
+    ``classify``: velocities over 2π/``period`` (m, s), positions of another unit than the
+    first position's rescaled; returns the points and the orbit sizes (m)."""
+    index = {name: i for i, name in enumerate(names)}
+    pairs = [(q, f"v{q}") for q in names if f"v{q}" in index]
+    if 2 * len(pairs) != len(names):
+        raise ValueError("state variables are not positions with their velocities")
+    unit_of = [units[q] for q, _ in pairs]
+    scale = {u: np.max(ptp[:, [index[q] for (q, _), uq in zip(pairs, unit_of, strict=True)
+                               if uq == u]], axis=1) for u in unit_of}
+    size = np.maximum(scale[unit_of[0]], 1e-300)
+    omega = (2 * np.pi / period)[:, None]
+    out = np.empty_like(sections)
+    for (q, v), u in zip(pairs, unit_of, strict=True):
+        factor = (size / np.maximum(scale[u], 1e-300))[:, None] if u != unit_of[0] else 1.0
+        out[:, :, index[q]] = sections[:, :, index[q]] * factor
+        out[:, :, index[v]] = sections[:, :, index[v]] / omega * factor
+    return out, size
+
+
+def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
+                   max_period: int = 16) -> np.ndarray:
+    """``classify.repeat_period`` of each member (m × K × n points, sizes m): the smallest
+    n, 0 where none."""
+    found = np.zeros(len(points), dtype=np.int64)
+    for n in range(1, max_period + 1):
+        if points.shape[1] < 2 * n + 2:
+            break
+        gap = np.max(np.linalg.norm(points[:, n:] - points[:, :-n], axis=2), axis=1)
+        found[(found == 0) & (gap < rel_tol * size)] = n
+    return found
+
+
+def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.ndarray:
+    """``classify.graph_ratio`` of each member (m × K × n points, phases m × K)."""
+    count = points.shape[1]
+    order = np.argsort(phase, axis=1)
+    sorted_points = np.take_along_axis(points, order[:, :, None], axis=1)
+    neighbours = np.linalg.norm(np.diff(sorted_points, axis=1), axis=2)
+    rng = np.random.default_rng(seed)
+    i, j = rng.integers(0, count, (2, 4 * count))
+    pairs = np.linalg.norm(points[:, i] - points[:, j], axis=2)
+    return np.median(neighbours, axis=1) / np.maximum(np.median(pairs[:, i != j], axis=1),
+                                                      1e-300)
+
+
+def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
+                  units: dict[str, str], period: np.ndarray, times: np.ndarray,
+                  graph: np.ndarray, vc_hz: np.ndarray, lam: np.ndarray, ci: np.ndarray,
+                  chaos_floor: float = 0.01
+                  ) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Class, period (0: none) and graph ratio (NaN: none) of m points as
+    ``classify_section`` gives them (``rel_tol`` 1e-3, periods up to 16): ``sections``
+    m × K × n, ``ptp`` m × n peak-to-peak (SI units), ``period`` the section periods (s),
+    ``times`` m × K the section times (s), ``graph`` whether a point's graph ratio is
+    judged (forced at X and VC, shaft section), ``vc_hz`` its VC frequency (Hz), ``lam``
+    and ``ci`` λ1 and its 95 % half-width (1/s)."""
+    points, size = normalised(sections, ptp, names, units, period)
+    periods = repeat_periods(points, size)
+    ratios = np.full(len(points), np.nan)
+    judged = graph & (periods == 0)
+    if judged.any():
+        ratios[judged] = graph_ratios(points[judged],
+                                      np.mod(times[judged] * vc_hz[judged][:, None], 1.0))
+    floor = chaos_floor * 2 * np.pi / period
+    natures = []
+    for n, ratio, lam_k, ci_k, floor_k in zip(periods.tolist(), ratios.tolist(),
+                                              lam.tolist(), ci.tolist(), floor.tolist(),
+                                              strict=True):
+        if n:
+            natures.append(f"periodic-{n}")
+        elif ratio == ratio and ratio < GRAPH_RATIO:
+            natures.append("quasi-periodic")
+        elif lam_k - ci_k > 0 and lam_k > floor_k:
+            natures.append("chaotic")
+        else:
+            natures.append("quasi-periodic")
+    return natures, periods, ratios
