@@ -73,7 +73,8 @@ def hb(
     stability; with --param, --from and --to its continuation (LP, PD, NS, BP points).
     Prefer it for a periodic response (one forcing period); for a quasi-periodic one (shaft
     and cage frequencies) use `torus`, whose default invariant circle is accurate on
-    contact. Check H: run again at 2H; the change is the error."""
+    contact. Prints its error estimate: the change at 2H and at twice the samples."""
+    from analysis.frequency.accuracy import hb_error
     from analysis.frequency.methods import PERIODIC, Request
     from analysis.model import as_system
 
@@ -84,7 +85,8 @@ def hb(
                           max_points=max_points, ds_max=ds_max,
                           options=given_options(dt=dt, settle=settle, samples=samples),
                           progress=progress_lines(quiet))
-        data = PERIODIC["hb"].run(system, request, end)
+        data = hb_error(PERIODIC["hb"], system, request, PERIODIC["hb"].run(system, request,
+                                                                             end))
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)))
 
@@ -133,6 +135,8 @@ def points_json(data) -> list[dict]:
 
 
 def _print(data, output: Path) -> None:
+    from analysis.frequency.accuracy import error_words
+
     param = data.attrs.get("param", "")
     n = data.sizes["point"]
     head = f"wrote {output}: "
@@ -145,6 +149,7 @@ def _print(data, output: Path) -> None:
                    f"{float(data.residual.values[0]):.2e}, "
                    f"{'stable' if data.stable.values[0] else 'unstable'} (largest |μ| = "
                    f"{float(np.max(mult)):.6g}); amplitude {amp}")
+        typer.echo(error_words(data))
         return
     specials = [(str(k), float(v)) for k, v in zip(data.special.values, data[param].values,
                                                    strict=True) if k]
@@ -153,6 +158,7 @@ def _print(data, output: Path) -> None:
                f"{data.attrs['status']}; special points: {len(specials) or 'none'}")
     for kind, value in specials:
         typer.echo(f"  {kind}  {param} = {value:.6g} {unit}".rstrip())
+    typer.echo(error_words(data))
 
 
 def response_figure(data):
@@ -188,8 +194,10 @@ def response_figure(data):
 
     shown = scaled_axis(ax.yaxis, unit, float(np.nanmax(np.abs(amp), initial=0.0)))
     ax.set_ylabel(f"amplitude of {state}, (max - min)/2 ({shown})")
+    from analysis.frequency.accuracy import error_words
+
     ax.set_title(f"{data.attrs['model']}: harmonic balance, period {data.attrs['period']}, "
-                 f"H = {data.attrs['harmonics']}", fontsize=9)
+                 f"H = {data.attrs['harmonics']}\n{error_words(data)}", fontsize=9)
     return canvas.finish(fig, data)
 
 
