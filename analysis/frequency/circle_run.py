@@ -50,7 +50,10 @@ def circle_states(data: xr.Dataset, duration: float) -> tuple[np.ndarray, np.nda
     starts = interpolate_circle(data.circle.values.T, phi)
     shaft = ShaftMap(system, freqs, steps, steps, revolutions)
     _, _, states = shaft(starts, phi, system.p)
-    z = np.vstack([starts[:1], states.reshape(-1, system.n_state)])
+    # each section holds its circle point (the end of the revolution before differs by the
+    # circle's invariance defect between its samples)
+    z = np.concatenate([starts[:, None, :], states[:, :-1, :]], axis=1)
+    z = np.vstack([z.reshape(-1, system.n_state), states[-1, -1:]])
     t = h * np.arange(len(z))
     keep = t <= duration + 0.5 * h
     return t[keep], z[keep]

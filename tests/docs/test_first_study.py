@@ -25,7 +25,8 @@ SMALL: dict[str, dict[str, str | None]] = {
 EXPECT = {
     "run": ["docs/calibration.md", "class (paper)"],
     "attractors": ["attractor(s)", "%"],
-    "torus": ["by the invariant circle", "circle tail", "change at N = 34"],
+    "torus": ["by the invariant circle", "circle tail", "change at N = 34",
+              "between the sections"],
     "simulate vakharia2015": ["kept speeds 1000 → 10000 rpm"],
     "waterfall": ["rpm"],
     "spectrum": ["holds the structural resonance at 8000 Hz", "BPFO"],
