@@ -449,19 +449,17 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
 
 def _kernel_rows(points: list[_KernelPoint], out, rows: list[int]) -> list[dict]:
     """The chart rows (``chart_row``'s fields) of kernel points of one model holding the
-    same number of section points, members ``rows`` of the kernel result ``out``: λ1 and
-    its interval point by point, the class with numpy over the points
-    (``classes.chart_classes``)."""
+    same number of section points, members ``rows`` of the kernel result ``out``: λ1, its
+    interval (``lyapunov.running_mean``, ``batch_ci95``, one interval per row) and the class
+    (``classes.chart_classes``) with numpy over the points."""
     model, attrs = points[0].system.model, [p.attrs for p in points]
     sections = np.stack([out.sections[j, p.skip:p.skip + p.count]
                          for j, p in zip(rows, points, strict=True)])
     ptp = out.high[rows] - out.low[rows]
-    lam, ci = np.empty(len(points)), np.empty(len(points))
-    for m, (j, p) in enumerate(zip(rows, points, strict=True)):
-        total, interval = p.skip + p.count, p.every * p.h
-        logs = out.logs[j, total - p.averaged:total][None, :]
-        lam[m] = float(running_mean(logs, interval)[0, -1])
-        ci[m] = float(batch_ci95(logs, interval)[0])
+    logs = np.stack([out.logs[j, p.skip + p.count - p.averaged:p.skip + p.count]
+                     for j, p in zip(rows, points, strict=True)])
+    interval = np.array([p.every * p.h for p in points])[:, None]
+    lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
     period = np.array([p.period for p in points])
     times = np.stack([(0.0 + np.arange(p.first, p.first + p.count)) * p.period
                       for p in points])

@@ -102,3 +102,19 @@ def test_chart_classes_equal_classify_section_on_varied_sections():
         seen.add(got.nature if not got.period else "periodic")
         seen.add("ratio" if got.graph_ratio is not None else "no ratio")
     assert seen >= {"periodic", "quasi-periodic", "chaotic", "ratio", "no ratio"}
+
+
+def test_lambda_over_rows_equals_lambda_point_by_point():
+    """λ1 and its interval of many points at once (one interval per row), as the rows take
+    them, equal to those of each point alone."""
+    from analysis.stability.lyapunov import batch_ci95, running_mean
+
+    rng = np.random.default_rng(1)
+    for length in (10, 40, 200):
+        logs = rng.normal(size=(100, length)) * rng.choice([1e-3, 1.0, 50.0], (100, 1))
+        interval = rng.uniform(1e-3, 0.1, 100)
+        lam = running_mean(logs, interval[:, None])[:, -1]
+        ci = batch_ci95(logs, interval[:, None])
+        for r in range(100):
+            assert lam[r] == running_mean(logs[r][None, :], interval[r])[0, -1]
+            assert ci[r] == batch_ci95(logs[r][None, :], interval[r])[0]
