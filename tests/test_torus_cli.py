@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from analysis.io import open_result
-from tests.test_harmonic_balance import unforced_spec
+from tests.frequency.test_harmonic_balance import unforced_spec
 
 ROTOR = ["vakharia2015", "--n-balls", "10", "--set", "speed_rpm=5000"]
 
@@ -129,7 +129,8 @@ def test_hb_figure_carries_the_provenance(cli, tmp_path):
     ([*ROTOR, "--method", "shooting", "--points", "100000"], "GiB"),
     ([*ROTOR, "--method", "shooting", "--harmonics", "8,4"], "--harmonics: applies to "
                                                              "--method hb only"),
-    ([*ROTOR, "--points", "33"], "--points: applies to --method shooting only"),
+    ([*ROTOR, "--frequencies", "vc,shaft", "--points", "33"],  # the default there is hb
+     "--points: applies to --method shooting only"),
     ([*ROTOR, "--method", "shooting", "--param", "speed_rpm", "--from", "5000"],
      "give --to"),
     ([*ROTOR, "--method", "shooting", "--frequencies", "vc,shaft"], "--method shooting needs"),
