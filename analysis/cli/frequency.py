@@ -89,7 +89,8 @@ def hb(
         data = hb_error(PERIODIC["hb"], system, request, PERIODIC["hb"].run(system, request,
                                                                              end))
     _finish(data, output, as_json, lambda: _print(data, output),
-            plot and (plot, lambda: response_figure(data)))
+            plot and (plot, lambda: response_figure(data)),
+            {k: data.attrs[k] for k in ("error_harmonics", "error_aliasing", "error_at")})
 
 
 def _finish(data, output: Path, as_json: bool, say, figure, extra: dict | None = None,

@@ -24,3 +24,14 @@ def test_error_estimate_is_printed_stored_and_falls_with_h(cli, tmp_path):
         assert (tmp_path / f"h{h}.png").stat().st_size > 0
     assert found[7][0] < found[2][0] / 10
     assert found[7][0] < 1e-3
+
+
+def test_error_estimate_in_the_json(cli, tmp_path):
+    import json
+
+    out = cli("hb", *DUFFING, "--harmonics", "5", "-o", str(tmp_path / "j.nc"), "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert 0 <= data["error_harmonics"] < 1 and data["error_at"] == "the response"
+    assert data["error_aliasing"] == float(open_result(tmp_path / "j.nc").attrs[
+        "error_aliasing"])
