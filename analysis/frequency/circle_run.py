@@ -47,7 +47,8 @@ def circle_states(data: xr.Dataset, duration: float) -> tuple[np.ndarray, np.nda
     h = period / steps
     revolutions = max(1, math.ceil(duration / period - 1e-9))
     phi = np.mod(w2 * period * np.arange(revolutions), 2 * math.pi)
-    starts = interpolate_circle(data.circle.values.T, phi)
+    circle = data.circle.values if data.circle.ndim == 2 else data.circle.values[-1]
+    starts = interpolate_circle(circle.T, phi)  # a branch: its last circle, as torus_of
     shaft = ShaftMap(system, freqs, steps, steps, revolutions)
     _, _, states = shaft(starts, phi, system.p)
     # each section holds its circle point (the end of the revolution before differs by the
