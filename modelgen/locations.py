@@ -21,9 +21,11 @@ from pathlib import Path
 SPEC_DIR = "specs"
 MODELS_ENV = "BEARINGDYN_MODELS"
 CACHE_ENV = "BEARINGDYN_CACHE"
-GENERATED_LAYOUT = "3"
+GENERATED_LAYOUT = "4"
 """Version of the generated code's layout; part of the cache key, so code cached by a
-bearingdyn with another layout is never loaded (3: with a manifest of hashes)."""
+bearingdyn with another layout is never loaded (3: with a manifest of hashes; 4: the
+runtime's ``derivative`` is public, so a cached root of layout 3, whose runtime names it
+``_derivative``, is generated anew instead of failing in statics and tori)."""
 MANIFEST = "MANIFEST.json"
 """The file of a generated root (user cache, ``generate --out``) that holds the SHA-256 of
 every other file, checked when the root is loaded."""
