@@ -223,7 +223,9 @@ def _solve_circle(system: System, request: Request) -> xr.Dataset:
 
     circle = solve_circle(system, None, request.frequencies, request.resolution,
                           **request.stability, **request.options)
-    return circle_dataset(_converged(circle, "torus: no invariant circle found"))
+    return circle_dataset(_converged(circle, "torus: no invariant circle found; the response "
+                                     "here may not be quasi-periodic (check a run with "
+                                     "bearingdyn classify)"))
 
 
 def _follow_circle(system: System, request: Request) -> xr.Dataset:
