@@ -1,6 +1,6 @@
 """The basins benchmark of the attractors issue: basins of attraction of the balanced rotor
 (N_b = 8, 8000 rpm, radial load 50 N) on a 100 × 100 grid of initial (x, y) over the box of
-tests/test_attractors.py (x from -20 to 30 µm, y from -20 to 20 µm), on 2 cores
+tests/stability/test_attractors.py (x from -20 to 30 µm, y from -20 to 20 µm), on 2 cores
 (``analysis.sweeps.attractor_blocks.basins_to_file``, the processes executor with 2 workers,
 blocks of 256 states; the wall time includes the cell scale, the description of every
 attractor and writing the file).

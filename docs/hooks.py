@@ -27,7 +27,7 @@
   parameters it needs) and the built-in quantities of ``modelgen.quantities.QUANTITIES``.
   The text is in the repository, readable without a build; ``python3 docs/hooks.py
   spec-reference`` rewrites it from the schema, ``tests/test_docs.py`` fails when it differs
-  and a build warns (an error under ``--strict``). ``tests/test_spec_guide.py`` fails on a
+  and a build warns (an error under ``--strict``). ``tests/modelgen/test_spec_guide.py`` fails on a
   field that has no docstring.
 - **Included files.** ``<!-- bearingdyn:include PATH -->`` (PATH relative to ``docs/``)
   becomes the file in a code block, so a page shows the example spec as it is.
@@ -164,8 +164,8 @@ def submodules_markdown(package: str) -> str:
 # --------------------------------------------------------------------------- spec reference
 
 FIELD_NOTES: dict[str, str] = {
-    # The fields whose class gives them no docstring (tests/test_spec_guide.py checks that each
-    # key is a field without one: a docstring added in the code replaces the note here).
+    # The fields whose class gives them no docstring (tests/modelgen/test_spec_guide.py checks
+    # that each key is a field without one: a docstring added in the code replaces the note here).
     "Term.kind": "Which term this is.",
 }
 """Descriptions of the schema fields that have no docstring in the code."""

@@ -40,7 +40,7 @@ RACE_SIGN: dict[str, int] = {"inner": 1, "outer": -1}
 NEWTON_STEPS = 4
 """Newton steps on the ellipticity from the Hamrock–Brewe start: the start is off by a few
 %, each step squares the relative error; 4 steps leave < 2e-14 for groove conformities
-0.505…1 and D_b/D_m 0.02…0.45 (tests/test_hertz.py)."""
+0.505…1 and D_b/D_m 0.02…0.45 (tests/modelgen/test_hertz.py)."""
 AGM_STEPS = 6
 """Arithmetic–geometric-mean steps for ℱ and ℰ (double precision for κ up to ~100)."""
 

@@ -10,7 +10,7 @@ Hypothesis draws inputs in rounds until the time is up, alternating two targets:
   and read by ``load_spec``. A spec that loads is assembled and printed as the generated
   module (``modelgen.codegen.module_source``), whose text must compile.
 - *expression parser*: random text, hostile and valid expressions (the strategies of
-  tests/test_properties.py) through ``parse_expression`` with the audit hook that fails on
+  tests/modelgen/test_properties.py) through ``parse_expression`` with the audit hook that fails on
   anything run; the valid ones are printed as CasADi code and built.
 
 Anything but a result or the clean error (``SpecError``, ``ExpressionError``) is a crash:
@@ -42,7 +42,7 @@ from modelgen.quantities import QUANTITIES
 from modelgen.spec import SpecError, load_spec, shipped_spec_names, spec_hash
 from modelgen.terms import TERMS
 from tests.conftest import SPECS
-from tests.test_properties import HOSTILE, SYMBOLS, VALID, _parse_watched
+from tests.modelgen.test_properties import HOSTILE, SYMBOLS, VALID, _parse_watched
 
 WORDS = [*QUANTITIES, *TERMS, "kind", "value", "unit", "source", "low", "high", "fx", "fy",
          "ball", "n_balls", "dt", "duration", "transient", "x0", "cage", "variant", "model",

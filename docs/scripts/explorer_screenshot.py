@@ -1,6 +1,6 @@
 """Screenshot of a chart explorer page (docs/figures/explorer-vakharia2015.png).
 
-Opens the page from disk in headless Chromium (as tests/test_explore.py does), clicks the
+Opens the page from disk in headless Chromium (as tests/reports/test_explore.py does), clicks the
 point nearest to the given coordinates and saves the window as PNG::
 
     python docs/scripts/explorer_screenshot.py chart.html --x 5000 --y 6 \

@@ -54,7 +54,7 @@ Profiles (``profile``) of the offset across the pit, u the angle from the pit's 
   Jacobian finite; the window is a select (``ca.if_else``) whose discarded side is zero.
 
 With ``defect_depth = 0`` every offset is exactly 0·(finite) = 0 and the model computes what
-the defect-free model computes, bit for bit (``tests/test_faults.py``).
+the defect-free model computes, bit for bit (``tests/signal/test_faults.py``).
 """
 
 from __future__ import annotations

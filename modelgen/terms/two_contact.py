@@ -36,7 +36,7 @@ from modelgen.unrolled import NUMPY, Ops, Unrolled, numpy_call
 
 STEPS = 4
 """Newton steps per ball: the force error is below 1e-15 of K_i δ^{3/2} over F_c/K_o from
-0 to 1e-6 m^{3/2} (tests/test_two_contact.py)."""
+0 to 1e-6 m^{3/2} (tests/modelgen/test_two_contact.py)."""
 
 
 def inner_race_load(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops = NUMPY,

@@ -22,7 +22,7 @@ effect of waviness on vibrations associated with ball bearings", J. Tribol. 121 
 
 θ_i = atan2(sin θ_i, cos θ_i) is computed from the ball's (cos θ_i, sin θ_i), so the sum over
 balls is still built at run time for any N_b. Known consequence (Wardle 1988; Aktürk 1999),
-checked in ``tests/test_faults_waviness.py``: outer-race orders k = q N_b ± 1 produce a
+checked in ``tests/modelgen/test_faults_waviness.py``: outer-race orders k = q N_b ± 1 produce a
 radial force at q·BPFO, other orders none.
 """
 

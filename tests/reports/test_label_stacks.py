@@ -13,7 +13,7 @@ from analysis.reports.plots import (
     peak_labels,
     spectrum_figure,
 )
-from tests.test_figure_quality import VC_HZ, X_HZ, _run
+from tests.reports.test_figure_quality import VC_HZ, X_HZ, _run
 
 
 def test_crowded_labels_stay_within_the_stack_and_the_axis_keeps_its_data():

@@ -35,7 +35,7 @@ own edges and the fast search's dropped skirts, |H|² < 1e-3, differ at this lev
 
 def impulse_train() -> xr.Dataset:
     """Impacts (Gaussian, σ = 20 µs) at 123 Hz ringing a 6 kHz resonance (decay 0.5 ms),
-    strong noise below 2 kHz and white noise (the signal of tests/test_faults.py)."""
+    strong noise below 2 kHz and white noise (the signal of tests/signal/test_faults.py)."""
     fs, n = 50_000.0, 50_000
     t = np.arange(n) / fs
     rng = np.random.default_rng(1)

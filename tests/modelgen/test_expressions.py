@@ -1,8 +1,8 @@
 """Custom expression terms: the whitelist parser, its printing as CasADi code, and a spec
 that uses them all the way to the generated right-hand side.
 
-The catalogue of rejected expressions (with their messages) is in tests/test_bad_inputs.py;
-random strings and syntax trees are in tests/test_properties.py.
+The catalogue of rejected expressions (with their messages) is in tests/cli/test_bad_inputs.py;
+random strings and syntax trees are in tests/modelgen/test_properties.py.
 """
 
 from __future__ import annotations

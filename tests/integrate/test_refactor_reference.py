@@ -21,7 +21,7 @@ import pytest
 
 from analysis.integrate.simulate import simulate
 
-REFERENCE = np.load(Path(__file__).parent / "data" / "pre_shapes_reference.npz")
+REFERENCE = np.load(Path(__file__).parents[1] / "data" / "pre_shapes_reference.npz")
 
 
 def _case(key: str) -> tuple[str, int | None, dict[str, float]]:

@@ -99,7 +99,7 @@ def test_process_pool_retries_a_task_whose_worker_died(tmp_path):
 
 
 def test_dask_retries_a_task_whose_worker_died(tmp_path):
-    import tests.test_sweep as me
+    import tests.sweeps.test_sweep as me
 
     cloudpickle.register_pickle_by_value(me)  # workers need not import the tests package
     executor = DaskExecutor(workers=2)

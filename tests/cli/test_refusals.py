@@ -16,8 +16,8 @@ from analysis.errors import InputError
 from analysis.io import open_result
 from analysis.sweeps.grid import Axis, Setting
 from analysis.sweeps.store import PointStore
+from tests.cli.test_bad_inputs import _listing
 from tests.conftest import SPECS, run_cli
-from tests.test_bad_inputs import _listing
 
 SWEEP = ("sweep", "vakharia2015", "--n-balls", "8", "--param", "speed_rpm", "--from", "4000",
          "--to", "4500", "--num", "2", "--transient", "0.02", "--samples", "5", "--executor",

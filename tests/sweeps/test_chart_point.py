@@ -24,7 +24,7 @@ from analysis.sweeps.points import chart_point, chart_points, one_pass
 
 CALM = {"radial_load": 50.0}
 """Radial load 50 N: a periodic orbit for the balanced rotor, a two-frequency torus with
-unbalance (``tests/test_classify.py``)."""
+unbalance (``tests/stability/test_classify.py``)."""
 
 BLOW_UP = {"radial_clearance": 1e-9, "unbalance_force": 1e5}
 """A 1 nm clearance (blow-up limit 1 µm) and a 100 kN unbalance: out of bounds in one step."""
@@ -86,7 +86,8 @@ def test_one_pass_equals_two_pass_on_non_chaotic_points(model, n_balls, values, 
 
 
 def test_paper_case_is_chaotic_both_ways():
-    """vakharia2015, N_b = 6, the paper's parameters: chaotic (``tests/test_lyapunov.py``)."""
+    """vakharia2015, N_b = 6, the paper's parameters: chaotic
+    (``tests/stability/test_lyapunov.py``)."""
     setting = _setting("vakharia2015", transient=1.0, samples=100)
     one = chart_point(setting, _system(setting, 6, {}))
     two = chart_point_two_pass(setting, _system(setting, 6, {}))

@@ -17,7 +17,7 @@ from analysis.integrate.speed_profile import SpeedProfile
 from analysis.signal.orders import order_lines, order_peaks, order_spectrum
 from analysis.signal.waterfall import waterfall
 
-MODEL, DAMPING = "vakharia2015-consistent", 1000.0  # as tests/test_speed_profile.py
+MODEL, DAMPING = "vakharia2015-consistent", 1000.0  # as tests/integrate/test_speed_profile.py
 RAMP = SpeedProfile.ramp(1000, 10000)
 
 
