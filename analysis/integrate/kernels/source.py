@@ -177,7 +177,11 @@ BD_FN void bd_member_{variant}({args}) {{
   double s[{ns}], nx[{ns}], c[{nc}];
   const double *pm = p + m * {npar};
   const double hm = h[m], t0m = t0[m], lim = limit[m];
-  double lo[{n}], hi[{n}];  /* the member's own: written out once, at its end */
+#ifdef __CUDACC__
+  double *lo = low + m * {n}, *hi = high + m * {n};  /* no registers for them on a GPU */
+#else
+  double lo[{n}], hi[{n}];  /* the member's own, written out at its end: no false sharing */
+#endif
   for (int i = 0; i < {n}; i++) {{ s[i] = z0[m * {n} + i]; lo[i] = INFINITY; hi[i] = -INFINITY; }}
   s[{n}] = k0[m];
   rk4_constants(pm, &hm, &t0m, c);
@@ -289,9 +293,10 @@ _MEMBER_TAIL = """
     if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
     {nan_log}
   }}
-  for (int i = 0; i < {n}; i++) {{
-    final[m * {n} + i] = s[i]; low[m * {n} + i] = lo[i]; high[m * {n} + i] = hi[i];
-  }}
+  for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
+#ifndef __CUDACC__
+  for (int i = 0; i < {n}; i++) {{ low[m * {n} + i] = lo[i]; high[m * {n} + i] = hi[i]; }}
+#endif
 }}
 """
 
