@@ -113,7 +113,7 @@ def test_command_shooting_torus_json_run_and_figure(cli, tmp_path):
 def test_hb_figure_carries_the_provenance(cli, tmp_path):
     from PIL import Image
 
-    from tests.test_harmonic_balance import DUFFING_ARGS
+    from tests.frequency.test_harmonic_balance import DUFFING_ARGS
 
     out = cli("hb", "duffing", *DUFFING_ARGS, "--set", "speed_rpm=12", "--harmonics", "5",
               "-o", str(tmp_path / "one.nc"), "--plot", str(tmp_path / "one.png"))
