@@ -352,7 +352,7 @@ def attractors(
 
 def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | None,
               settings: dict) -> None:
-    """The cost estimate (``analysis.sweeps.cost``) on stderr, before the work."""
+    """The cost estimate (``analysis.integrate.cost``) on stderr, before the work."""
     if quiet:
         return
     import os

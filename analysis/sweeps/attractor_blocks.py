@@ -33,6 +33,7 @@ import xarray as xr
 
 from analysis import errors
 from analysis.errors import InputError
+from analysis.integrate.cost import CostEstimate, estimate_cost
 from analysis.io import save_dataset
 from analysis.model import System, load_model
 from analysis.stability.attractors.continuation import MATCH_DISTANCE
@@ -47,7 +48,6 @@ from analysis.stability.attractors.studies import (
     global_continuation,
 )
 from analysis.stability.attractors.study import AttractorStudy, Block, make_study
-from analysis.sweeps.cost import CostEstimate, estimate_cost
 from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
 from analysis.sweeps.store import PointStore
 
@@ -224,7 +224,7 @@ def study_cost(system: System, members: int, *, workers: int | None = None,
                options: MapperOptions | None = None, block: int | None = None,
                mapper: str = "auto", device: str = "auto",
                feature_options: FeatureOptions | None = None, **_: object) -> CostEstimate:
-    """The cost of mapping ``members`` initial states (``analysis.sweeps.cost``), said before
+    """The cost of mapping ``members`` initial states (``analysis.integrate.cost``), said before
     the work: the featurizing mapper runs every member its transient and section periods;
     the recurrence mapper at most ``max_periods`` (most stop far earlier: a bound). Takes
     the settings of the ``*_to_file`` functions (others, such as ``seed``, ignored)."""

@@ -22,13 +22,13 @@ import xarray as xr
 
 from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_seconds
+from analysis.integrate.cost import CostEstimate, estimate_cost
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
 from analysis.model import BallCounts, Model, System, as_system, load_model
 from analysis.provenance import displacement_names, run_attrs
 from analysis.signal.poincare import period_of
 from analysis.stability.classify import GRID_RECORD_SECTION
-from analysis.sweeps.cost import CostEstimate, estimate_cost
 
 STRUCTURE_AXIS = "n_balls"
 """An axis over the number of balls: ``n_balls`` (the model's only bearing) or
@@ -280,7 +280,7 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
 
 def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
               members_per_point: int = 1, lyapunov: bool | None = None) -> CostEstimate:
-    """The cost of a grid's points (``analysis.sweeps.cost``), said before they run: every
+    """The cost of a grid's points (``analysis.integrate.cost``), said before they run: every
     point's RK4 steps taken at the corner with the longest record (the slowest forcing),
     ``members_per_point`` runs a point (initial states, directions), λ1 (``lyapunov``;
     None: the setting's) counted as the tangent's ``n + 1`` columns. Call after

@@ -8,9 +8,9 @@ import math
 import pytest
 
 from analysis.errors import InputError
+from analysis.integrate.cost import CostEstimate, coarsest_step, estimate_cost, probe_step_seconds
 from analysis.integrate.plan import RunPlan
 from analysis.model import System
-from analysis.sweeps.cost import CostEstimate, coarsest_step, estimate_cost, probe_step_seconds
 from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
 
 
