@@ -17,6 +17,7 @@ bit; the CUDA build agrees with it to the last bits of CUDA's libm.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -34,6 +35,12 @@ HOST_BUDGET = 8 * 2**30
 """Bytes of results a call may hold in host memory (as ``plan.MEMORY_BUDGET``)."""
 CPU_BLOCK = 1 << 16
 """Members per call of the CPU build by default (progress is reported per call)."""
+PROGRESS_SECONDS = 0.5
+"""With a ``progress`` callback and no ``block`` on the CPU: the members of a call run in
+sub-chunks of about this much work each, so the counter moves every half second or so
+(each member runs alone: the results are those of one call, bit for bit)."""
+CHUNK_PER_THREAD = 4
+"""Least members per thread in such a sub-chunk (OpenMP still fills every core)."""
 GPU_BLOCK_SHARE = 0.5
 """Share of the GPU's free memory one block of members may take."""
 SELF_TEST_TOL = 1e-12
@@ -247,7 +254,9 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     (step counters, whole numbers; one or per member): step k runs from ``t0 + k·h``, the
     first from k0. ``device``: ``cpu``, ``gpu`` or ``auto`` (``devices.resolve_device``);
     ``block``: members per call (default: ``CPU_BLOCK`` on the CPU, half the GPU's free
-    memory on the GPU); ``progress(done, total)`` after each block (members); ``threads``:
+    memory on the GPU); ``progress(done, total)`` after each block (members: on the CPU
+without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, at least
+``CHUNK_PER_THREAD`` members per thread, sized from the chunks before); ``threads``:
     CPU threads (None: ``cpu.cores()``, every core; a worker process of a pool of W takes
     cores / W).
 
@@ -284,9 +293,14 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     diverged = np.empty(m, dtype=np.int64)
     size = _block_size(device, m, _bytes_per_member(schedule, n, n_par), block)
     z0, p = np.ascontiguousarray(z0), np.ascontiguousarray(p)
-    for start in range(0, m, size):
-        part = slice(start, min(m, start + size))
+    width = min(threads or cores(), m)
+    chunks = _Chunks(size, width if progress is not None and device == "cpu"
+                     and block is None else None)
+    start = 0
+    while start < m:
+        part = slice(start, min(m, start + chunks.size))
         count = part.stop - start
+        began = time.perf_counter()
         outs = [np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n)),
                 np.empty((count, k)) if logs is not None else np.empty((1, 1)),
                 np.empty((count, n)), np.empty(count, dtype=np.int64),
@@ -302,6 +316,8 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
         if logs is not None:
             logs[part] = outs[1]
         final[part], diverged[part], low[part], high[part] = outs[2:]
+        chunks.took(count, time.perf_counter() - began)
+        start = part.stop
         if progress is not None:
             progress(part.stop, m)
     lambda1 = None
@@ -311,6 +327,25 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
         with np.errstate(invalid="ignore"):
             lambda1 = np.where(used, logs, 0.0).sum(axis=1) / (n_sec - skip) / (every * hs)
     return MemberResult(sections, logs, lambda1, diverged, final, low, high, device)
+
+
+class _Chunks:
+    """Members per call of ``run_members``: ``block`` (one size), or with ``width`` threads
+    sub-chunks of about ``PROGRESS_SECONDS`` each (a whole number of ``CHUNK_PER_THREAD``
+    × ``width`` members, at most ``block``), sized by the rate of the chunks before."""
+
+    def __init__(self, block: int, width: int | None):
+        self.block, self.width = block, width
+        self.least = CHUNK_PER_THREAD * width if width else block
+        self.size = min(block, self.least)
+
+    def took(self, count: int, seconds: float) -> None:
+        if not self.width:
+            return
+        rate = count / seconds if seconds > 0 else math.inf
+        want = rate * PROGRESS_SECONDS
+        size = self.least * max(1, int(min(want, self.block) // self.least))
+        self.size = min(self.block, size)
 
 
 def blow_up_error(system: System, step: int, h: float, state: np.ndarray) -> SimulationError:
