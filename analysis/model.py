@@ -644,23 +644,58 @@ def as_system(target: System | Model | str | Path, n_balls: BallCounts = None,
 
 # ---- finding and importing generated models -------------------------------------------
 
-def user_models() -> dict[str, Path]:
+def user_models(warn: bool = True) -> dict[str, Path]:
     """The specs of the ``BEARINGDYN_MODELS`` folders by name (``user_specs``), the folders
-    judged first: ``InputError`` for a folder that does not exist, and a warning for each
-    spec whose name a shipped model has (the shipped one wins; the spec is never used)."""
+    judged first: ``InputError`` for a folder that does not exist; with ``warn``, a warning
+    for each spec whose name a shipped model has (``shadowed_specs``: that name is refused
+    by ``load_model``, which one is meant cannot be told)."""
     import os
-    import warnings
 
     for folder in user_spec_dirs():
         if not folder.is_dir():
             raise InputError(f"{MODELS_ENV}: '{folder}' is not an existing folder; give "
                              f"folders of specs, separated by '{os.pathsep}'")
     found = user_specs()
-    for name, path in found.items():
-        if _is_shipped_name(name):
-            warnings.warn(f"{MODELS_ENV}: {path} has the name of a shipped model and is never "
-                          "used; rename it (the file and model.name) to use it", stacklevel=2)
+    if warn:
+        _warn_shadowed(shadowed_specs(found))
     return found
+
+
+def _warn_shadowed(shadowed: Mapping[str, Path]) -> None:
+    import warnings
+
+    for name, path in shadowed.items():
+        warnings.warn(f"{MODELS_ENV}: {shown_path(path)} has the name of the shipped model "
+                      f"'{name}', so "
+                      f"the name '{name}' is refused; rename the spec (its model.name and "
+                      "file) or give its .toml path", stacklevel=2)
+
+
+def shadowed_specs(users: Mapping[str, Path] | None = None) -> dict[str, Path]:
+    """The specs of ``BEARINGDYN_MODELS`` folders (``users``, default ``user_specs()``)
+    whose name a shipped model has, by name: asked for by that name, a model is refused
+    (``load_model``); ``bearingdyn models`` lists them as shadowed."""
+    users = user_specs() if users is None else users
+    return {name: path for name, path in users.items() if _is_shipped_name(name)}
+
+
+def shown_path(path: Path) -> str:
+    """``path`` as a message shows it: relative to the working folder when inside it (as a
+    ``BEARINGDYN_MODELS=mine`` user wrote it), else whole."""
+    try:
+        return str(Path(path).relative_to(Path.cwd().resolve()))
+    except (ValueError, OSError):
+        return str(path)
+
+
+def _shadowed_error(name: str, path: Path) -> InputError:
+    """The refusal of a model name that is both shipped and a spec's in a
+    ``BEARINGDYN_MODELS`` folder (at ``path``)."""
+    return InputError(f"model: '{name}' is both the shipped model and the spec "
+                      f"{shown_path(path)} in "
+                      f"{MODELS_ENV}; rename that spec (model.name and the file, e.g. "
+                      f"'{name}-mine') or give its .toml path to use it, or take it out of "
+                      f"{MODELS_ENV} to use the shipped model")
 
 
 def available_models() -> list[str]:
@@ -669,14 +704,21 @@ def available_models() -> list[str]:
     for info in pkgutil.iter_modules(generated.__path__):
         if info.ispkg:
             names.append(importlib.import_module(f"generated.{info.name}").NAME)
-    names += [n for n in user_models() if n not in names]
+    names += [n for n in user_models(warn=False) if n not in names]
     return sorted(names)
 
 
 def model_origin(name: str) -> str:
-    """'shipped' or the path of the user spec a model name stands for."""
+    """'shipped' or the path of the user spec a model name stands for (a shadowed name:
+    'shipped', the one ``shadowed_specs`` lists beside it)."""
     users = user_specs()
     return "shipped" if name not in users or _is_shipped_name(name) else str(users[name])
+
+
+def shipped_spec(name: str) -> Path:
+    """The spec file of the shipped model ``name`` (``load_model`` of it loads the shipped
+    model even when a ``BEARINGDYN_MODELS`` spec has its name)."""
+    return shipped_spec_dir() / f"{name}.toml"
 
 
 def _is_shipped_name(name: str) -> bool:
@@ -693,12 +735,16 @@ def load_model(name: str | Path) -> Model:
     if not text.strip():
         raise InputError("model: the name is empty; give a model name (see 'bearingdyn "
                          "models') or the path of a .toml spec")
-    users = user_models()  # the folders judged whatever the name (a shadowed spec warned)
+    users = user_models(warn=False)  # the folders judged whatever the name
     path = Path(text).expanduser()
     if (broken := broken_link(path)) is not None:
         raise InputError(f"model: '{text}' {broken}")
     if text.endswith(".toml") or path.is_dir() or path.exists():
         return _load_path(path)
+    shadowed = shadowed_specs(users)
+    if text in shadowed:
+        raise _shadowed_error(text, shadowed[text])
+    _warn_shadowed(shadowed)  # a spec that shadows another name: said, not refused
     if _is_shipped_name(text) or _generated_exists(text):
         return _load_shipped(text)
     if text in users:

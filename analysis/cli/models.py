@@ -88,14 +88,27 @@ def _say_written(changed: list[str], targets: dict[Path, list[str]], package: Pa
 @reports_errors
 def models():
     """List the shipped models and the specs in BEARINGDYN_MODELS folders: origin, state
-    size n, bearings with their default balls, spec hash and title."""
-    from analysis.model import available_models, load_model, model_origin
+    size n, bearings with their default balls, spec hash and title (and a spec that has a
+    shipped model's name, whose name is then refused, as shadowed)."""
+    import warnings
+
+    from analysis.model import (
+        available_models,
+        load_model,
+        model_origin,
+        shadowed_specs,
+        shipped_spec,
+        shown_path,
+    )
     from modelgen.errors import SpecError
 
+    shadowed = shadowed_specs()
     for name in available_models():
         origin = model_origin(name)
-        try:
-            m = load_model(name)
+        try:  # a shadowed name: the shipped model, by its spec's path
+            with warnings.catch_warnings():  # a shadowed spec: said in its own line below
+                warnings.filterwarnings("ignore", message=".*has the name of the shipped")
+                m = load_model(shipped_spec(name) if name in shadowed else name)
         except (BearingdynError, SpecError) as exc:
             typer.echo(f"{name:26s} {origin}: cannot load ({exc})")
             continue
@@ -103,3 +116,7 @@ def models():
             or "no bearings"
         typer.echo(f"{name:26s} {origin:8s} n = {m.n_state:2d}  {bearings:30s} "
                    f"sha256 {m.spec_sha256[:12]}  {m.module.TITLE}")
+        if name in shadowed:
+            typer.echo(f"{'':26s} shadowed: {shown_path(shadowed[name])} has this name too, so "
+                       f"'{name}' is refused; rename that spec (model.name and the file) "
+                       "or give its .toml path")

@@ -639,6 +639,7 @@ def _folder(name: str) -> Callable[[Path], None]:
 
 def _spec_file(name: str, text: str) -> Callable[[Path], None]:
     def setup(folder: Path) -> None:
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
         (folder / name).write_text(text)
     return setup
 
@@ -1104,6 +1105,15 @@ CLI_CASES += [
             "BEARINGDYN_MODELS entry that is a file", ("models",),
             ("BEARINGDYN_MODELS: 'f.txt' is not an existing folder",),
             setup=_spec_file("f.txt", "a file"), env=(("BEARINGDYN_MODELS", "f.txt"),)),
+    CliCase("models-shadowed-name", "accepted without a word (now judged)", "a user spec in "
+            "BEARINGDYN_MODELS with a shipped model's name, asked for by that name (was a "
+            "warning, and the shipped model ran)", ("simulate", "duffing", "-o", "r.nc",
+                                                    *SHORT),
+            ("model: 'duffing' is both the shipped model and the spec mine/duffing.toml in "
+             "BEARINGDYN_MODELS; rename that spec",),
+            setup=_spec_file("mine/duffing.toml", (SPECS / "duffing.toml").read_text()),
+            env=(("BEARINGDYN_MODELS", "mine"),),
+            fixed=("simulate", "mine/duffing.toml", "-o", "r.nc", *SHORT)),
 ]
 
 

@@ -10,16 +10,19 @@ from analysis.cli.stability import unresolved_warning
 from tests.conftest import SPECS, run_cli
 
 
-def test_a_user_spec_named_like_a_shipped_model_is_said_to_be_unused(tmp_path):
+def test_a_user_spec_named_like_a_shipped_model_is_said_to_shadow_it(tmp_path):
+    """Another model runs, with one warning; the shadowed name itself is refused (the
+    catalogue's ``models-shadowed-name`` row)."""
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "duffing.toml").write_text((SPECS / "duffing.toml").read_text())
-    res = run_cli("simulate", "duffing", "-o", "r.nc", "--duration", "0.1", "--transient", "0",
+    res = run_cli("simulate", "mathieu", "-o", "r.nc", "--duration", "0.1", "--transient", "0",
                   "--no-compile", cwd=tmp_path,
                   env={"BEARINGDYN_MODELS": "mine", "PYTHONWARNINGS": "default"})
     assert res.returncode == 0, res.stderr
     lines = [line for line in res.stderr.splitlines() if line.startswith("warning:")]
-    assert len(lines) == 1 and "mine/duffing.toml has the name of a shipped model" in lines[0]
-    assert "never used" in lines[0]
+    assert len(lines) == 1, res.stderr
+    assert "mine/duffing.toml has the name of the shipped model 'duffing'" in lines[0]
+    assert "the name 'duffing' is refused" in lines[0]
 
 
 @pytest.mark.parametrize(("value", "ci", "warned"), [(290.0, 580.0, True), (-50.0, 10.0, False),
