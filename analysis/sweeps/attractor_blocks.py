@@ -23,6 +23,9 @@ is written, and a study refused before its first block leaves nothing behind.
 from __future__ import annotations
 
 import functools
+import os
+import tempfile
+import threading
 import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -96,10 +99,55 @@ def study_of(ref: StudyRef) -> AttractorStudy:
     return ref.study()
 
 
-def map_block_task(task: tuple[StudyRef, str, np.ndarray]) -> tuple[str, dict]:
-    """A worker's task: (ref, key, states) -> (key, the mapped block as arrays)."""
-    ref, key, states = task
-    return key, study_of(ref).map_block(states).arrays()
+def map_block_task(task: tuple) -> tuple[str, dict]:
+    """A worker's task: (ref, key, states[, counts file, slot]) -> (key, the mapped block as
+    arrays); with a counts file (``WorkerCounts``) the block's states mapped so far are
+    written to its slot as the mapper goes."""
+    ref, key, states, *where = task
+    report = WorkerCounts.writer(*where) if where else None
+    return key, study_of(ref).map_block(states, report).arrays()
+
+
+class WorkerCounts:
+    """How far the workers are in their blocks: one int64 per pending block (its states
+    labelled so far) in a small file of the store's folder (``.progress.*.tmp``: one left
+    by a killed run is removed with the store's other temporaries), written by the workers
+    (``writer``), read by the parent (``running``), so the counter moves within a block, not
+    once per block. A worker that cannot open the file (a Dask worker on another machine)
+    writes nothing: its block then counts once it is stored."""
+
+    def __init__(self, folder: Path, blocks: int):
+        fd, self.path = tempfile.mkstemp(prefix=".progress.", suffix=".tmp",
+                                         dir=os.path.abspath(folder))
+        os.ftruncate(fd, 8 * blocks)
+        os.close(fd)
+        self.finished = np.zeros(blocks, dtype=bool)
+
+    def running(self) -> int:
+        """States mapped in the blocks not yet stored."""
+        try:
+            counts = np.fromfile(self.path, dtype=np.int64)
+        except OSError:
+            return 0
+        return int(counts[~self.finished[:len(counts)]].sum())
+
+    def close(self) -> None:
+        Path(self.path).unlink(missing_ok=True)
+
+    @staticmethod
+    def writer(path: str, slot: int) -> Progress:
+        """A worker's ``progress(done, total)`` writing ``done`` to ``slot`` of ``path``."""
+        def write(done: int, _: int) -> None:
+            try:
+                fd = os.open(path, os.O_WRONLY)
+            except OSError:  # not on this machine, or the run is over
+                return
+            try:
+                os.pwrite(fd, np.int64(done).tobytes(), 8 * slot)
+            finally:
+                os.close(fd)
+
+        return write
 
 
 class StoredRunner:
@@ -155,18 +203,43 @@ class StoredRunner:
                 found[keys[j]] = block
                 done[0] += len(blocks[j])
         elif pending:
-            ref = StudyRef.of(study)  # the scale: computed here, once, for every worker
+            self.on_workers(study, keys, blocks, pending, found, done, total, progress)
+        return [found[k] for k in keys]
 
-            def stored(task, result) -> None:
-                _, key, states = task
-                self.save(key, states, result[1])
+    def on_workers(self, study: AttractorStudy, keys: list[str], blocks: list[np.ndarray],
+                   pending: list[int], found: dict, done: list[int], total: int,
+                   progress: Progress | None) -> None:
+        """The pending blocks on the executor's workers, each stored as it arrives; the
+        counter moves as the workers label states (``WorkerCounts``)."""
+        ref = StudyRef.of(study)  # the scale: computed here, once, for every worker
+        counts = WorkerCounts(self.store.folder, len(pending)) if progress else None
+        slot = {keys[j]: i for i, j in enumerate(pending)}
+        lock, shown = threading.Lock(), [done[0]]
+
+        def stored(task, result) -> None:
+            key, states = task[1], task[2]
+            self.save(key, states, result[1])
+            with lock:
                 found[key] = Block.from_arrays(result[1])
                 done[0] += len(states)
+                if counts is not None:
+                    counts.finished[slot[key]] = True
 
+        def count() -> int:  # monotone: a retried block starts its slot again
+            with lock:
+                now = done[0] + (counts.running() if counts is not None else 0)
+                shown[0] = max(shown[0], min(now, total))
+                return shown[0]
+
+        where = (lambda j: (counts.path, slot[keys[j]])) if counts is not None \
+            else (lambda j: ())
+        try:
             run_with_progress(self.executor, map_block_task,
-                              [(ref, keys[j], blocks[j]) for j in pending],
-                              lambda: done[0], total, progress, stored)
-        return [found[k] for k in keys]
+                              [(ref, keys[j], blocks[j], *where(j)) for j in pending],
+                              count, total, progress, stored)
+        finally:
+            if counts is not None:
+                counts.close()
 
 
 MAX_SEED = 2**63 - 1
@@ -351,9 +424,24 @@ def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner
         save_dataset(ds, output)
         store.remove()
     except BaseException as exc:  # a refusal or failure before the first block: no trace
-        store.stopped(exc, what="blocks of states")
+        kept = stored_states(store)
+        store.stopped(exc, what=f"blocks ({kept:,} initial states)" if kept else
+                      "blocks of initial states")
         raise
     return ds
+
+
+def stored_states(store: PointStore) -> int:
+    """Initial states in the blocks ``store`` holds (an interrupted study's note counts
+    them); a block that cannot be read counts none."""
+    count = 0
+    for key in store.done():
+        try:
+            with np.load(store.folder / f"{key}.npz", allow_pickle=False) as data:
+                count += len(data["states"])
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            continue
+    return count
 
 
 def basins_to_file(system: System, x: Range, y: Range, output: str | Path, *,

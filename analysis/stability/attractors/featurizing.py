@@ -134,7 +134,9 @@ class Record:
     steps: int
 
 
-Recorder = Callable[[StroboscopicMap, np.ndarray, FeatureOptions], Record]
+Recorder = Callable[..., Record]
+"""``record(smap, states, options, progress=None)``: a block's fixed-time run;
+``progress(done, total)`` (members) while it runs."""
 
 
 def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
@@ -148,13 +150,15 @@ def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
 
 
 def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
-                  device: str = "cpu") -> Record:
+                  device: str = "cpu",
+                  progress: Callable[[int, int], None] | None = None) -> Record:
     """The fixed-time run of ``states`` (M, n; t = 0) on the member kernel
-    (``analysis.integrate.kernels.run_members`` on ``device``)."""
+    (``analysis.integrate.kernels.run_members`` on ``device``; on the CPU ``progress``
+    moves every ~0.5 s of work, ``members.PROGRESS_SECONDS``)."""
     from analysis.integrate.kernels import run_members
 
     out = run_members(smap.system, states, None, smap.dt, schedule_of(smap, options),
-                      device=device)
+                      device=device, progress=progress)
     sections = np.asarray(out.sections, dtype=float)
     # the kernel checks every step by the blow-up predicate of simulate (its sections after
     # a blow-up are NaN): no pass over the sections here
@@ -163,16 +167,21 @@ def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOpt
     return Record(sections, bad, np.asarray(out.final, dtype=float), steps)
 
 
-def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions) -> Record:
+def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
+               progress: Callable[[int, int], None] | None = None) -> Record:
     """The same run through ``StroboscopicMap.advance`` (the lane kernel or the RK4 blocks,
-    one process): the path of a model whose member kernel cannot be built on the CPU."""
+    one process): the path of a model whose member kernel cannot be built on the CPU.
+    Every member advances together: ``progress`` counts the members times the share of
+    the periods run, after each ``TRANSIENT_CHUNK`` periods."""
     s = np.ascontiguousarray(np.column_stack([states, np.zeros(len(states))]))
     bad = np.zeros(len(states), dtype=bool)
-    left = options.transient
+    left, periods = options.transient, options.transient + options.sections
     while left:
         chunk = min(left, TRANSIENT_CHUNK)
         bad |= smap.diverged(smap.advance(s, chunk))
         left -= chunk
+        if progress is not None:
+            progress(len(states) * (options.transient - left) // periods, len(states))
     sections = smap.advance(s, options.sections)
     bad |= smap.diverged(sections)
     return Record(sections, bad, s[:, :-1].copy(), int(s[0, -1]) if len(s) else 0)
@@ -206,7 +215,8 @@ def recorder(smap: StroboscopicMap, device: str, block: int,
             raise InputError(f"--device gpu: the member kernel of model "
                              f"'{system.model.name}' cannot be built: {exc}") from None
         return map_record
-    return lambda smap, states, options: kernel_record(smap, states, options, device)
+    return lambda smap, states, options, progress=None: kernel_record(smap, states, options,
+                                                                        device, progress)
 
 
 def features(sections: np.ndarray, scale: Scale) -> np.ndarray:
@@ -317,7 +327,10 @@ class FeaturizingMapper:
         from 1 in the order of their first member, or ``DIVERGED``."""
         states = np.atleast_2d(np.asarray(states, dtype=float))
         opts = self.options
-        run = self.record(self.smap, states, opts)
+        total = len(states)
+        running = None if progress is None else \
+            (lambda done, _: progress(min(done, total - 1), total))  # labels come last
+        run = self.record(self.smap, states, opts, running)
         labels = np.full(len(states), DIVERGED, dtype=np.int64)
         ok = np.flatnonzero(~run.diverged)
         kept = run.sections if len(ok) == len(states) else run.sections[ok]  # no copy if all
