@@ -1,5 +1,5 @@
-"""``python -m analysis.cli``."""
+"""``python -m analysis.cli`` (the Ctrl-C handler of ``analysis.cli.entry`` first)."""
 
-from analysis.cli import main
+from analysis.cli.entry import main
 
 main()

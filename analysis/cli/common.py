@@ -20,7 +20,8 @@ app = typer.Typer(no_args_is_help=True, rich_markup_mode=None, add_completion=Fa
                   pretty_exceptions_enable=False,
                   help="Rotor-ball-bearing models from equation specs: generate, simulate, "
                        "analyse. SI units; speeds in rpm.")
-_state = {"debug": False}
+_state = {"debug": False, "said": False}
+"""``said``: the error edge printed its line (``_fail``), so an exit code needs no other."""
 
 
 @app.callback()
@@ -76,6 +77,7 @@ def _fail(exc: BaseException, line: str, code: int) -> None:
     if _state["debug"]:
         raise exc
     typer.echo(line, err=True)
+    _state["said"] = True
     for note in getattr(exc, "__notes__", ()):  # e.g. a sweep's points kept, how to resume
         typer.echo(note, err=True)
     raise typer.Exit(code) from None
@@ -453,6 +455,7 @@ def main(args: list[str] | None = None) -> None:
         sys.unraisablehook = lambda unraisable: None  # errors in finalisers: reported above
     signal.signal(signal.SIGTERM, _terminated)
     signal.signal(signal.SIGINT, _terminated)
+    _state["said"] = False
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:
@@ -469,14 +472,23 @@ def main(args: list[str] | None = None) -> None:
         typer.echo(f"error: {exc}", err=True)
         sys.exit(2)
     except typer.Exit as exc:
-        _leave(exc.exit_code)
+        _leave(_said(exc.exit_code))
     except Exception as exc:  # raised while the options were read: still one line
         if "--debug" in (args if args is not None else sys.argv):
             raise
         typer.echo(f"internal error: {type(exc).__name__}: {exc} (run with --debug for the "
                    "traceback)", err=True)
         sys.exit(1)
-    _leave(code if isinstance(code, int) else 0)
+    _leave(_said(code if isinstance(code, int) else 0))
+
+
+def _said(code: int) -> int:
+    """``code``, after the line ``interrupted`` for a Ctrl-C that typer turned into exit code
+    130 without a word (one that came while the options were read, outside a command's
+    error edge)."""
+    if code == 130 and not _state["said"]:
+        typer.echo("interrupted", err=True)
+    return code
 
 
 def _terminated(signum, frame) -> None:

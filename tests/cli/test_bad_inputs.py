@@ -1641,7 +1641,13 @@ Notes:
 - Anything unexpected ends in one line too (`internal error: <type>: <message> (run with
   --debug for the traceback)`, exit code 1); a full disk or a missing permission while
   writing is one line with exit code 1 (the old file, if any, is kept); Ctrl-C or SIGTERM
-  ends with `interrupted`, exit code 130.
+  ends with `interrupted`, exit code 130, also while the command is still loading (the
+  console script's first statement installs the handler, `analysis/cli/entry.py`). What
+  remains is the interpreter's own start before that statement: Python's initialisation and
+  `site` with the environment's `.pth` files (20–100 ms here, more on a loaded machine); a
+  Ctrl-C there is Python's own (a `KeyboardInterrupt` traceback from `site`, or the process
+  killed before Python handles signals). `tests/cli/test_startup_interrupt.py` interrupts at
+  0–1 s.
 - Generated code is written whole or not at all (a temporary folder, renamed into
   place): a disk that fills during `bearingdyn generate` ends in one line naming the file
   (`error: cannot use '…/__init__.py': No space left on device`, exit code 1) and leaves
