@@ -282,13 +282,17 @@ def torus(
                           options=given_options(dt=dt, settle=settle),
                           progress=progress_lines(quiet))
         data = with_between_error(chosen.run(system, request, end))
+        if chosen.name == "hb":  # its own error estimate: the change at 2H, the aliasing
+            from analysis.frequency.accuracy import hb_error
+
+            data = hb_error(chosen, system, request, data)
     also = {}
     if run:  # an invariant circle's run is integrated between its sections
         also[run] = circle_run(data, duration, dt)
     _finish(data, output, as_json, lambda: _print_torus(data, output, run),
             plot and (plot, lambda: torus_figure(data, duration, dt)),
-            {"stop_report": str(data.attrs["stop_report"])}
-            if "stop_report" in data.attrs else None, also)
+            {k: data.attrs[k] for k in ("stop_report", "error_harmonics", "error_aliasing",
+                                        "error_at") if k in data.attrs} or None, also)
 
 
 def _check_run(system, run: Path | None, duration: float, dt: float | None) -> None:
@@ -323,6 +327,8 @@ HB_CAUTION = ("note: the residual is not the error: on contact models 2-D harmon
 
 
 def _print_torus(data, output: Path, run: Path | None) -> None:
+    from analysis.frequency.accuracy import error_words
+
     param = data.attrs.get("param", "")
     lam = data.lambda1.values
     head = (f"wrote {output}: torus {data.attrs['frequencies']}, H = "
@@ -354,10 +360,12 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
                    f"{float(data.residual_fine.values[0]):.2e}), lambda1 "
                    f"{float(lam[0]):.4g} ± {float(data.lambda1_ci95.values[0]):.2g} 1/s; "
                    f"amplitude {amp}")
+        typer.echo(error_words(data))
         typer.echo(HB_CAUTION)
     else:
         typer.echo(head + f"{data.sizes['point']} tori")
         typer.echo(str(data.attrs["stop_report"]))
+        typer.echo(error_words(data))
         typer.echo(HB_CAUTION)
     if run:
         typer.echo(f"wrote {run}")
@@ -368,6 +376,7 @@ def torus_figure(data, duration: float, dt: float | None = None):
     Poincaré section (shaft) of a time run of the same system from a state on the torus,
     in the first two states; the PNG carries the result's provenance (``canvas.finish``)."""
     from analysis.frequency import torus_of
+    from analysis.frequency.accuracy import error_words
     from analysis.integrate.simulate import simulate
     from analysis.reports import canvas
     from analysis.reports.plots import scale_of
@@ -395,7 +404,7 @@ def torus_figure(data, duration: float, dt: float | None = None):
              f"{float(data.border.values[-1]):.1e}, change at 2N "
              f"{float(data.attrs.get('circle_change', math.nan)):.1e})" if shooting else
              f"torus section u(0, θ2), H = {data.attrs['harmonics']} (2-D HB: 20-38 % off "
-             "on contact)")
+             f"on contact)\n{error_words(data)}")
     ax.plot(sec[a].values * fa, sec[b].values * fb, ".", ms=3, color="C1",
             label=f"Poincaré section of a time run ({len(sec[a])} revolutions)")
     ax.plot(curve[:, 0] * fa, curve[:, 1] * fb, "-", color="C0", lw=1.2,

@@ -8,6 +8,12 @@ of the two responses over one period (on a grid of 8(4H + 1) phases), relative t
 state's amplitude (max − min)/2, the largest over the states. On a branch they are measured
 at its first point.
 
+A torus by 2-D harmonic balance (``torus --method hb``) gets the same two estimates: the
+re-solve at (2H1, 2H2) and at twice the grid (2N1, 2N2), each from the simulation's fit as
+the first solve (the solves are the method's own), compared on a grid of 2(4H1 + 1) ×
+2(4H2 + 1) phases (θ1, θ2) of the larger harmonics. A doubled solve that the memory bound
+refuses, or that does not converge, gives NaN.
+
 >>> import numpy as np
 >>> t = np.linspace(0, 2 * np.pi, 4, endpoint=False)
 >>> np.round(series(np.array([[1.0], [0.0], [2.0]]), t)[:, 0], 6).tolist()
@@ -36,33 +42,73 @@ def series(coefficients: np.ndarray, phase: np.ndarray) -> np.ndarray:
     return coefficients[0] + cos @ coefficients[1::2] + sin @ coefficients[2::2]
 
 
+def doubled(harmonics: object) -> int | str:
+    """The harmonics ``harmonics`` (an HB result's attr: ``"H"`` or ``"H1,H2"``) doubled.
+
+    >>> doubled(10), doubled("8,4")
+    (20, '16,8')
+    """
+    parts = [2 * int(v) for v in str(harmonics).split(",")]
+    return parts[0] if len(parts) == 1 else ",".join(str(v) for v in parts)
+
+
+def _is_torus(data: xr.Dataset) -> bool:
+    return "frequencies" in data.attrs
+
+
+def _torus_values(data: xr.Dataset, theta1: np.ndarray, theta2: np.ndarray) -> np.ndarray:
+    """The first torus of ``data`` at the forcing phases (θ1, θ2) (rad): points × n."""
+    from analysis.frequency.torus.dataset import torus_of
+
+    ts, coeffs = torus_of(data, 0)
+    phi = np.mod(theta2 - ts.shear * theta1, 2 * np.pi)
+    return ts.basis.evaluate(coeffs, theta1, phi, ts.n)
+
+
 def change(a: xr.Dataset, b: xr.Dataset) -> float:
-    """max over the states of max_t |z_a − z_b| / ((max − min)/2 of z_a), at the first point
-    of each response."""
-    ca = a.coefficients.values[0]
-    cb = b.coefficients.values[0]
-    h = max(ca.shape[0], cb.shape[0]) // 2
-    phase = np.linspace(0, 2 * np.pi, 8 * (4 * h + 1), endpoint=False)
-    za, zb = series(ca, phase), series(cb, phase)
+    """max over the states of max |z_a − z_b| / ((max − min)/2 of z_a), at the first point
+    of each response: over one period of a periodic one, over a (θ1, θ2) grid of a
+    torus."""
+    if _is_torus(a):
+        h1, h2 = (max(int(x), int(y)) for x, y in zip(
+            str(a.attrs["harmonics"]).split(","), str(b.attrs["harmonics"]).split(","),
+            strict=True))
+        t1, t2 = np.meshgrid(np.linspace(0, 2 * np.pi, 2 * (4 * h1 + 1), endpoint=False),
+                             np.linspace(0, 2 * np.pi, 2 * (4 * h2 + 1), endpoint=False))
+        za = _torus_values(a, t1.ravel(), t2.ravel())
+        zb = _torus_values(b, t1.ravel(), t2.ravel())
+    else:
+        ca = a.coefficients.values[0]
+        cb = b.coefficients.values[0]
+        h = max(ca.shape[0], cb.shape[0]) // 2
+        phase = np.linspace(0, 2 * np.pi, 8 * (4 * h + 1), endpoint=False)
+        za, zb = series(ca, phase), series(cb, phase)
     amp = np.maximum(np.ptp(za, axis=0) / 2, 1e-300)
     return float(np.max(np.max(np.abs(za - zb), axis=0) / amp))
+
+
+def _doubled_samples(samples: object) -> int | tuple[int, int]:
+    """Twice the AFT samples of an HB result's attr (``"N"`` or ``"N1,N2"``)."""
+    parts = [2 * int(v) for v in str(samples).split(",")]
+    return parts[0] if len(parts) == 1 else (parts[0], parts[1])
 
 
 def hb_error(method, system: System, request, data: xr.Dataset) -> xr.Dataset:
     """``data`` with attrs ``error_harmonics`` (the change at 2H), ``error_aliasing`` (the
     change at twice the AFT samples) and ``error_at`` (where they were measured); each a
     fraction of the amplitude, NaN where that solve did not converge. ``method``: the
-    ``methods.PERIODIC`` entry that made ``data``; ``request``: its request."""
+    ``methods.PERIODIC`` or ``methods.TORUS["hb"]`` entry that made ``data``; ``request``:
+    its request (the extra solves without λ1)."""
     from analysis.errors import InputError
 
-    single = replace(request, param=None, start=None, stop=None, progress=None)
-    harmonics = int(data.attrs["harmonics"])
+    single = replace(request, param=None, start=None, stop=None, progress=None,
+                     lyapunov_duration=0.0)
     options = {k: v for k, v in single.options.items() if k != "samples"}
     out = {}
-    for name, ask in (("error_harmonics", replace(single, resolution=2 * harmonics,
-                                                  options=options)),
+    for name, ask in (("error_harmonics", replace(
+            single, resolution=doubled(data.attrs["harmonics"]), options=options)),
                       ("error_aliasing", replace(single, options={
-                          **options, "samples": 2 * int(data.attrs["samples"])}))):
+                          **options, "samples": _doubled_samples(data.attrs["samples"])}))):
         try:
             out[name] = change(data, method.run(system, ask))
         except InputError:
@@ -76,11 +122,11 @@ def hb_error(method, system: System, request, data: xr.Dataset) -> xr.Dataset:
 
 
 def error_words(data: xr.Dataset) -> str:
-    """'error estimate: change at H = 80 …, aliasing …' of an HB response ('' without)."""
+    """'error estimate: change at H = 80 …, aliasing …' of an HB response or torus ('' without
+    one)."""
     if "error_harmonics" not in data.attrs:
         return ""
-    h = int(data.attrs["harmonics"])
     where = "" if data.attrs["error_at"] == "the response" else f" at {data.attrs['error_at']}"
-    return (f"error estimate{where}: change at H = {2 * h} "
+    return (f"error estimate{where}: change at H = {doubled(data.attrs['harmonics'])} "
             f"{float(data.attrs['error_harmonics']):.1e} of the amplitude, aliasing (2x "
             f"samples) {float(data.attrs['error_aliasing']):.1e}")
