@@ -66,17 +66,23 @@ def calibrate(
     from analysis.inference.results import calibrate_to_file, to_dataset, to_json
     from analysis.inference.simulate import RunSettings
     from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.executors import workers_of
 
     problem = prepare(model, target, prior, samples=samples, rounds=rounds, seed=seed,
                       device=device, block=block,
                       settings=RunSettings(transient_revolutions=transient,
                                            revolutions=revolutions, dt=dt))
-    cost = problem.estimate()
     ex = executor_of(executor, workers, scheduler)
     say = (lambda text: typer.echo(text, err=True)) if not quiet else (lambda text: None)
-    say(f"calibrate: {samples} sets × {rounds} rounds × {len(problem.target.rows)} rows = "
-        f"{int(cost['simulations'])} runs, {cost['member_steps']:.3g} RK4 steps, about "
-        f"{cost['core_seconds'] / 60:.3g} core-minutes ({ex.name})")
+    rows = len(problem.target.rows)
+    say(f"calibrate: {samples} sets × {rounds} rounds × {rows} rows = "
+        f"{samples * rounds * rows} runs ({ex.name})")
+    if not quiet:  # the estimate and its advice, from a timed probe, before the work
+        for line in problem.cost(host_workers=workers_of(ex)).lines():
+            say(line)
+        if device != "cpu":
+            say("note: the probe times the CPU's RK4; the member kernels on a GPU run "
+                "faster than this estimate")
     try:
         cal = calibrate_to_file(problem, output, executor=ex,
                                 progress=ProgressReporter("calibrate", quiet or as_json,

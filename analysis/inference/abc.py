@@ -51,10 +51,13 @@ from analysis.inference.simulate import (
     MemberRow,
     RunSettings,
     check_steps,
+    classify_seconds,
     evaluate_row,
     member_steps,
+    row_system,
 )
 from analysis.inference.targets import Target, TargetRow, class_matches, load_target
+from analysis.integrate.cost import CostEstimate, duration_text, estimate_cost
 from analysis.model import Model, load_model
 
 MAX_SAMPLES = 200_000
@@ -66,8 +69,9 @@ MAX_CORE_HOURS = 100.0
 CPU_RATE = 1.0e6
 """Member RK4 steps (a tangent carried over the record counted as one more member) per
 second per core of the member kernels' CPU build with the host's classification and
-spectra, measured on the paper's model (docs/calibration.md): the basis of the up-front
-estimate."""
+spectra, measured on the paper's model (docs/calibration.md): the basis of the refusal
+above ``MAX_CORE_HOURS`` (the estimate printed before the work is ``calibrate_cost``'s,
+from a timed probe)."""
 MIN_SD = 1e-3
 """Least kernel standard deviation per unit coordinate (a population of one point)."""
 
@@ -242,13 +246,20 @@ def estimate(model: Model, target: Target, options: Options) -> dict[str, float]
             "core_seconds": steps / CPU_RATE}
 
 
-def _evaluate_task(task: tuple) -> list[list[dict]]:
+def _evaluate_task(task: tuple, progress: Callable[[int, int], None] | None = None
+                   ) -> list[list[dict]]:
     """An executor task: a block of parameter sets at every row (one ensemble call per
-    row); per row, per member, the ``MemberRow`` as a dict."""
+    row); per row, per member, the ``MemberRow`` as a dict. ``progress(done, total)``
+    counts the block's sets × rows run so far."""
     model, rows, names, thetas, settings, coordinates, device = task
-    return [[res.as_dict() for res in evaluate_row(model, row, names, thetas, settings,
-                                                   coordinates, device)]
-            for row in rows]
+    m, out = len(thetas), []
+    for r, row in enumerate(rows):
+        report = None if progress is None else \
+            (lambda k, _, before=r * m: progress(before + k, len(rows) * m))
+        out.append([res.as_dict() for res in evaluate_row(model, row, names, thetas,
+                                                          settings, coordinates, device,
+                                                          report)])
+    return out
 
 
 def _pack(results: list[list[dict]], coordinates: Sequence[str]) -> dict[str, np.ndarray]:
@@ -292,6 +303,10 @@ class Problem:
 
     def estimate(self) -> dict[str, float]:
         return estimate(self.model, self.target, self.options)
+
+    def cost(self, workers: int | None = None, host_workers: int = 1) -> CalibrationCost:
+        """The cost said before any work, from timed probes (``problem_cost``)."""
+        return problem_cost(self, workers, host_workers)
 
     def definition(self) -> dict[str, Any]:
         """What a stored (resumable) calibration must agree on."""
@@ -344,6 +359,79 @@ def prepare(
     return Problem(mdl, tgt, pri, options)
 
 
+@dataclass(frozen=True)
+class CalibrationCost:
+    """A calibration's cost said before any work: the member kernels' RK4 steps
+    (``kernels``, ``analysis.integrate.cost``) and the host's classification and spectra of
+    each run (a parameter set at a row), ``host_seconds`` each (probed) on ``host_workers``
+    processes."""
+
+    kernels: CostEstimate
+    runs: int
+    host_seconds: float
+    host_workers: int = 1
+
+    @property
+    def host_total(self) -> float:
+        """Seconds of classification and spectra, wall time."""
+        return self.runs * self.host_seconds / max(1, min(self.host_workers, self.runs))
+
+    @property
+    def seconds(self) -> float:
+        """Expected wall time, s: the kernels' and the host's."""
+        return self.kernels.seconds + self.host_total
+
+    def lines(self) -> list[str]:
+        """The kernels' estimate line, the host's line with the total, then the advice."""
+        head, *advice = self.kernels.lines()
+        host = (f"estimate: {self.runs:,} runs x {self.host_seconds:.3g} s of classification "
+                f"and spectra on the host (probed) on {min(self.host_workers, self.runs)} "
+                f"worker(s) = {duration_text(self.host_total)}; in all "
+                f"{duration_text(self.seconds)}")
+        return [head, host, *advice]
+
+
+def problem_cost(problem: Problem, workers: int | None = None,
+                 host_workers: int = 1) -> CalibrationCost:
+    """The cost of a prepared calibration, from two timed probes at the first target row
+    and the centre of the priors. The member kernels (``analysis.integrate.cost``): its
+    parameter sets over every round (samples × rounds) are the members, each taking
+    ``member_steps`` RK4 steps (every row's transient and record, the tangent over the
+    record counted as one more member), with that row's step, on ``workers`` cores (None:
+    every core, ``kernels.cpu.cores``). The host: each run (a set at a row) classified and
+    its lines named (``simulate.classify_seconds``) on ``host_workers`` processes (1 for the
+    serial executor, the workers of a pool). On a GPU the kernels run faster than this."""
+    from analysis.integrate.kernels.cpu import cores
+
+    opts = problem.options
+    centre = box(problem.priors, np.full((1, len(problem.priors)), 0.5))[0]
+    values = dict(zip(problem.names, map(float, centre), strict=True))
+    row = problem.target.rows[0]
+    system = row_system(problem.model, row).replace(**values)
+    h, _ = opts.settings.steps(system)
+    steps = member_steps(problem.target, opts.settings, problem.model)
+    kernels = estimate_cost(system, opts.samples * opts.rounds, steps, dt=h,
+                            workers=workers or cores(), what="parameter sets")
+    host = classify_seconds(problem.model, row, values, opts.settings,
+                            problem.target.coordinates or ("x",))
+    return CalibrationCost(kernels, opts.samples * opts.rounds * len(problem.target.rows),
+                           host, host_workers)
+
+
+def calibrate_cost(model: str | Model, target: str | Target,
+                   priors: Sequence[Prior | str], *, workers: int | None = None,
+                   host_workers: int = 1, **options: Any) -> CalibrationCost:
+    """What ``calibrate`` with the same arguments would cost, said before any work (every
+    input checked as ``prepare`` checks it; ``problem_cost``): ``.lines()`` are the
+    estimate and its advice, ``.seconds`` the expected wall time.
+
+    >>> calibrate_cost("vakharia2015", "paper-table2", ["damping:10:3162:log"],
+    ...                samples=8, rounds=1).kernels.members  # doctest: +SKIP
+    8
+    """
+    return problem_cost(prepare(model, target, priors, **options), workers, host_workers)
+
+
 def calibrate(model: str | Model, target: str | Target, priors: Sequence[Prior | str], *,
               executor=None, store=None, progress: Callable[[int, int], None] | None = None,
               log: Callable[[str], None] | None = None, **options: Any) -> Calibration:
@@ -367,8 +455,9 @@ def run(problem: Problem, *, executor=None, store=None,
     """Run a prepared calibration. ``executor``: an ``analysis.sweeps.executors`` executor
     running blocks of ``block`` members (None: in this process); ``store``: a
     ``PointStore`` whose stored blocks are reused (resuming) and to which each finished
-    block is saved. ``progress(done, total)`` counts members × rows; ``log(line)`` reports
-    each round."""
+    block is saved. ``progress(done, total)`` counts members × rows, moving as the member
+    kernels finish sets within a block (on the CPU every ~0.5 s of work; from worker
+    processes too, ``attractor_blocks.WorkerCounts``); ``log(line)`` reports each round."""
     import time
 
     start = time.perf_counter()
@@ -424,6 +513,7 @@ def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
                options: Options, coordinates: Sequence[str], model_ref: str, executor,
                store, progress, done_count: list[int], total: int) -> list[list[MemberRow]]:
     """Run one round's sets in blocks (resuming stored blocks); rows[member][row]."""
+    from analysis.sweeps.attractor_blocks import WorkerCounts
     from analysis.sweeps.executors import SerialExecutor, run_with_progress
 
     blocks = list(range(0, len(values), options.block))
@@ -446,11 +536,27 @@ def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
         done_count[0] += len(found[item[0]]) * len(target.rows)
 
     if tasks:
-        run_with_progress(executor or SerialExecutor(), _block_task, tasks,
-                          lambda: done_count[0], total, progress, on_result)
+        slot = {b: i for i, (b, _) in enumerate(tasks)}
+        with WorkerCounts(store.folder if store is not None else None, len(tasks),
+                          total) as counts:
+            def stored(item, result):
+                with counts.lock:
+                    on_result(item, result)
+                    counts.finish(slot[item[0]])
+
+            items = [(b, task, *(counts.where(slot[b]) if progress else ()))
+                     for b, task in tasks]
+            run_with_progress(executor or SerialExecutor(), _block_task, items,
+                              lambda: counts.count(lambda: done_count[0]), total, progress,
+                              stored)
     return [member for b in blocks for member in found[b]]
 
 
 def _block_task(item: tuple) -> list[list[dict]]:
-    """A picklable executor task: (block start, evaluation task)."""
-    return _evaluate_task(item[1])
+    """A picklable executor task: (block start, evaluation task[, counts file, slot]);
+    with a counts file (``WorkerCounts``) the block's sets × rows run so far are written to
+    its slot as the kernels go."""
+    from analysis.sweeps.attractor_blocks import WorkerCounts
+
+    _, task, *where = item
+    return _evaluate_task(task, WorkerCounts.writer(*where) if where else None)

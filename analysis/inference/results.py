@@ -164,7 +164,7 @@ def calibrate_to_file(problem: Problem, output: str | Path, *, executor=None,
         cal = run(problem, executor=executor, store=store, progress=progress, log=log)
         write_calibration(cal, output)
     except BaseException as exc:
-        store.stopped(exc, total, "blocks")
+        store.stopped(exc, total, f"blocks of {problem.options.block} parameter sets")
         raise
     store.remove()
     return cal

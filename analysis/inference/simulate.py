@@ -19,7 +19,8 @@ build on the GPU: ``device``). A row's members are one call.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -100,16 +101,19 @@ class EngineResult:
 
 def run_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
                every: int, transient_samples: int, n_samples: int, per_revolution: int,
-               device: str = "cpu") -> EngineResult:
+               device: str = "cpu",
+               progress: Callable[[int, int], None] | None = None) -> EngineResult:
     """Run M members of ``system``'s model and balls in one call of the member kernels
     (``analysis.integrate.kernels.run_members``): ``states`` (M × n), ``parameters``
     (M × n_par), step ``h`` s; ``transient_samples`` · ``every`` steps dropped, then
     ``n_samples`` samples every ``every`` steps kept, with one tangent vector renormalised
     at each sample; λ1 is the mean growth over the record, its 95 % interval from batch
-    means of the revolutions' growths (``per_revolution`` samples each)."""
+    means of the revolutions' growths (``per_revolution`` samples each). ``progress(done,
+    M)``: members run so far (on the CPU every ~0.5 s of work)."""
     schedule = Schedule(transient_samples * every, every, n_samples, tangent=True,
                         lyapunov_skip=0, keep_sections=True)
-    out = run_members(system, states, parameters, h, schedule, device=device)
+    out = run_members(system, states, parameters, h, schedule, device=device,
+                      progress=progress)
     logs = np.asarray(out.logs, dtype=float)
     per = logs.reshape(len(logs), -1, per_revolution).sum(axis=2)
     with np.errstate(invalid="ignore"):
@@ -176,9 +180,11 @@ def _member_row(system: System, samples: np.ndarray, lam: float, ci: float, h: f
 
 def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],
                  thetas: np.ndarray, settings: RunSettings, coordinates: Sequence[str],
-                 device: str = "cpu") -> list[MemberRow]:
+                 device: str = "cpu",
+                 progress: Callable[[int, int], None] | None = None) -> list[MemberRow]:
     """Every parameter set ``thetas`` (M × P, SI units, in the order of ``names``) at one
-    target ``row``: one ensemble call, each member classified and its lines named."""
+    target ``row``: one ensemble call, each member classified and its lines named.
+    ``progress(done, M)``: the sets whose run is done (``run_engine``)."""
     model = load_model(model) if not isinstance(model, Model) else model
     base = row_system(model, row)
     members = [base.replace(**dict(zip(names, map(float, theta), strict=True)))
@@ -188,22 +194,47 @@ def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],
     if any(abs(s[0] - h) > 1e-15 * h or s[1] != every for s in steps):
         # a calibrated speed changes h per member: one call per distinct step
         out: list[MemberRow] = [None] * len(members)  # type: ignore[list-item]
+        done = 0
         for key in dict.fromkeys(steps):
             idx = [i for i, s in enumerate(steps) if s == key]
+            part = None if progress is None else \
+                (lambda k, _, before=done: progress(before + k, len(members)))
             for i, res in zip(idx, evaluate_row(model, row, names, thetas[idx], settings,
-                                                coordinates, device), strict=True):
+                                                coordinates, device, part), strict=True):
                 out[i] = res
+            done += len(idx)
         return out
     per = settings.samples_per_revolution
     result = run_engine(base, np.array([m.state for m in members]),
                         np.array([m.p for m in members]), h, every,
                         settings.transient_revolutions * per, settings.revolutions * per,
-                        per, device)
+                        per, device, progress)
     start = settings.transient_revolutions * per * every
     return [_member_row(m, result.samples[i], float(result.lambda1[i]),
                         float(result.ci95[i]), h, every, start, int(result.diverged_at[i]),
                         settings, coordinates)
             for i, m in enumerate(members)]
+
+
+def classify_seconds(model: Model, row: TargetRow, values: dict[str, float],
+                     settings: RunSettings, coordinates: Sequence[str]) -> float:
+    """Seconds the host takes to classify one member's record at ``row`` and name its lines
+    (the parameter set ``values``, SI units): the best of two classifications of one record
+    run alone (no transient; one member on the CPU build). The up-front estimate's second
+    part: the member kernels' RK4 steps are timed by ``analysis.integrate.cost``."""
+    system = row_system(model, row).replace(**values)
+    h, every = settings.steps(system)
+    per = settings.samples_per_revolution
+    result = run_engine(system, system.state[None, :], system.p[None, :], h, every, 0,
+                        settings.revolutions * per, per)
+    best = math.inf
+    for _ in range(2):  # the first also imports and warms what classifying needs
+        start = time.perf_counter()
+        _member_row(system, result.samples[0], float(result.lambda1[0]),
+                    float(result.ci95[0]), h, every, 0, int(result.diverged_at[0]), settings,
+                    coordinates)
+        best = min(best, time.perf_counter() - start)
+    return best
 
 
 def check_steps(model: Model, target: Target, corners: Sequence[dict[str, float]],

@@ -109,30 +109,53 @@ def map_block_task(task: tuple) -> tuple[str, dict]:
 
 
 class WorkerCounts:
-    """How far the workers are in their blocks: one int64 per pending block (its states
-    labelled so far) in a small file of the store's folder (``.progress.*.tmp``: one left
-    by a killed run is removed with the store's other temporaries), written by the workers
-    (``writer``), read by the parent (``running``), so the counter moves within a block, not
-    once per block. A worker that cannot open the file (a Dask worker on another machine)
-    writes nothing: its block then counts once it is stored."""
+    """How far the tasks on an executor are: one int64 per task (its members done so far) in
+    a small file (``.progress.*.tmp`` in ``folder``, a store's folder, where one left by a
+    killed run is removed with the store's other temporaries; None: the temporary folder),
+    written by the task (``writer``, in a worker or in this process), read by the parent
+    (``count``), so a counter moves within a task, not once per task. A worker that cannot
+    open the file (a Dask worker on another machine) writes nothing: its task then counts
+    once it is done. Use as a context manager (the file is removed on exit); the parent
+    updates its own count of finished members and calls ``finish(slot)`` under ``lock``."""
 
-    def __init__(self, folder: Path, blocks: int):
+    def __init__(self, folder: Path | str | None, tasks: int, total: int):
         fd, self.path = tempfile.mkstemp(prefix=".progress.", suffix=".tmp",
-                                         dir=os.path.abspath(folder))
-        os.ftruncate(fd, 8 * blocks)
+                                         dir=os.path.abspath(folder) if folder else None)
+        os.ftruncate(fd, 8 * tasks)
         os.close(fd)
-        self.finished = np.zeros(blocks, dtype=bool)
+        self.finished = np.zeros(tasks, dtype=bool)
+        self.total, self.shown = total, 0
+        self.lock = threading.Lock()
+
+    def __enter__(self) -> WorkerCounts:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        Path(self.path).unlink(missing_ok=True)
+
+    def where(self, slot: int) -> tuple[str, int]:
+        """What a task needs to write its count (``writer``'s arguments)."""
+        return self.path, slot
+
+    def finish(self, slot: int) -> None:
+        """Task ``slot`` is done (its members now counted by the parent; hold ``lock``)."""
+        self.finished[slot] = True
 
     def running(self) -> int:
-        """States mapped in the blocks not yet stored."""
+        """Members done in the tasks not yet finished."""
         try:
             counts = np.fromfile(self.path, dtype=np.int64)
         except OSError:
             return 0
         return int(counts[~self.finished[:len(counts)]].sum())
 
-    def close(self) -> None:
-        Path(self.path).unlink(missing_ok=True)
+    def count(self, finished: Callable[[], int]) -> int:
+        """``finished()`` (the parent's count of the finished tasks' members) plus the
+        running tasks' counts: monotone (a retried task starts its slot again), at most
+        ``total``."""
+        with self.lock:
+            self.shown = max(self.shown, min(finished() + self.running(), self.total))
+            return self.shown
 
     @staticmethod
     def writer(path: str, slot: int) -> Progress:
@@ -212,34 +235,20 @@ class StoredRunner:
         """The pending blocks on the executor's workers, each stored as it arrives; the
         counter moves as the workers label states (``WorkerCounts``)."""
         ref = StudyRef.of(study)  # the scale: computed here, once, for every worker
-        counts = WorkerCounts(self.store.folder, len(pending)) if progress else None
         slot = {keys[j]: i for i, j in enumerate(pending)}
-        lock, shown = threading.Lock(), [done[0]]
+        with WorkerCounts(self.store.folder, len(pending), total) as counts:
+            def stored(task, result) -> None:
+                key, states = task[1], task[2]
+                self.save(key, states, result[1])
+                with counts.lock:
+                    found[key] = Block.from_arrays(result[1])
+                    done[0] += len(states)
+                    counts.finish(slot[key])
 
-        def stored(task, result) -> None:
-            key, states = task[1], task[2]
-            self.save(key, states, result[1])
-            with lock:
-                found[key] = Block.from_arrays(result[1])
-                done[0] += len(states)
-                if counts is not None:
-                    counts.finished[slot[key]] = True
-
-        def count() -> int:  # monotone: a retried block starts its slot again
-            with lock:
-                now = done[0] + (counts.running() if counts is not None else 0)
-                shown[0] = max(shown[0], min(now, total))
-                return shown[0]
-
-        where = (lambda j: (counts.path, slot[keys[j]])) if counts is not None \
-            else (lambda j: ())
-        try:
-            run_with_progress(self.executor, map_block_task,
-                              [(ref, keys[j], blocks[j], *where(j)) for j in pending],
-                              count, total, progress, stored)
-        finally:
-            if counts is not None:
-                counts.close()
+            tasks = [(ref, keys[j], blocks[j], *(counts.where(slot[keys[j]]) if progress
+                                                  else ())) for j in pending]
+            run_with_progress(self.executor, map_block_task, tasks,
+                              lambda: counts.count(lambda: done[0]), total, progress, stored)
 
 
 MAX_SEED = 2**63 - 1

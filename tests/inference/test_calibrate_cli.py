@@ -23,7 +23,7 @@ def test_cli_json_layout_file_and_figure(cli, tmp_path):
               "--prior", "rotor_mass:0.3:3:log", "--prior", "damping:100:1000:log", *TINY,
               "-o", str(out), "--json", "--plot", str(png))
     assert res.returncode == 0, res.stderr
-    assert "40 runs" in res.stderr and "core-minutes" in res.stderr  # the estimate, first
+    assert "40 runs" in res.stderr and "RK4 steps" in res.stderr  # the estimate, first
     doc = json.loads(res.stdout)
     assert {"target", "accepted", "best_matched", "share_of_prior", "provenance"} <= set(doc)
     assert doc["target"]["name"] == "paper-table2"
