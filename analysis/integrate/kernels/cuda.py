@@ -14,15 +14,14 @@ member (``tests/integrate/test_kernels_gpu.py``).
 
 ``cuda_source(system, tangent)`` returns the text, for ``nvcc -Xptxas -v`` (registers and
 spills; no GPU needed): ``nvcc -arch=sm_90 -cubin -Xptxas -v --fmad=false -std=c++11 -x cu
-member.cu``. Measured with nvcc 13.0 for sm_90 (registers per thread, spill stores/loads in
-bytes), states | tangent:
-
-- balanced-rotor N_b 8: 180 | 202; vakharia2015 N_b 6: 162 | 192, N_b 8: – | 212, N_b 12:
-  208 | 250; no spills (issue 33's forward AD through the fused step took 255 registers
-  and spilled 576 B at N_b 8);
-- rotor-housing (8 states): 230, no spills | 255, 136/200 B; two-bearing-rotor (8, 10):
-  255, 564/744 B | 255, 1864/2392 B: the eight-state models' rhs needs more than 255 live
-  values in CasADi's order (``__noinline__`` stage functions do not remove them).
+member.cu``; ``benchmarks/ptxas_table.py`` prints the table of every shipped model.
+Measured with nvcc 13.0 for sm_90 (registers per thread, states | tangent), no spills for
+any shipped model and variant (``tests/integrate/test_kernels_gpu.py``): balanced-rotor N_b 8
+184 | 180, vakharia2015 N_b 6 160 | 160, N_b 12 210 | 202, rotor-housing 220 | 206,
+two-bearing-rotor 200 | 214, the 6205 defect models 166-168 | 216-220, nu205-roller 248 |
+228, vakharia2015-two-contact 208 | 210. Before the CUDA text's loops were rolled
+(``source.member_source``), the eight-state models spilled up to 1864/2392 B
+(two-bearing-rotor's tangent) and vakharia2015-two-contact's tangent 7280/10624 B.
 """
 
 from __future__ import annotations

@@ -76,7 +76,8 @@ PRELUDE = """\
 #define BD_RESTRICT __restrict__
 #define BD_GLOBAL extern "C" __global__
 typedef long long bd_long;
-#define BD_STAGE_SINCOS 1
+#define BD_ROLLED _Pragma("unroll 1")
+#define BD_NOINLINE static __device__ __noinline__
 #ifndef INFINITY
 #define INFINITY __longlong_as_double(0x7ff0000000000000ULL)
 #endif
@@ -89,6 +90,8 @@ typedef long long bd_long;
 #define BD_FN static inline
 #define BD_RESTRICT restrict
 typedef long long bd_long;
+#define BD_ROLLED
+#define BD_NOINLINE static
 #endif
 BD_FN double bd_sign(double x) { return x < 0 ? -1 : x > 0 ? 1 : x; }
 """
@@ -100,15 +103,15 @@ class Unsupported(ValueError):
     """An operation ``scalar_c`` does not write, or a Function that is not SX."""
 
 
-def scalar_c(fn: ca.Function, name: str) -> str:
+def scalar_c(fn: ca.Function, name: str, qualifier: str = "BD_FN") -> str:
     """``BD_FN void name(const double *x0, …, double *y0, …)``: the SX Function ``fn`` on
     doubles, one C statement per instruction in CasADi's order (``Unsupported`` for an
-    operation outside ``UNARY``/``BINARY``)."""
+    operation outside ``UNARY``/``BINARY``); ``qualifier`` replaces ``BD_FN``."""
     if not fn.is_a("SXFunction"):
         raise Unsupported(f"{fn.name()}: not an SX Function")
     inputs = ", ".join(f"const double *BD_RESTRICT x{i}" for i in range(fn.n_in()))
     outputs = ", ".join(f"double *BD_RESTRICT y{i}" for i in range(fn.n_out()))
-    lines = [f"BD_FN void {name}({inputs}, {outputs}) {{",
+    lines = [f"{qualifier} void {name}({inputs}, {outputs}) {{",
              "  double " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
     for i in range(fn.n_instructions()):
         op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
@@ -182,17 +185,18 @@ BD_FN void bd_member_{variant}({args}) {{
 #else
   double lo[{n}], hi[{n}];  /* the member's own, written out at its end: no false sharing */
 #endif
-  for (int i = 0; i < {n}; i++) {{ s[i] = z0[m * {n} + i]; lo[i] = INFINITY; hi[i] = -INFINITY; }}
+  BD_ROLLED for (int i = 0; i < {n}; i++) {{
+    s[i] = z0[m * {n} + i]; lo[i] = INFINITY; hi[i] = -INFINITY;
+  }}
   s[{n}] = k0[m];
-  rk4_constants(pm, &hm, &t0m, c);
+  rk4_constants(pm, &hm, &t0m, c);{stage_setup}
   const bd_long tr = transient[m], ev = every[m], ns = n_sec[m];
   const bd_long total = tr + ev * ns, from = ext_from[m], upto = ext_to[m];
   const bd_long end = total > upto ? total : upto;
   bd_long step = 0, bad = -1, sec = 0;
   if (from <= 0 && upto >= 0) bd_extend(lo, hi, s);
   for (; step < tr; ) {{
-    rk4_steps1(s, pm, &hm, &t0m, c, nx);
-    for (int i = 0; i < {ns}; i++) s[i] = nx[i];
+{advance}
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
     if (step >= from && step <= upto) bd_extend(lo, hi, s);
@@ -201,14 +205,29 @@ BD_FN void bd_member_{variant}({args}) {{
 
 _STATE_BODY = """
   for (bd_long left = ev; bad < 0 && step < end; ) {{
-    rk4_steps1(s, pm, &hm, &t0m, c, nx);
-    for (int i = 0; i < {ns}; i++) s[i] = nx[i];
+{advance}
     step++;
     if (bd_bad(s, lim)) {{ bad = step; break; }}
     if (step >= from && step <= upto) bd_extend(lo, hi, s);
     if (--left == 0) {{
       if (keep && sec < ns)
-        for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
+        BD_ROLLED for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
+      sec++; left = ev;
+    }}
+  }}
+"""
+
+_TANGENT_TAIL = """
+    step++;
+    if (bd_bad(s, lim)) {{ bad = step; break; }}
+    if (step >= from && step <= upto) bd_extend(lo, hi, s);
+    if (--left == 0 && sec < ns) {{
+      double norm = 0.0;
+      BD_ROLLED for (int i = 0; i < {n}; i++) norm += v[i] * v[i];
+      norm = sqrt(norm);
+      BD_ROLLED for (int i = 0; i < {n}; i++) v[i] /= norm;
+      logs[m * kmax + sec] = log(norm);
+      if (keep) BD_ROLLED for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
       sec++; left = ev;
     }}
   }}
@@ -218,9 +237,7 @@ _TANGENT_BODY = """
   double v[{n}], zs[{n}], vs[{n}], f[{n}], jv[{n}], az[{n}], av[{n}], d[{nd}];
   double ang[{na1}], rot[{nr}], cs0[{ncs}], cs[{ncs}];
   stage_constants(pm, d);
-#ifndef BD_STAGE_SINCOS
   stage_rotations(pm, &hm, rot);
-#endif
   for (int i = 0; i < {n}; i++) v[i] = i == 0 ? 1.0 : 0.0;
   const double half = hm / 2.0, sixth = hm / 6.0;
   for (bd_long left = ev; bad < 0 && step < end; ) {{
@@ -231,11 +248,7 @@ _TANGENT_BODY = """
       az[i] = f[i]; av[i] = jv[i];
       zs[i] = s[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
     }}
-#ifdef BD_STAGE_SINCOS
-    bd_trig(cs, &th, pm, ang);
-#else
     bd_rotate(cs, cs0, rot, 0);  /* the angles at t + h/2 */
-#endif
     stage(&th, zs, pm, vs, d, cs, f, jv);
     for (int i = 0; i < {n}; i++) {{
       az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
@@ -246,30 +259,81 @@ _TANGENT_BODY = """
       az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
       zs[i] = s[i] + hm * f[i]; vs[i] = v[i] + hm * jv[i];
     }}
-#ifdef BD_STAGE_SINCOS
-    bd_trig(cs, &tf, pm, ang);
-#else
     bd_rotate(cs, cs0, rot, 2);  /* the angles at t + h */
-#endif
     stage(&tf, zs, pm, vs, d, cs, f, jv);
     for (int i = 0; i < {n}; i++) {{
       s[i] += sixth * (az[i] + f[i]); v[i] += sixth * (av[i] + jv[i]);
     }}
     s[{n}] += 1.0;
-    step++;
-    if (bd_bad(s, lim)) {{ bad = step; break; }}
-    if (step >= from && step <= upto) bd_extend(lo, hi, s);
-    if (--left == 0 && sec < ns) {{
-      double norm = 0.0;
-      for (int i = 0; i < {n}; i++) norm += v[i] * v[i];
-      norm = sqrt(norm);
-      for (int i = 0; i < {n}; i++) v[i] /= norm;
-      logs[m * kmax + sec] = log(norm);
-      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec) * {n} + i] = s[i];
-      sec++; left = ev;
+""" + _TANGENT_TAIL
+
+_CUDA_TANGENT_BODY = """
+  double v[{n}], vs[{n}], jv[{n}], av[{n}];
+  BD_ROLLED for (int i = 0; i < {n}; i++) v[i] = i == 0 ? 1.0 : 0.0;
+  for (bd_long left = ev; bad < 0 && step < end; ) {{
+    bd_rk4_tangent(s, v, pm, hm, t0m, d, ang, cs, zs, vs, f, jv, az, av);
+""" + _TANGENT_TAIL
+"""The CUDA build's tangent loop: the stages of ``_TANGENT_BODY`` (the same operations)
+in a loop that is not unrolled (``bd_rk4_tangent``), one inlined stage, each forcing angle's
+sin and cos at the stage's own time."""
+
+_CUDA_STAGED = """
+BD_FN void bd_rk4(double *s, const double *p, double h, double t0, const double *d,
+                  double *ang, double *cs, double *zs, double *f, double *az) {{
+  /* one RK4 step of the states, stage by stage (stage_f), s = [z; k] */
+  const double t = t0 + s[{n}] * h, half = h / 2.0, sixth = h / 6.0;
+  BD_ROLLED for (int i = 0; i < {n}; i++) zs[i] = s[i];
+  BD_ROLLED for (int q = 0; q < 4; q++) {{
+    const double tq = q == 0 ? t : q < 3 ? t + half : t + h;
+    bd_trig(cs, &tq, p, ang);
+    stage_f(&tq, zs, p, zs, d, cs, f);
+    if (q == 0) {{ BD_ROLLED for (int i = 0; i < {n}; i++) az[i] = f[i]; }}
+    else if (q < 3) {{ BD_ROLLED for (int i = 0; i < {n}; i++) az[i] += 2.0 * f[i]; }}
+    if (q < 3) {{
+      const double a = q < 2 ? half : h;
+      BD_ROLLED for (int i = 0; i < {n}; i++) zs[i] = s[i] + a * f[i];
+    }} else {{
+      BD_ROLLED for (int i = 0; i < {n}; i++) s[i] += sixth * (az[i] + f[i]);
     }}
   }}
+  s[{n}] += 1.0;
+}}
 """
+"""The CUDA build's RK4 step stage by stage (rhs only): the steps of a model whose fused
+step holds too many live values for the GPU's registers (``FUSED_WORK_MAX``)."""
+
+_CUDA_TANGENT_STEP = """
+BD_FN void bd_rk4_tangent(double *s, double *v, const double *p, double h, double t0,
+                          const double *d, double *ang, double *cs, double *zs, double *vs,
+                          double *f, double *jv, double *az, double *av) {{
+  /* one RK4 step of the states and the tangent, stage by stage: _TANGENT_BODY's sums */
+  const double t = t0 + s[{n}] * h, half = h / 2.0, sixth = h / 6.0;
+  BD_ROLLED for (int i = 0; i < {n}; i++) {{ zs[i] = s[i]; vs[i] = v[i]; }}
+  BD_ROLLED for (int q = 0; q < 4; q++) {{
+    const double tq = q == 0 ? t : q < 3 ? t + half : t + h;
+    bd_trig(cs, &tq, p, ang);
+    {stage_call}
+    if (q == 0) {{ BD_ROLLED for (int i = 0; i < {n}; i++) {{ az[i] = f[i]; av[i] = jv[i]; }} }}
+    else if (q < 3) {{
+      BD_ROLLED for (int i = 0; i < {n}; i++) {{ az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i]; }}
+    }}
+    if (q < 3) {{
+      const double a = q < 2 ? half : h;
+      BD_ROLLED for (int i = 0; i < {n}; i++) {{
+        zs[i] = s[i] + a * f[i]; vs[i] = v[i] + a * jv[i];
+      }}
+    }} else {{
+      BD_ROLLED for (int i = 0; i < {n}; i++) {{
+        s[i] += sixth * (az[i] + f[i]); v[i] += sixth * (av[i] + jv[i]);
+      }}
+    }}
+  }}
+  s[{n}] += 1.0;
+}}
+"""
+"""The CUDA build's step of the states and the tangent (``_CUDA_TANGENT_BODY``); the stage
+is one call of ``stage``, or ``stage_f`` then ``stage_jv`` when the fused stage holds too
+many live values (``STAGE_WORK_MAX``)."""
 
 _ROTATE = """
 BD_FN void bd_trig(double *cs, const double *t, const double *p, double *ang) {{
@@ -290,10 +354,10 @@ BD_FN void bd_rotate(double *cs, const double *cs0, const double *rot, int j) {{
 _MEMBER_TAIL = """
   diverged[m] = bad < 0 ? -1 : (bd_long)k0[m] + bad;
   for (bd_long q = sec < ns ? sec : ns; q < kmax; q++) {{
-    if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
+    if (keep) BD_ROLLED for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
     {nan_log}
   }}
-  for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
+  BD_ROLLED for (int i = 0; i < {n}; i++) final[m * {n} + i] = s[i];
 #ifndef __CUDACC__
   for (int i = 0; i < {n}; i++) {{ low[m * {n} + i] = lo[i]; high[m * {n} + i] = hi[i]; }}
 #endif
@@ -320,33 +384,75 @@ def _args_without_m() -> str:
     return _ARGS.split(",", 1)[1].strip()
 
 
+FUSED_WORK_MAX = 120
+"""Most live work values (``Function.sz_w``) of the fused RK4 step that the CUDA build runs
+as written; a model beyond it (the eight-state rotor-housing defects and two-bearing-rotor:
+135-201) steps stage by stage on a GPU (``bd_rk4``): beyond it ptxas spills registers
+(``benchmarks/ptxas_table.py``)."""
+STAGE_WORK_MAX = 100
+"""Most live work values of the tangent's fused stage (rhs and Jv) that the CUDA build calls
+as one function; beyond it (two-bearing-rotor: 133, vakharia2015-two-contact: 274) it calls
+``stage_f`` then ``stage_jv`` (a function call, not inlined: 40-86 each, the rhs computed
+twice)."""
+
+
 def member_source(step: ca.Function, constants: ca.Function, n: int,
                   pairs: Sequence[tuple[int, int | None]], stage: Stage | None = None, *,
-                  target: str = "cpu") -> str:
+                  target: str = "cpu", tangent: bool | None = None) -> str:
     """The whole C text of one model and balls: the prelude, the written Functions
     (``rk4_steps1`` and ``rk4_constants``; with ``stage``, the tangent's ``stage``,
     ``stage_constants``, ``stage_angles`` and ``stage_rotations``), ``bd_bad``, the member
-    function ``bd_member_states`` or ``bd_member_tangent`` and its wrapper for ``target``
-    (``"cpu"``: an OpenMP loop ``bd_members_<variant>(count, threads, …)``; ``"cuda"``: a
-    ``__global__`` kernel, one member per thread)."""
-    variant = "states" if stage is None else "tangent"
+    function ``bd_member_states`` or ``bd_member_tangent`` (``tangent``; None: whether a
+    ``stage`` is given) and its wrapper for ``target`` (``"cpu"``: an OpenMP loop
+    ``bd_members_<variant>(count, threads, …)``; ``"cuda"``: a ``__global__`` kernel, one
+    member per thread).
+
+    The CUDA text computes what the CPU text computes with fewer live values (no spills,
+    ``benchmarks/ptxas_table.py``): its loops over the states are not unrolled
+    (``BD_ROLLED``: the member's arrays stay in local memory, read once per stage), the
+    tangent's four stages run in a loop with one inlined stage (``bd_rk4_tangent``, the
+    sin and cos at each stage time), and a model whose fused step or stage is too large
+    (``FUSED_WORK_MAX``, ``STAGE_WORK_MAX``; needs ``stage``) steps stage by stage (its
+    states then differ from the CPU build's by rounding)."""
+    tangent = stage is not None if tangent is None else tangent
+    if tangent and stage is None:
+        raise ValueError("the tangent variant needs its stage")
+    variant = "tangent" if tangent else "states"
+    cuda = target == "cuda"
     ns, nc = step.size1_in(0), max(step.size1_in(4), 1)
     parts = [PRELUDE, scalar_c(constants, "rk4_constants"), scalar_c(step, "rk4_steps1"),
              blow_up_c(n, pairs)]
     npar = step.size1_in(1)
-    body = _STATE_BODY.format(ns=ns, n=n)
+    staged = cuda and stage is not None and step.sz_w() > FUSED_WORK_MAX
+    advance = ("    bd_rk4(s, pm, hm, t0m, d, ang, cs, zs, f, az);" if staged else
+               f"    rk4_steps1(s, pm, &hm, &t0m, c, nx);\n"
+               f"    BD_ROLLED for (int i = 0; i < {ns}; i++) s[i] = nx[i];")
+    body, setup = _STATE_BODY.format(n=n, advance=advance), ""
     if stage is not None:
         na = stage.n_angles
+        sizes = dict(n=n, nd=max(stage.stage.size1_in(4), 1), na=na, na1=max(na, 1),
+                     nr=max(4 * na, 1), ncs=max(2 * na, 1))
         parts += [scalar_c(stage.constants, "stage_constants"),
                   scalar_c(stage.angles, "stage_angles"),
                   scalar_c(stage.rotations, "stage_rotations"), scalar_c(stage.stage, "stage")]
         parts.append(_ROTATE.format(na=na))  # after stage_angles: bd_trig calls it
-        body = _TANGENT_BODY.format(n=n, nd=max(stage.stage.size1_in(4), 1), na=na,
-                                    na1=max(na, 1), nr=max(4 * na, 1), ncs=max(2 * na, 1))
+        if cuda:
+            split = stage.stage.sz_w() > STAGE_WORK_MAX
+            parts += [scalar_c(stage.rhs, "stage_f"), _CUDA_STAGED.format(n=n)]
+            if split:
+                # not inlined: else the compiler merges its rhs with stage_f's (spills)
+                parts.append(scalar_c(stage.product, "stage_jv", "BD_NOINLINE"))
+            call = ("stage_f(&tq, zs, p, vs, d, cs, f); stage_jv(&tq, zs, p, vs, d, cs, jv);"
+                    if split else "stage(&tq, zs, p, vs, d, cs, f, jv);")
+            parts.append(_CUDA_TANGENT_STEP.format(n=n, stage_call=call))
+            setup = ("\n  double d[{nd}], ang[{na1}], cs[{ncs}], zs[{n}], f[{n}], az[{n}];"
+                     "\n  stage_constants(pm, d);").format(**sizes)
+        if tangent:
+            body = (_CUDA_TANGENT_BODY if cuda else _TANGENT_BODY).format(**sizes)
     parts.append(_MEMBER_HEAD.format(variant=variant, args=_ARGS, ns=ns, nc=nc, n=n,
-                                     npar=npar) + body
+                                     npar=npar, stage_setup=setup, advance=advance) + body
                  + _MEMBER_TAIL.format(n=n, nan_log="logs[m * kmax + q] = NAN;"
-                                       if stage is not None else ""))
+                                       if tangent else ""))
     wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
     parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL))
     return "\n".join(parts)
@@ -375,6 +481,10 @@ class Stage(NamedTuple):
     rotations: ca.Function
     """``stage_rotations(p, h) -> [cos ω_k h/2, sin ω_k h/2, cos ω_k h, sin ω_k h]_k``."""
     n_angles: int
+    rhs: ca.Function | None = None
+    """``stage_f(t, z, p, v, d, cs) -> f``: the stage's f alone (the same operations)."""
+    product: ca.Function | None = None
+    """``stage_jv(t, z, p, v, d, cs) -> Jv``: the stage's Jv alone."""
 
 
 def _forcing_angle(angle: ca.SX, t: ca.SX, others: Sequence[ca.SX]) -> bool:
@@ -445,14 +555,19 @@ def stage_functions(model: object, structure: tuple[int, ...]) -> Stage:
                              [ca.vertcat(*angles) if angles else ca.SX(0, 1)]),
                  ca.Function("stage_rotations", [p, h],
                              [ca.vertcat(*rotations) if rotations else ca.SX(0, 1)]),
-                 len(angles))
+                 len(angles),
+                 ca.Function("stage_f", [t, z, p, v, d, cs], [fused[:n]]),
+                 ca.Function("stage_jv", [t, z, p, v, d, cs], [fused[n:]]))
 
 
 def model_source(model: object, structure: tuple[int, ...], tangent: bool,
                  target: str = "cpu") -> str:
     """The member C of ``model`` with these balls (``member_source``): the state variant,
-    or with ``tangent`` the tangent variant, for ``target`` ``"cpu"`` or ``"cuda"``."""
+    or with ``tangent`` the tangent variant, for ``target`` ``"cpu"`` or ``"cuda"`` (whose
+    state variant takes the stage functions too when its fused step is large)."""
     step, constants = state_functions(model, structure)
-    stage = stage_functions(model, structure) if tangent else None
+    staged = target == "cuda" and step.sz_w() > FUSED_WORK_MAX
+    stage = stage_functions(model, structure) if tangent or staged else None
     return member_source(step, constants, model.n_state,  # type: ignore[attr-defined]
-                         model.centre_indices(), stage, target=target)  # type: ignore
+                         model.centre_indices(), stage, target=target,  # type: ignore
+                         tangent=tangent)
