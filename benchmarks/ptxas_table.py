@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
                    "variant": "tangent" if tangent else "states",
                    **ptxas_report(cuda_source(system, tangent), args.arch)}
             rows.append(row)
-            print(f"{name:28s} {str(system.structure[0] if system.structure else '-'):>4s} "
+            print(f"{name:28s} {system.structure[0] if system.structure else '-'!s:>4s} "
                   f"{row['variant']:8s} {row['registers']:5d} "
                   f"{row['spill_stores']:>7d}/{row['spill_loads']:<8d} {row['stack']:6d} "
                   f"{time.perf_counter() - start:5.0f}", flush=True)
