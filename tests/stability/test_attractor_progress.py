@@ -153,3 +153,24 @@ def test_an_interrupted_study_that_kept_nothing_says_so(system, tmp_path, monkey
     assert caught.value.__notes__ == [
         "nothing was kept: none of the blocks of initial states had finished"]
     assert not out.exists() and not Path(f"{out}.parts").exists()
+
+
+def test_a_searching_state_counts_its_share_of_max_periods():
+    """Ten trajectories that never recur (every point in a new cell), 50 periods at most in
+    chunks of 10: the counter moves every chunk by 10 x 10/50 states, though none settles
+    before the last chunk makes them all 'undecided'."""
+    from analysis.stability.attractors import MapperOptions
+    from analysis.stability.attractors.mapper import UNDECIDED, Scale
+
+    def advance(block: np.ndarray, n: int) -> np.ndarray:
+        first = block[:, -1:] + np.arange(1, n + 1)[None, :]  # never the same cell twice
+        block[:, -1] += n
+        return np.repeat((first + 1e3 * np.arange(len(block))[:, None])[:, :, None], 2, axis=2)
+
+    mapper = RecurrenceMapper(advance, lambda points: np.zeros(len(points), dtype=bool),
+                              Scale(np.ones(2)),
+                              MapperOptions(revisits=5, max_periods=50, chunk=10))
+    seen: list[tuple[int, int]] = []
+    labels = mapper.map(np.zeros((10, 2)), progress=lambda d, t: seen.append((d, t)))
+    assert np.all(labels == UNDECIDED)
+    assert seen == [(2, 10), (4, 10), (6, 10), (8, 10), (10, 10)]

@@ -218,7 +218,10 @@ class RecurrenceMapper:
             progress: Callable[[int, int], None] | None = None) -> np.ndarray:
         """Labels (K,) of the initial states ``states`` (K, n; SI) started at step counters
         ``steps`` (K,; default 0): attractor labels from 1, ``DIVERGED`` or ``UNDECIDED``.
-        ``progress(done, total)`` after each chunk."""
+        ``progress(done, total)`` after each chunk: ``done`` counts the labelled states
+        and, for each state still searching, the share of ``max_periods`` it has run (a
+        bound on its work: most settle far sooner), so the counter moves with every chunk,
+        not only when states settle."""
         states = np.atleast_2d(np.asarray(states, dtype=float))
         count = len(states)
         start = np.zeros(count) if steps is None else np.asarray(steps, dtype=float)
@@ -256,7 +259,8 @@ class RecurrenceMapper:
                 labels[active] = UNDECIDED
                 active = active[:0]
             if progress is not None:
-                progress(int(np.count_nonzero(labels)), count)
+                searching = self.spent[active].sum() / opts.max_periods
+                progress(int(np.count_nonzero(labels) + searching), count)
         return np.array([self.resolve(int(k)) for k in labels], dtype=np.int64)
 
     def _walk(self, trace: _Trace, keys: list[bytes], points: np.ndarray, index: int,
