@@ -143,6 +143,8 @@ def chart(
     axes = Axis.parse(x), Axis.parse(y)
     check_grid(setting, *axes)  # every input, before a worker starts or a file is made
     several = parse_ics(ics, ics_box, ics_seed)
+    if several is not None:  # its box within the model's bounds, before the estimate
+        several.check(setting.system_at(**{a.name: a.values[0] for a in axes}))
     ex = executor_of(executor, workers, scheduler)
     if not quiet:  # the cost, said before it is paid
         typer.echo("\n".join(grid_cost(setting, *axes, workers=workers_of(ex), members_per_point=(

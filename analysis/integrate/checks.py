@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -180,3 +182,130 @@ def check_resolution(system: System, dt: float, duration: float | None = None,
                    "resolves it")
         (warn or (lambda m: warnings.warn(m, RuntimeWarning, stacklevel=3)))(message)
     return steps
+
+
+BLOW_UP_FACTOR = 1000.0
+"""A displacement beyond this many clearances is a blow-up (models without a clearance are
+only checked for non-finite states)."""
+
+
+BALL_FRACTION = 0.25
+"""... or beyond this fraction of the largest ball diameter: Hertz contact describes
+deflections far smaller than the ball, so a displacement of a quarter of it is no longer a
+motion of the bearing the model describes (a static deflection under 1e5 N on the paper's
+bearing is 0.12 of its ball diameter)."""
+
+
+def blow_up_limit(model: Model, values: Mapping[str, float]) -> float:
+    """Displacement (m) beyond which a run of ``model`` with parameter ``values`` has blown
+    up: ``BLOW_UP_FACTOR`` times the largest radial clearance of its bearings, or
+    ``BALL_FRACTION`` of the largest ball diameter, whichever is smaller (the parameters
+    that play the ``clearance`` and ``ball_diameter`` roles, ``Model.role``; inf without
+    either: non-finite values only)."""
+    clearance = max((abs(v) for v in model.role_values("clearance", values)), default=0.0)
+    ball = max((abs(v) for v in model.role_values("ball_diameter", values)), default=0.0)
+    limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
+    limits += [BALL_FRACTION * ball] if ball > 0 else []
+    return min(limits, default=np.inf)
+
+
+
+VELOCITY_MARGIN = 10.0
+"""The velocity bound of an initial state is this many times the displacement limit times
+the model's fastest rate (``start_limits``)."""
+STATE_CAP = 1e100
+"""Every component of an initial state, in any unit, is within ±this: beyond it a cubic
+term overflows a double (1e300) in the first step. The bound of a model without a
+blow-up limit (no clearance and no ball diameter: only non-finite states blow up)."""
+
+
+@dataclass(frozen=True)
+class StartLimits:
+    """Where an initial state of a System may lie (SI units): each body's centre within
+    ``displacement`` (m) of the origin, each velocity component (m/s) within ±``velocity``,
+    every component within ±``STATE_CAP``.
+
+    The rule: a motion that stays within the displacement limit L (``blow_up_limit``: 1000
+    clearances or a quarter ball) at the fastest rate R of the model (1/s: the largest |λ|
+    of its stiffest linearisation, ``stable_step``, or 2π times its fastest forcing,
+    ``fastest_forcing``, whichever is larger) moves at most L·R; the bound is
+    ``VELOCITY_MARGIN`` times that (the paper's model: L = 1.19 mm, R = 8.7e3 1/s, so
+    ±103 m/s). Without L, or without a rate, velocities are bounded by ``STATE_CAP`` only."""
+
+    displacement: float
+    velocity: float
+    rate: float
+
+    def bound(self, unit: str) -> float:
+        """The bound of a component in ``unit`` (m: the displacement limit; m/s: the
+        velocity bound; any other: ``STATE_CAP``)."""
+        found = {"m": self.displacement, "m/s": self.velocity}.get(unit, math.inf)
+        return min(found, STATE_CAP)
+
+    def why(self, unit: str) -> tuple[str, str]:
+        """(name, reason) of the rule behind ``bound(unit)``, in words."""
+        if unit == "m" and math.isfinite(self.displacement):
+            return "the blow-up limit", "a state there has diverged before it starts"
+        if unit == "m/s" and math.isfinite(self.velocity):
+            return "the velocity bound", (
+                f"{VELOCITY_MARGIN:g} x the blow-up limit {self.displacement:.3g} m x the "
+                f"model's fastest rate {self.rate:.3g} 1/s: a motion that fast leaves the "
+                "limit at once")
+        return "the largest initial value", "beyond it a cubic term overflows at once"
+
+
+def start_limits(system: System) -> StartLimits:
+    """The ``StartLimits`` of ``system`` (its model, balls and parameter values)."""
+    limit = blow_up_limit(system.model, dict(system.parameters))
+    if not math.isfinite(limit):
+        return StartLimits(limit, math.inf, 0.0)
+    _, largest = stable_step(system)
+    rate = max(largest, 2 * math.pi * fastest_forcing(system)[1])
+    velocity = VELOCITY_MARGIN * limit * rate if rate > 0 else math.inf
+    return StartLimits(limit, velocity, rate)
+
+
+def check_start_range(system: System, coordinate: str, low: float, high: float,
+                      field: str, limits: StartLimits | None = None) -> None:
+    """``InputError`` naming ``field`` when initial values of state ``coordinate`` from
+    ``low`` to ``high`` (its unit) reach beyond its bound (``StartLimits``: a body's centre
+    beyond the blow-up limit, a velocity beyond the velocity bound, any value beyond
+    ``STATE_CAP``): the one check of every side of a box or grid of initial states."""
+    model = system.model
+    unit = model.state_units[coordinate]
+    centres = {model.state_names[i] for pair in model.centre_indices() for i in pair
+               if i is not None}
+    limits = limits or start_limits(system)
+    bound = limits.bound(unit) if unit != "m" or coordinate in centres else STATE_CAP
+    if max(abs(low), abs(high)) <= bound:
+        return
+    name, reason = limits.why(unit) if bound < STATE_CAP else limits.why("")
+    what, give = (f"{coordinate} = {low:g} {unit}", "value") if low == high else \
+        (f"{coordinate} from {low:g} to {high:g} {unit}", "side")
+    raise InputError(f"{field}: {what} reaches beyond {name} of {bound:.3g} {unit} "
+                     f"({reason}); give a {give} within ±{bound:.3g} {unit}")
+
+
+def check_start(system: System, state=None, field: str = "initial_state") -> None:
+    """``InputError`` naming ``field`` when the initial state ``state`` (default: the
+    System's) of ``system`` lies beyond its ``StartLimits``: each body's centre
+    displacement (``hypot(x, y)``, as the blow-up predicate ``bad_states`` measures it),
+    each velocity component and every component. The one check of every path that takes an
+    initial state (``simulate``, ensembles; the sides of boxes and grids:
+    ``check_start_range``)."""
+    model = system.model
+    z = system.state if state is None else np.asarray(state, dtype=float)
+    limits = start_limits(system)
+    for name, value in zip(model.state_names, z, strict=True):
+        if model.state_units[name] != "m":
+            check_start_range(system, name, float(value), float(value), field, limits)
+    names = model.state_names
+    for i, j in model.centre_indices():
+        shift = abs(z[i]) if j is None else math.hypot(z[i], z[j])
+        bound = limits.bound("m")
+        if shift > bound:
+            what = names[i] if j is None else f"hypot({names[i]}, {names[j]})"
+            name, reason = limits.why("m")
+            raise InputError(f"{field}: the centre displacement {what} = {shift:.3g} m is "
+                             f"beyond {name} of {bound:.3g} m ({reason}); give one within "
+                             f"{bound:.3g} m")

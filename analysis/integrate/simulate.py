@@ -9,7 +9,7 @@ parameter value, method and step, the characteristic frequencies and the package
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,15 +18,17 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, Interrupt, SimulationError
+from analysis.integrate.checks import (  # noqa: F401  (blow_up_limit's old home)
+    BALL_FRACTION,
+    BLOW_UP_FACTOR,
+    blow_up_limit,
+    check_start,
+)
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.plan import Method, RunPlan
 from analysis.integrate.speed_profile import SpeedProfile
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.provenance import completed_attrs, state_variable_attrs, to_dataset
-
-BLOW_UP_FACTOR = 1000.0
-"""A displacement beyond this many clearances is a blow-up (models without a clearance are
-only checked for non-finite states)."""
 
 
 def simulate(
@@ -145,6 +147,7 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
                         save_every=save_every, rtol=rtol, atol=atol, in_memory=in_memory,
                         profile=profile)
     system, profile = plan.system, plan.profile
+    check_start(system)  # the initial state within the model's bounds (StartLimits)
     attrs = completed_attrs(system, **plan.settings(), initial_state=True,
                             tolerances=(rtol, atol) if method == "cvodes" else None,
                             speed_profile=None if profile is None
@@ -222,26 +225,6 @@ def simulate_to_file(
                      run.limit, compiled, sink=sink, functions=run.functions)
 
     return atomic_write(path, write, size=8 * (model.n_state + 1) * size)
-
-
-BALL_FRACTION = 0.25
-"""... or beyond this fraction of the largest ball diameter: Hertz contact describes
-deflections far smaller than the ball, so a displacement of a quarter of it is no longer a
-motion of the bearing the model describes (a static deflection under 1e5 N on the paper's
-bearing is 0.12 of its ball diameter)."""
-
-
-def blow_up_limit(model: Model, values: Mapping[str, float]) -> float:
-    """Displacement (m) beyond which a run of ``model`` with parameter ``values`` has blown
-    up: ``BLOW_UP_FACTOR`` times the largest radial clearance of its bearings, or
-    ``BALL_FRACTION`` of the largest ball diameter, whichever is smaller (the parameters
-    that play the ``clearance`` and ``ball_diameter`` roles, ``Model.role``; inf without
-    either: non-finite values only)."""
-    clearance = max((abs(v) for v in model.role_values("clearance", values)), default=0.0)
-    ball = max((abs(v) for v in model.role_values("ball_diameter", values)), default=0.0)
-    limits = [BLOW_UP_FACTOR * clearance] if clearance > 0 else []
-    limits += [BALL_FRACTION * ball] if ball > 0 else []
-    return min(limits, default=np.inf)
 
 
 def bad_states(points: np.ndarray, limit: float,

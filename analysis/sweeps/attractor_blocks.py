@@ -283,22 +283,17 @@ def check_branch_of(system: System, branch: xr.Dataset, parameter: str, field: s
 
 
 def check_sides(system: System, sides: Sequence[Range], field: str) -> None:
-    """``InputError`` (naming ``field``) when a side of initial states reaches a displacement
-    beyond the blow-up limit of ``system`` (``integrate.simulate.blow_up_limit``: 1000
-    clearances or a quarter ball): such a state has blown up before its first step (±1e300
-    m was mapped as 'diverged')."""
-    from analysis.integrate.simulate import blow_up_limit
+    """``InputError`` (naming ``field``) when a side of initial states reaches beyond the
+    bounds of an initial state of ``system`` (``integrate.checks.check_start_range``: a
+    displacement beyond the blow-up limit, a velocity beyond the velocity bound): such a
+    state has blown up before its first steps (±1e300 m was mapped as 'diverged')."""
+    from analysis.integrate.checks import check_start_range, start_limits
 
-    limit = blow_up_limit(system.model, system.parameters)
-    centres = {i for pair in system.model.centre_indices() for i in pair if i is not None}
+    limits = start_limits(system)
     for side in sides:
-        index = side.check_state(system, field)
-        reach = max(abs(side.low), abs(side.high))
-        if index in centres and reach > limit:
-            raise InputError(f"{side.field or field}: {side.coordinate} from {side.low:g} to "
-                             f"{side.high:g} m reaches beyond the blow-up limit of {limit:.3g} "
-                             f"m (a state there has diverged before it starts); give a side "
-                             f"within ±{limit:.3g} m")
+        side.check_state(system, field)
+        check_start_range(system, side.coordinate, side.low, side.high, side.field or field,
+                          limits)
 
 
 def study_cost(system: System, members: int, *, workers: int | None = None,

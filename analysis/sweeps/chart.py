@@ -168,7 +168,7 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
     device = resolve_device(device, len(x.values) * len(y.values),
                             max(1, round(setting.transient / setting.step())))
     if ics is not None:  # its box fits the model, before any point runs
-        ics.box_of(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
+        ics.check(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
     definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
                   "structure": list(setting.loaded().structure(setting.n_balls))}
     if ics is not None:

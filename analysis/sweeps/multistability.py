@@ -59,6 +59,18 @@ class Ics:
                          for name, z in zip(system.state_names[:half], system.state[:half],
                                             strict=True)))
 
+    def check(self, system: System) -> None:
+        """``InputError`` before any point runs: the box fits ``system`` (``box_of``) and its
+        sides lie within the bounds of an initial state (``integrate.checks``:
+        ``check_start_range``, a displacement within the blow-up limit, a velocity within
+        the velocity bound)."""
+        from analysis.integrate.checks import check_start_range, start_limits
+
+        limits = start_limits(system)
+        for side in self.box_of(system).sides:
+            check_start_range(system, side.coordinate, side.low, side.high,
+                              side.field or "ics-box", limits)
+
     def states(self, system: System, point: int) -> np.ndarray:
         """The K initial states of grid point ``point`` (its index in the grid), SI units."""
         drawn = self.box_of(system).sample(system, self.count - 1,

@@ -1331,6 +1331,18 @@ CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
     ("attractors-box-1e300", THIRD, "initial states of +-1e300 m (were mapped as "
      "'diverged')", (*ATTR[:5], "x:-1e300:1e300", *ATTR[6:]),
      ("--box: x from -1e+300 to 1e+300 m reaches beyond the blow-up limit",), None, ATTR),
+    ("attractors-box-vx-1e300", THIRD, "initial velocities of +-1e300 m/s (were accepted)",
+     (*ATTR, "--box", "vx:-1e300:1e300"),
+     ("--box: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound of 103 m/s "
+      "(10 x the blow-up limit 0.00119 m x the model's fastest rate",), None,
+     (*ATTR, "--box", "vx:-0.01:0.01")),
+    ("basins-grid-vx-1e300", THIRD, "a basins grid of velocities of +-1e300 m/s (was "
+     "accepted)", ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:4", "--y",
+                   "vx:-1e300:1e300:4", "-o", "b.nc"),
+     ("--y: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",)),
+    ("chart-ics-box-vx-1e300", THIRD, "chart --ics states drawn among velocities of +-1e300 "
+     "m/s (was accepted)", (*CHART, "--ics", "2", "--ics-box", "vx:-1e300:1e300"),
+     ("--ics-box: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",)),
     ("attractors-param-count-1e9", THIRD, "a --param count of 1e9 (was allocated first)",
      (*ATTR, "--param", "speed_rpm:5000:6000:1000000000"),
      ("--param: must be a whole number in [1, 100000] (values of the parameter), got "
