@@ -33,6 +33,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
+from analysis.integrate.checks import check_start
 from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.kernels.members import Schedule
@@ -194,6 +195,8 @@ def _members(system: System, states: np.ndarray | None,
         state = None if states is None else system.model.check_state(states[i],
                                                                      f"states[{i}]")
         members.append(system.replace(state=state, **overrides))
+        if state is not None:  # within the model's bounds (integrate.checks.StartLimits)
+            check_start(members[-1], field=f"states[{i}]")
     return members
 
 

@@ -74,3 +74,11 @@ def test_a_model_without_a_blow_up_limit_is_capped():
     with pytest.raises(InputError, match="beyond the largest initial value of 1e\\+100"):
         check_start(duffing, [0.0, 0.0, 1e300, 0.0])
     check_start(duffing, [0.0, 0.0, STATE_CAP, 0.0])
+
+
+def test_an_ensemble_member_beyond_the_bounds_is_refused_naming_it(paper):
+    from analysis.integrate.ensemble import ensemble
+
+    states = [[1e-6, 0.0, 0.0, 0.0], [1e-6, 0.0, 0.0, -1e300]]
+    with pytest.raises(InputError, match=r"^states\[1\]: vy = -1e\+300 m/s reaches beyond"):
+        ensemble(paper, states, duration=0.001)
