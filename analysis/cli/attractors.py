@@ -248,7 +248,8 @@ def basins(
     _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings)
     ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
         system, x_range, y_range, output, **settings, executor=ex,
-        progress=ProgressReporter("basins", quiet or as_json), on_damaged=_recomputing))
+        progress=ProgressReporter("basins", quiet or as_json, unit="states"),
+        on_damaged=_recomputing))
     _finish(ds, output, as_json, plot)
 
 
@@ -335,7 +336,7 @@ def attractors(
         _say_cost(quiet or as_json, system, samples, executor, workers, settings)
         ds = _run(executor_made, lambda ex: fractions_to_file(
             system, sides, samples, output, **settings, executor=ex,
-            progress=ProgressReporter("attractors", quiet or as_json),
+            progress=ProgressReporter("attractors", quiet or as_json, unit="states"),
             on_damaged=_recomputing))
     else:
         say = None if quiet else (lambda line: typer.echo(line, err=True))
