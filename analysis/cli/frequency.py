@@ -86,11 +86,17 @@ def hb(
                           max_points=max_points, ds_max=ds_max,
                           options=given_options(dt=dt, settle=settle, samples=samples),
                           progress=progress_lines(quiet))
-        data = hb_error(PERIODIC["hb"], system, request, PERIODIC["hb"].run(system, request,
-                                                                             end))
+        data = hb_error(PERIODIC["hb"], system, request, PERIODIC["hb"].run(
+            system, request, end, cost_lines(quiet)))
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
             {k: data.attrs[k] for k in ("error_harmonics", "error_aliasing", "error_at")})
+
+
+def cost_lines(quiet: bool):
+    """The ``cost`` callback of ``Method.run``: the estimate's lines on stderr, before the
+    work (None with ``--quiet``)."""
+    return None if quiet else (lambda est: typer.echo("\n".join(est.lines()), err=True))
 
 
 def _finish(data, output: Path, as_json: bool, say, figure, extra: dict | None = None,
@@ -281,7 +287,7 @@ def torus(
                           stability_every=stability_every,
                           options=given_options(dt=dt, settle=settle),
                           progress=progress_lines(quiet))
-        data = with_between_error(chosen.run(system, request, end))
+        data = with_between_error(chosen.run(system, request, end, cost_lines(quiet)))
         if chosen.name == "hb":  # its own error estimate: the change at 2H, the aliasing
             from analysis.frequency.accuracy import hb_error
 

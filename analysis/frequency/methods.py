@@ -4,7 +4,8 @@ up, so that a command only parses, looks up and prints.
 A ``Method`` is one way to compute a response: its name, the field that sets its resolution
 (``harmonics`` H or H1,H2; ``points`` N) and three functions of a System and a ``Request``:
 ``check`` (every input, before any work: nothing is written after a refusal), ``solve`` (one
-response, as a Dataset) and ``follow`` (a branch in a runtime parameter, as a Dataset).
+response, as a Dataset) and ``follow`` (a branch in a runtime parameter, as a Dataset); and
+``estimate``, its cost from a short timed probe (``frequency.cost``), said before the work.
 
 * ``PERIODIC["hb"]``: harmonic balance of a T-periodic response with Hill's stability
   (``harmonic_balance``, ``continue_harmonic``);
@@ -29,10 +30,13 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
+import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
 from analysis.frequency.circle.solve import DEFAULT_POINTS
+from analysis.frequency.cost import circle_cost, hb_cost, torus_hb_cost
+from analysis.integrate.cost import CostEstimate
 from analysis.model import System
 
 Progress = Callable[[str], None] | None
@@ -100,14 +104,19 @@ class Method:
     check: Callable[[System, System | None, Request], None]
     solve: Callable[[System, Request], xr.Dataset]
     follow: Callable[[System, Request], xr.Dataset]
+    estimate: Callable[[System, Request], CostEstimate] | None = None
+    """The cost of a checked request, from a short timed probe (``frequency.cost``)."""
 
-    def run(self, system: System, request: Request, end: System | None = None
-            ) -> xr.Dataset:
+    def run(self, system: System, request: Request, end: System | None = None,
+            cost: Callable[[CostEstimate], None] | None = None) -> xr.Dataset:
         """Check, then one response (no ``request.param``) or its branch; a request without
-        a resolution gets the method's default."""
+        a resolution gets the method's default. ``cost``: given the estimate after the
+        checks, before the work."""
         if request.resolution is None:
             request = replace(request, resolution=self.default)
         self.check(system, end, request)
+        if cost is not None and self.estimate is not None:
+            cost(self.estimate(system, request))
         return (self.follow if request.param is not None else self.solve)(system, request)
 
 
@@ -180,13 +189,37 @@ def _torus_frequencies(system: System, end: System | None, request: Request,
     return freqs
 
 
+FORCING_PERIODS = 20
+"""Periods of F1 of the short run on which ``_check_forcing`` compares the torus forcing
+with the model's (the solve compares them again on its settled run)."""
+
+
+def _check_forcing(system: System, freqs, dt: float | None) -> None:
+    """The torus forcing of ``freqs`` is the model's (``torus.check_phases``) on a short run
+    from the initial state (``FORCING_PERIODS`` periods of F1), before the cost is said and
+    any work done (RK4 steps of ``dt`` s, the spec's when None): 'do not carry' in one
+    line, not after the estimate."""
+    from analysis.frequency.torus.equations import check_phases, omegas_of, torus_function
+    from analysis.integrate.plan import RunPlan
+    from analysis.integrate.simulate import simulate
+
+    period = 2 * math.pi / omegas_of(system, freqs)[0]
+    dt = RunPlan.step(system, dt, warn=lambda message: None).dt
+    run = simulate(system, duration=FORCING_PERIODS * period, transient=0.0, dt=dt)
+    t = run.t.values[::max(1, run.sizes["t"] // 50)]
+    z = np.column_stack([run[name].values[::max(1, run.sizes["t"] // 50)]
+                         for name in system.state_names])
+    check_phases(system, freqs, torus_function(system, freqs), t, z)
+
+
 def _check_torus(system: System, end: System | None, request: Request) -> None:
     from analysis.frequency.periodic.harmonic import check_forced
     from analysis.frequency.torus.equations import check_torus_harmonics
 
     check_forced(system)
     pair = check_torus_harmonics(request.resolution, system.n_state)
-    _torus_frequencies(system, end, request, pair)
+    _check_forcing(system, _torus_frequencies(system, end, request, pair),
+                   request.options.get("dt"))
 
 
 def _solve_torus(system: System, request: Request) -> xr.Dataset:
@@ -216,6 +249,7 @@ def _check_circle(system: System, end: System | None, request: Request) -> None:
     if freqs[0].kind == "vc" or freqs[1].kind != "vc":
         raise InputError(f"frequencies: --method shooting needs F1 shaft or param:NAME and "
                          f"F2 a vc, got {request.frequencies}")
+    _check_forcing(system, freqs, request.options.get("dt"))
 
 
 def _solve_circle(system: System, request: Request) -> xr.Dataset:
@@ -237,15 +271,15 @@ def _follow_circle(system: System, request: Request) -> xr.Dataset:
 
 PERIODIC: dict[str, Method] = {
     "hb": Method("hb", "harmonics", 10, "harmonic balance is resolved by --harmonics",
-                 _check_periodic, _solve_periodic, _follow_periodic),
+                 _check_periodic, _solve_periodic, _follow_periodic, hb_cost),
 }
 """The methods of a periodic response (``bearingdyn hb``)."""
 
 TORUS: dict[str, Method] = {
     "hb": Method("hb", "harmonics", "8,4", "harmonic balance is resolved by --harmonics",
-                 _check_torus, _solve_torus, _follow_torus),
+                 _check_torus, _solve_torus, _follow_torus, torus_hb_cost),
     "shooting": Method("shooting", "points", DEFAULT_POINTS,
                        "the shooting torus is resolved by --points",
-                       _check_circle, _solve_circle, _follow_circle),
+                       _check_circle, _solve_circle, _follow_circle, circle_cost),
 }
 """The methods of a 2-torus (``bearingdyn torus --method``)."""

@@ -29,6 +29,8 @@ from analysis.model import System
 
 PROBE_STEPS = 400
 """RK4 steps of the timed probe (after one untimed warm-up block)."""
+RK4_STEPS = "RK4 steps"
+"""The default unit of ``CostEstimate.steps``."""
 LONG = 60.0
 """An estimate above this many seconds comes with advice (a coarser step, fewer members)."""
 
@@ -38,7 +40,8 @@ class CostEstimate:
     """The cost of ``members`` runs of ``steps`` RK4 steps each (of ``dt`` s) on ``workers``
     workers, at ``step_seconds`` s per step of one member (measured). ``coarsest_dt``: the
     largest step the run plan accepts for this System (None: not known), ``what``: the
-    members' name in the lines (``points``, ``initial states``)."""
+    members' name in the lines (``points``, ``initial states``); ``unit``: what ``steps``
+    counts (RK4 steps by default)."""
 
     members: int
     steps: int
@@ -49,6 +52,9 @@ class CostEstimate:
     what: str = "points"
     bound: bool = False
     """``steps`` is an upper bound (a member may stop early: the recurrence mapper)."""
+    unit: str = RK4_STEPS
+    """What ``steps`` counts: RK4 steps of ``dt`` s, or another unit of work (``Newton
+    iterations`` of harmonic balance: ``dt`` unused, ``step_seconds`` per iteration)."""
 
     @property
     def total_steps(self) -> int:
@@ -63,11 +69,16 @@ class CostEstimate:
     def lines(self) -> list[str]:
         """The estimate in words (one line), then the advice (none, one or two lines)."""
         steps = f"up to {self.steps:,}" if self.bound else f"{self.steps:,}"
-        head = (f"estimate: {self.members:,} {self.what} x {steps} RK4 steps (dt = "
-                f"{self.dt:.3g} s) = {self.total_steps:.3g} steps; expected "
+        if self.unit == RK4_STEPS:
+            unit, total = f"RK4 steps (dt = {self.dt:.3g} s)", "steps"
+            each = f"{self.step_seconds * 1e6:.3g} us per step"
+        else:
+            unit, total = self.unit, self.unit.split()[-1]
+            each = f"{self.step_seconds:.3g} s per {total.removesuffix('s')}"
+        head = (f"estimate: {self.members:,} {self.what} x {steps} {unit} = "
+                f"{self.total_steps:.3g} {total}; expected "
                 f"{'at most ' if self.bound else ''}{duration_text(self.seconds)} on "
-                f"{min(self.workers, self.members)} worker(s) "
-                f"({self.step_seconds * 1e6:.3g} us per step, probed)")
+                f"{min(self.workers, self.members)} worker(s) ({each}, probed)")
         return [head, *self.advice()]
 
     def advice(self) -> list[str]:
