@@ -142,8 +142,13 @@ def _chart_groups(setting: Setting, tasks: list[tuple],
         return [[task] for task in tasks]
     groups: list[list[tuple]] = []
     previous = None
+    known: dict[tuple, tuple] = {}  # the balls of a point: built once per ball axis value
     for task in tasks:
-        balls = _task_system(task).structure
+        _, xname, xval, _, yval, *_ = task
+        key = (yval, xval if axis_bearing(xname) is not None else None)
+        if key not in known:
+            known[key] = _task_system(task).structure
+        balls = known[key]
         if groups and balls == previous and len(groups[-1]) < size:
             groups[-1].append(task)
         else:
@@ -210,17 +215,16 @@ def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,
     extra = ("n_attractors", "multistable", "diverged_share") if ics is not None else ()
     fields = ("nature_code", "period", "lyapunov", "ci95",
               *(f for f in first if f.startswith("amplitude_")), "graph_ratio", *extra)
-    arrays = {f: np.full(shape, np.nan) for f in fields}
-    nature = np.empty(shape, dtype=object)
+    points = [stored[f"{iy:04d}-{ix:04d}"] for iy in range(shape[0])
+              for ix in range(shape[1])]  # row-major: the grid's order
+    arrays = {f: np.array([point[f] for point in points], dtype=float).reshape(shape)
+              for f in fields}
+    nature = np.array([str(point["nature"]) for point in points],
+                      dtype=object).reshape(shape)
     codes = np.full((*shape, ics.count if ics is not None else 0), -1, dtype=np.int64)
-    for iy in range(shape[0]):
-        for ix in range(shape[1]):
-            point = stored[f"{iy:04d}-{ix:04d}"]
-            for f in fields:
-                arrays[f][iy, ix] = point[f]
-            nature[iy, ix] = str(point["nature"])
-            if ics is not None:
-                codes[iy, ix] = point["attractor_codes"]
+    if ics is not None:
+        codes[...] = np.array([point["attractor_codes"] for point in points]).reshape(
+            codes.shape)
     dims = (y.name, x.name)
     state_units = setting.loaded().state_units
     units = {"lyapunov": "1/s", "ci95": "1/s",

@@ -42,30 +42,54 @@ def normalised(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     return out, size
 
 
+CHUNK = 256
+"""Members per numpy pass of ``repeat_periods`` and ``graph_ratios``: their temporaries
+(members × K × n doubles) stay in the cache; the values are the same for any chunk."""
+
+
+def _norms(d: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(d, axis=-1)`` squared, the same operations (sqrt(add.reduce(d·d)))
+    without the square root (taken after a max or a median: the same bits, sqrt being
+    monotonic and correctly rounded)."""
+    return np.add.reduce(d * d, axis=-1)
+
+
 def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
                    max_period: int = 16) -> np.ndarray:
     """``classify.repeat_period`` of each member (m × K × n points, sizes m): the smallest
     n, 0 where none."""
     found = np.zeros(len(points), dtype=np.int64)
-    for n in range(1, max_period + 1):
-        if points.shape[1] < 2 * n + 2:
-            break
-        gap = np.max(np.linalg.norm(points[:, n:] - points[:, :-n], axis=2), axis=1)
-        found[(found == 0) & (gap < rel_tol * size)] = n
+    for lo in range(0, len(points), CHUNK):
+        part, out, limit = points[lo:lo + CHUNK], found[lo:lo + CHUNK], \
+            rel_tol * size[lo:lo + CHUNK]
+        todo = np.arange(len(part))
+        for n in range(1, max_period + 1):
+            if points.shape[1] < 2 * n + 2 or not len(todo):
+                break
+            sub = part[todo] if len(todo) < len(part) else part
+            gap = np.sqrt(np.max(_norms(sub[:, n:] - sub[:, :-n]), axis=1))
+            hit = gap < limit[todo]
+            out[todo[hit]] = n
+            todo = todo[~hit]
     return found
 
 
 def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.ndarray:
     """``classify.graph_ratio`` of each member (m × K × n points, phases m × K)."""
     count = points.shape[1]
-    order = np.argsort(phase, axis=1)
-    sorted_points = np.take_along_axis(points, order[:, :, None], axis=1)
-    neighbours = np.linalg.norm(np.diff(sorted_points, axis=1), axis=2)
     rng = np.random.default_rng(seed)
     i, j = rng.integers(0, count, (2, 4 * count))
-    pairs = np.linalg.norm(points[:, i] - points[:, j], axis=2)
-    return np.median(neighbours, axis=1) / np.maximum(np.median(pairs[:, i != j], axis=1),
-                                                      1e-300)
+    i, j = i[i != j], j[i != j]
+    out = np.empty(len(points))
+    for lo in range(0, len(points), CHUNK):
+        part = points[lo:lo + CHUNK]
+        order = np.argsort(phase[lo:lo + CHUNK], axis=1)
+        sorted_points = np.take_along_axis(part, order[:, :, None], axis=1)
+        neighbours = np.sqrt(_norms(np.diff(sorted_points, axis=1)))
+        pairs = np.sqrt(_norms(part[:, i] - part[:, j]))
+        out[lo:lo + CHUNK] = np.median(neighbours, axis=1) / np.maximum(
+            np.median(pairs, axis=1), 1e-300)
+    return out
 
 
 def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
