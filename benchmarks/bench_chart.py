@@ -28,6 +28,14 @@ read back per point) against the chart's (``chart_points``: a group's rows class
 numpy over its points; ``PointStore.save_block``: one entry per group; ``points``), in ms
 per point.
 
+``--host-speeds S`` times the host side of a whole chart of S speeds × N_b 5-12 in the
+GPU's groups (``chart.GROUP_POINTS["gpu"]``): ``stability_chart`` with ``run_members``
+replaced by a replay (one real member per N_b on the CPU build, its sections, logs and
+extremes given to every point of a call; every point then quasi-periodic and judged by its
+graph ratio, the costliest class), so only the host's work is timed: systems, plans,
+classes, store blocks and the assembled chart, in ms per point (issue 33's 160 000-point
+chart is ``--host-speeds 20000``; target <= 0.1 ms/point).
+
 Targets: the 1600-point chart in <= 150 s on 2 cores; chart point / RK4 <= 2.5 (serial).
 ``--quick`` is ``--speeds 10`` (80 points) for an estimate.
 """
@@ -176,6 +184,50 @@ def host_side(count: int, repeat: int) -> dict[str, float]:
     return {name: min(values) for name, values in times.items()}
 
 
+def host_chart(speeds: int) -> tuple[float, float]:
+    """ms per point (wall, CPU time of this process) of the host side of a chart of
+    ``speeds`` speeds × N_b 5-12 in GPU-size groups, the kernel call replayed (see the
+    module); a 2-speed chart first builds the replays (not timed)."""
+    from analysis.integrate.kernels import MemberResult, Schedule
+    from analysis.sweeps import chart as chart_mod
+
+    real, replays = chart_module.run_members, {}
+
+    def replay(system, z0, p, h, schedule, **kwargs):
+        m, n, k = len(z0), system.model.n_state, schedule.max_sections
+        if system.structure not in replays:
+            one = {name: schedule.counts(name)[:1] for name in (
+                "transient_steps", "steps_per_section", "n_sections", "lyapunov_skip",
+                "extremes_from", "extremes_to")}
+            replays[system.structure] = real(system, z0[:1], p[:1], h[:1],
+                                             Schedule(**one, tangent=True))
+        one = replays[system.structure]
+        kept = min(k, one.sections.shape[1])
+        sections, logs = np.full((m, k, n), np.nan), np.full((m, k), np.nan)
+        sections[:, :kept], logs[:, :kept] = one.sections[0, :kept], one.logs[0, :kept]
+        return MemberResult(sections, logs, np.repeat(one.lambda1, m),
+                            np.full(m, -1, dtype=np.int64), *(np.repeat(a, m, axis=0) for a in
+                                                              (one.final, one.low, one.high)),
+                            "cpu")
+
+    groups = dict(chart_mod.GROUP_POINTS)
+    chart_module.run_members = replay
+    chart_mod.GROUP_POINTS["cpu"] = chart_mod.GROUP_POINTS["gpu"]
+    y = Axis.parse("n_balls:5:12")
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            stability_chart(SETTING, Axis.parse("speed_rpm:1000:10000:2"), y,
+                            Path(tmp) / "warm.nc")
+            start, cpu = time.perf_counter(), time.process_time()
+            chart = stability_chart(SETTING, Axis.parse(f"speed_rpm:1000:10000:{speeds}"), y,
+                                    Path(tmp) / "chart.nc")
+            wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+    finally:
+        chart_module.run_members = real
+        chart_mod.GROUP_POINTS.update(groups)
+    return wall / chart.nature.size * 1e3, cpu / chart.nature.size * 1e3
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -188,6 +240,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--host-points", type=int, default=32,
                         help="points of the host-side timing (0: skip it)")
+    parser.add_argument("--host-speeds", type=int, default=0,
+                        help="time the host side of a chart of this many speeds (0: skip)")
     parser.add_argument("--no-chart", action="store_true",
                         help="the serial reference only")
     parser.add_argument("--save", type=Path, help="also write the chart to this netCDF file")
@@ -204,6 +258,12 @@ def main() -> None:
               f"store entry each) {host['per_point']:.2f} ms/point; chart's (numpy rows, "
               f"one block) {host['block']:.2f} ms/point; "
               f"{host['per_point'] / host['block']:.1f}x")
+    if args.host_speeds > 0:
+        per, cpu = host_chart(args.host_speeds)
+        print(f"host side of a {8 * args.host_speeds}-point chart (GPU groups, kernel "
+              f"replayed, load {os.getloadavg()[0]:.1f}): {per:.3f} ms/point wall, {cpu:.3f} "
+              f"ms/point CPU: {cpu * 160:.0f} s of CPU for 160 000 points (target <= 0.1 "
+              "ms/point)")
     if args.reference_points > 0:
         report_reference(serial_reference(full_x, y, args.reference_points, args.repeat),
                          args.repeat)
