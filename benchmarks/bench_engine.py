@@ -7,6 +7,8 @@ In one run, on the same model and step:
   ``simulate``);
 - **CPU build, all cores**: ``kernels.run_members`` on ``--members`` members (state only,
   no sections kept: the kernel's throughput), OpenMP over every core this process may use;
+  and on **one core** (``threads=1``, members / cores: the same work per core), the ratio
+  being the build's scaling over the cores;
 - **CUDA build**, when a GPU is visible (CuPy installed): the same call on the GPU, at
   ``--gpu-members`` members (default 2²⁰, where an H200 reaches its throughput);
 - **a basin**: ``--size`` × ``--size`` initial states of the balanced rotor (50 N, N_b 8,
@@ -76,15 +78,16 @@ def one_core(system: System, h: float, steps: int, members: int, repeat: int) ->
 
 
 def kernel(system: System, h: float, steps: int, members: int, repeat: int,
-           device: str) -> dict:
-    """The member kernel's build on ``device`` (state only, nothing kept)."""
+           device: str, threads: int | None = None) -> dict:
+    """The member kernel's build on ``device`` (state only, nothing kept), on ``threads``
+    CPU threads (None: every core)."""
     z = members_of(system, members)
     schedule = Schedule(0, steps, 1, keep_sections=False)
     start = time.perf_counter()
     run_members(system, z[:1], None, h, Schedule(0, 1, 1), device=device)  # built, loaded
     first = time.perf_counter() - start
     seconds = best_of(repeat, lambda: run_members(system, z, None, h, schedule,
-                                                  device=device))
+                                                  device=device, threads=threads))
     return {"members": members, "steps": steps, "seconds": seconds, "first_use_s": first,
             "steps_per_s": members * steps / seconds}
 
@@ -149,6 +152,11 @@ def main() -> None:
     out["one_core"] = one_core(system, h, args.steps, args.one_core_members, args.repeat)
     out["cpu_build"] = kernel(system, h, args.steps, args.members, args.repeat, "cpu")
     out["cpu_over_one_core"] = out["cpu_build"]["steps_per_s"] / out["one_core"]["steps_per_s"]
+    out["cpu_build_1"] = kernel(system, h, args.steps, max(args.members // cores(), 1),
+                                args.repeat, "cpu", 1)
+    out["cpu_scaling"] = out["cpu_build"]["steps_per_s"] / out["cpu_build_1"]["steps_per_s"]
+    out["cpu_1_over_one_core"] = (out["cpu_build_1"]["steps_per_s"]
+                                  / out["one_core"]["steps_per_s"])
     if gpu:
         out["cuda_build"] = kernel(system, h, args.steps, args.gpu_members, args.repeat, "gpu")
         out["cuda_over_cpu"] = out["cuda_build"]["steps_per_s"] / out["cpu_build"]["steps_per_s"]
@@ -166,14 +174,17 @@ def main() -> None:
     print(f"balanced-rotor N_b 8, 50 N, 8000 rpm, h = {h:.4g} s, {out['cores']} core(s), "
           f"load {', '.join(f'{v:.2f}' for v in out['load'])}")
     for key, name in (("one_core", "one core, compiled RK4 blocks"),
-                      ("cpu_build", "CPU build, all cores"), ("cuda_build", "CUDA build")):
+                      ("cpu_build", "CPU build, all cores"),
+                      ("cpu_build_1", "CPU build, one core"), ("cuda_build", "CUDA build")):
         row = out[key]
         if row is None:
             print(f"  {name:32s} no GPU: {out['no_gpu']}")
             continue
         print(f"  {name:32s} {row['steps_per_s']:10.3e} steps/s ({row['members']} members "
               f"× {row['steps']} steps in {row['seconds']:.3g} s)")
-    print(f"  CPU build / one core: {out['cpu_over_one_core']:.1f}×")
+    print(f"  CPU build / one core: {out['cpu_over_one_core']:.1f}×; CPU build all cores / "
+          f"one core: {out['cpu_scaling']:.2f}× on {out['cores']} cores; CPU build on one "
+          f"core / compiled path: {out['cpu_1_over_one_core']:.2f}×")
     if gpu:
         print(f"  CUDA / CPU build: {out['cuda_over_cpu']:.1f}×;  CUDA / one core: "
               f"{out['cuda_over_one_core']:.1f}×")
