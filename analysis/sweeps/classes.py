@@ -47,6 +47,10 @@ CHUNK = 256
 (members × K × n doubles) stay in the cache; the values are the same for any chunk."""
 
 
+PROBE = 8
+"""Gaps of a period checked first by ``repeat_periods`` (see there)."""
+
+
 def _norms(d: np.ndarray) -> np.ndarray:
     """``np.linalg.norm(d, axis=-1)`` squared, the same operations (sqrt(add.reduce(d·d)))
     without the square root (taken after a max or a median: the same bits, sqrt being
@@ -66,11 +70,17 @@ def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
         for n in range(1, max_period + 1):
             if points.shape[1] < 2 * n + 2 or not len(todo):
                 break
-            sub = part[todo] if len(todo) < len(part) else part
+            # the first PROBE gaps first: a member with one of them >= its limit (or NaN)
+            # cannot repeat with period n, and most do not (the max of all is then not
+            # needed; the members left get the max over all their gaps, as before)
+            head = part[todo, :n + PROBE]
+            first = np.sqrt(np.max(_norms(head[:, n:] - head[:, :-n]), axis=1))
+            check = todo[first < limit[todo]]
+            sub = part[check]
             gap = np.sqrt(np.max(_norms(sub[:, n:] - sub[:, :-n]), axis=1))
-            hit = gap < limit[todo]
-            out[todo[hit]] = n
-            todo = todo[~hit]
+            hit = check[gap < limit[check]]
+            out[hit] = n
+            todo = np.setdiff1d(todo, hit, assume_unique=True)
     return found
 
 
