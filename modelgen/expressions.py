@@ -24,7 +24,8 @@ import difflib
 import math
 from collections.abc import Callable, Mapping
 
-import sympy as sp
+from modelgen.lazy import LazyTable
+from modelgen.lazy import sympy as sp
 
 MAX_LENGTH = 2000
 """Longest expression string, characters."""
@@ -44,13 +45,15 @@ def _heaviside(arg: sp.Expr) -> sp.Expr:
     return sp.Heaviside(arg, 0)
 
 
-FUNCTIONS: dict[str, tuple[Callable[..., sp.Expr], int | None]] = {
-    "sin": (sp.sin, 1), "cos": (sp.cos, 1), "exp": (sp.exp, 1), "sqrt": (sp.sqrt, 1),
-    "abs": (sp.Abs, 1), "Heaviside": (_heaviside, 1), "Max": (sp.Max, None),
-    "Min": (sp.Min, None),
-}
-"""Allowed functions: name -> (SymPy function, number of arguments; None: 2…MAX_ARGS)."""
-CONSTANTS: dict[str, sp.Expr] = {"pi": sp.pi}
+FUNCTIONS: Mapping[str, tuple[Callable[..., sp.Expr], int | None]] = LazyTable({
+    "sin": lambda: (sp.sin, 1), "cos": lambda: (sp.cos, 1), "exp": lambda: (sp.exp, 1),
+    "sqrt": lambda: (sp.sqrt, 1), "abs": lambda: (sp.Abs, 1),
+    "Heaviside": lambda: (_heaviside, 1), "Max": lambda: (sp.Max, None),
+    "Min": lambda: (sp.Min, None),
+})
+"""Allowed functions: name -> (SymPy function, number of arguments; None: 2…MAX_ARGS);
+the names are known without SymPy (``modelgen.lazy``)."""
+CONSTANTS: Mapping[str, sp.Expr] = LazyTable({"pi": lambda: sp.pi})
 """Named constants every expression may use."""
 
 _OPERATORS: dict[type, Callable[[sp.Expr, sp.Expr], sp.Expr]] = {

@@ -27,12 +27,13 @@ the parameters (so E, ν, f, D_b, D_m stay runtime parameters).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Literal
 
-from modelgen.unrolled import NUMPY, Ops, Unrolled
+from modelgen.unrolled import NUMPY, Ops, unrolled_base
 
 Race = Literal["inner", "outer"]
 RACE_SIGN: dict[str, int] = {"inner": 1, "outer": -1}
@@ -202,25 +203,40 @@ def race_contact(ball_diameter: float, pitch_diameter: float, conformity: float,
 
 
 
-class RaceStiffness(Unrolled):
-    """K(D_b, D_m, f, E, ν, s): ball–race load–deflection constant (N/m^1.5), s = +1 for the
-    inner race (K_i), −1 for the outer race (K_o)."""
+@functools.cache
+def race_stiffness_class() -> type:
+    """The class ``RaceStiffness`` (made on first use: an ``Unrolled`` SymPy function needs
+    SymPy, and validating a spec does not; ``modelgen.lazy``)."""
 
-    nargs = 6
-    code_name = "race_stiffness"
-    arg_names = ("d_b", "d_m", "f", "e", "nu", "sign")
-    doc = ("Hertz load-deflection constant K (N/m^1.5) of a ball (diameter d_b) and a race "
-           "(sign +1 inner, -1 outer) of groove conformity f, pitch diameter d_m, modulus e, "
-           f"Poisson ratio nu: Hamrock-Brewe start, {NEWTON_STEPS} Newton steps on the "
-           f"ellipticity, elliptic integrals by {AGM_STEPS} AGM steps (modelgen/hertz.py).")
-    is_positive = True
+    class RaceStiffness(unrolled_base()):
+        """K(D_b, D_m, f, E, ν, s): ball–race load–deflection constant (N/m^1.5), s = +1 for the
+        inner race (K_i), −1 for the outer race (K_o)."""
 
-    @staticmethod
-    def algorithm(d_b: Any, d_m: Any, f: Any, e: Any, nu: Any, sign: Any, ops: Ops) -> Any:
-        return unrolled_stiffness(d_b, d_m, f, e, nu, sign, ops)
+        nargs = 6
+        code_name = "race_stiffness"
+        arg_names = ("d_b", "d_m", "f", "e", "nu", "sign")
+        doc = ("Hertz load-deflection constant K (N/m^1.5) of a ball (diameter d_b) and a race "
+               "(sign +1 inner, -1 outer) of groove conformity f, pitch diameter d_m, modulus e, "
+               f"Poisson ratio nu: Hamrock-Brewe start, {NEWTON_STEPS} Newton steps on the "
+               f"ellipticity, elliptic integrals by {AGM_STEPS} AGM steps (modelgen/hertz.py).")
+        is_positive = True
 
-    def latex_name(self) -> str:
-        return "K_i" if self.args[5] == 1 else "K_o"
+        @staticmethod
+        def algorithm(d_b: Any, d_m: Any, f: Any, e: Any, nu: Any, sign: Any, ops: Ops) -> Any:
+            return unrolled_stiffness(d_b, d_m, f, e, nu, sign, ops)
 
-    def latex_args(self, printer: Any) -> str:
-        return ", ".join(printer._print(a) for a in self.args[:5])
+        def latex_name(self) -> str:
+            return "K_i" if self.args[5] == 1 else "K_o"
+
+        def latex_args(self, printer: Any) -> str:
+            return ", ".join(printer._print(a) for a in self.args[:5])
+
+    RaceStiffness.__module__, RaceStiffness.__qualname__ = __name__, "RaceStiffness"
+    return RaceStiffness
+
+
+def __getattr__(name: str) -> Any:
+    """``RaceStiffness``, made on first use (``race_stiffness_class``)."""
+    if name == "RaceStiffness":
+        return race_stiffness_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,7 +17,6 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import sympy as sp
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -30,6 +29,7 @@ from pydantic import (
 
 from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
+from modelgen.lazy import sympy as sp
 from modelgen.locations import (
     MODELS_ENV,
     broken_link,

@@ -16,8 +16,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.quantities import QUANTITIES
 
 STATE_NAMES = ("x", "y", "vx", "vy")

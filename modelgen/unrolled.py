@@ -20,13 +20,15 @@ and SymPy compares and traverses such trees in exponential time.)
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-import sympy as sp
+
+from modelgen.lazy import sympy as sp
 
 
 @dataclass(frozen=True)
@@ -150,55 +152,70 @@ TRACE = Ops(
 """Write an algorithm as straight-line CasADi code (``pi`` is bound per trace)."""
 
 
-class Unrolled(sp.Function):
-    """A SymPy function computed by ``algorithm(*args, ops)``; compact in equations.
+@functools.cache
+def unrolled_base() -> type:
+    """The class ``Unrolled`` (made on first use: a SymPy ``Function`` subclass needs SymPy,
+    and validating a spec does not; ``modelgen.lazy``)."""
 
-    Subclasses set ``nargs``, ``code_name`` (the helper function of the generated code),
-    ``arg_names``, ``doc`` and ``algorithm`` (a staticmethod taking the arguments and an
-    ``Ops``), and may override ``latex_name``.
-    """
+    class Unrolled(sp.Function):
+        """A SymPy function computed by ``algorithm(*args, ops)``; compact in equations.
 
-    code_name: ClassVar[str]
-    arg_names: ClassVar[tuple[str, ...]]
-    doc: ClassVar[str]
-    algorithm: ClassVar[Callable[..., Any]]
+        Subclasses set ``nargs``, ``code_name`` (the helper function of the generated code),
+        ``arg_names``, ``doc`` and ``algorithm`` (a staticmethod taking the arguments and an
+        ``Ops``), and may override ``latex_name``.
+        """
 
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        if "algorithm" in cls.__dict__:
-            algorithm = cls.__dict__["algorithm"].__func__
-            # lambdify evaluates the function by calling _imp_ on NumPy values
-            cls._imp_ = staticmethod(lambda *args: numpy_call(algorithm, *args))
+        code_name: ClassVar[str]
+        arg_names: ClassVar[tuple[str, ...]]
+        doc: ClassVar[str]
+        algorithm: ClassVar[Callable[..., Any]]
 
-    def latex_name(self) -> str:
-        return self.code_name
+        def __init_subclass__(cls, **kwargs: Any) -> None:
+            super().__init_subclass__(**kwargs)
+            if "algorithm" in cls.__dict__:
+                algorithm = cls.__dict__["algorithm"].__func__
+                # lambdify evaluates the function by calling _imp_ on NumPy values
+                cls._imp_ = staticmethod(lambda *args: numpy_call(algorithm, *args))
 
-    def latex_args(self, printer: Any) -> str:
-        return ", ".join(printer._print(a) for a in self.args)
+        def latex_name(self) -> str:
+            return self.code_name
 
-    def _latex(self, printer: Any, exp: str | None = None) -> str:
-        text = rf"{self.latex_name()}\left({self.latex_args(printer)}\right)"
-        return rf"\left({text}\right)^{{{exp}}}" if exp else text
+        def latex_args(self, printer: Any) -> str:
+            return ", ".join(printer._print(a) for a in self.args)
 
-    def _sympystr(self, printer: Any) -> str:
-        """A call of the helper: what the CasADi printer (a ``StrPrinter``) writes."""
-        return f"{self.code_name}({', '.join(printer._print(a) for a in self.args)})"
+        def _latex(self, printer: Any, exp: str | None = None) -> str:
+            text = rf"{self.latex_name()}\left({self.latex_args(printer)}\right)"
+            return rf"\left({text}\right)^{{{exp}}}" if exp else text
 
-    def _eval_evalf(self, prec: int) -> sp.Expr | None:
-        if not all(a.is_number for a in self.args):
-            return None
-        return sp.Float(float(type(self)._imp_(*(float(a) for a in self.args))), 15)
+        def _sympystr(self, printer: Any) -> str:
+            """A call of the helper: what the CasADi printer (a ``StrPrinter``) writes."""
+            return f"{self.code_name}({', '.join(printer._print(a) for a in self.args)})"
 
-    @classmethod
-    def helper_source(cls) -> str:
-        """Python source of the helper: the algorithm traced as straight-line CasADi code."""
-        trace = _Trace()
-        args = [Traced(trace, name) for name in cls.arg_names]
-        ops = Ops(**{**TRACE.__dict__, "pi": Traced(trace, "math.pi")})
-        result = _text(cls.algorithm(*args, ops))
-        lines = [f"def {cls.code_name}({', '.join(cls.arg_names)}):", f'    """{cls.doc}"""',
-                 *_live(trace.lines, result), f"    return {result}"]
-        return "\n".join(lines) + "\n"
+        def _eval_evalf(self, prec: int) -> sp.Expr | None:
+            if not all(a.is_number for a in self.args):
+                return None
+            return sp.Float(float(type(self)._imp_(*(float(a) for a in self.args))), 15)
+
+        @classmethod
+        def helper_source(cls) -> str:
+            """Python source of the helper: the algorithm traced as straight-line CasADi code."""
+            trace = _Trace()
+            args = [Traced(trace, name) for name in cls.arg_names]
+            ops = Ops(**{**TRACE.__dict__, "pi": Traced(trace, "math.pi")})
+            result = _text(cls.algorithm(*args, ops))
+            lines = [f"def {cls.code_name}({', '.join(cls.arg_names)}):", f'    """{cls.doc}"""',
+                     *_live(trace.lines, result), f"    return {result}"]
+            return "\n".join(lines) + "\n"
+
+    Unrolled.__module__, Unrolled.__qualname__ = __name__, "Unrolled"
+    return Unrolled
+
+
+def __getattr__(name: str) -> Any:
+    """``Unrolled``, made on first use (``unrolled_base``)."""
+    if name == "Unrolled":
+        return unrolled_base()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _live(lines: list[str], result: str) -> list[str]:
@@ -217,5 +234,5 @@ _NAME = re.compile(r"\bv\d+\b")
 
 def helper_sources(exprs: Iterable[sp.Basic]) -> list[str]:
     """Sources of the helpers the expressions call, each once, in a fixed order."""
-    classes = {type(f) for e in exprs for f in sp.sympify(e).atoms(Unrolled)}
+    classes = {type(f) for e in exprs for f in sp.sympify(e).atoms(unrolled_base())}
     return [cls.helper_source() for cls in sorted(classes, key=lambda c: c.code_name)]

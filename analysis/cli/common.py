@@ -159,7 +159,7 @@ MODEL_HELP = ("Model: a shipped name or a name in a BEARINGDYN_MODELS folder (se
               "generate SPEC --out DIR`.")
 
 
-def _judge_spec(value: str) -> str:
+def judge_spec(value: str | None) -> str | None:
     """Argument callback: a spec of your own that will be generated is judged now, before
     the command imports its libraries (``modelgen.early``)."""
     from modelgen.early import judge_spec_early
@@ -168,7 +168,10 @@ def _judge_spec(value: str) -> str:
 
 
 ModelArgument = Annotated[str, typer.Argument(help=MODEL_HELP, metavar="MODEL",
-                                              callback=_judge_spec, is_eager=True)]
+                                              callback=judge_spec, is_eager=True)]
+ModelOption = Annotated[str, typer.Option("--model", help=MODEL_HELP, callback=judge_spec,
+                                          is_eager=True)]
+"""``--model MODEL`` (``bearingdyn run``): judged as the MODEL argument is."""
 
 
 def parse_n_balls(items: list[str] | int | dict[str, int] | None

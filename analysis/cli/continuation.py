@@ -24,6 +24,7 @@ from analysis.cli.common import (
     app,
     figure_output,
     given_options,
+    judge_spec,
     netcdf_output,
     parse_n_balls,
     parse_sets,
@@ -45,7 +46,8 @@ def continue_(
     model: Annotated[str | None, typer.Argument(
         metavar="MODEL",
         help="Model: a shipped name, a name in a BEARINGDYN_MODELS folder, a .toml spec or a "
-             "generated folder (not with --from-branch).")] = None,
+             "generated folder (not with --from-branch).", callback=judge_spec,
+        is_eager=True)] = None,
     param: ParamOption = None,
     start: FromOption = None,
     from_branch: Annotated[Path | None, typer.Option(

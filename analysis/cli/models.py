@@ -33,18 +33,19 @@ def generate(
     Shipped specs go to the package's generated/; any other spec goes to the user cache
     (where `bearingdyn simulate SPEC.toml` finds it), or to --out DIR.
     """
-    from modelgen.codegen import default_root
-    from modelgen.codegen import generate as run_generate
     from modelgen.locations import cached_model_root, is_shipped
     from modelgen.spec import load_spec, shipped_spec_names
 
     names = specs or shipped_spec_names()
     if out is not None:
         check_out_dir(out, "--out")
+    paths = [load_spec(name)[1] for name in names]  # every spec judged before SymPy loads
+    from modelgen.codegen import default_root
+    from modelgen.codegen import generate as run_generate
+
     changed = run_generate(names, root=out, check=check)
     targets: dict[Path, list[str]] = {}
-    for name in names:
-        _, path = load_spec(name)
+    for name, path in zip(names, paths, strict=True):
         target = out if out is not None else (
             default_root() if is_shipped(path) else cached_model_root(path))
         targets.setdefault(Path(target), []).append(str(name))

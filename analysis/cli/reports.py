@@ -8,8 +8,8 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import (
-    MODEL_HELP,
     ExecutorOption,
+    ModelOption,
     QuietOption,
     SchedulerOption,
     SetOption,
@@ -74,7 +74,7 @@ def reproduce(
 def run(
     out_dir: Annotated[Path, typer.Option("-o", "--out-dir", help="Output folder.")] = Path(
         "bearingdyn-out"),
-    model: Annotated[str, typer.Option(help=MODEL_HELP)] = "vakharia2015",
+    model: ModelOption = "vakharia2015",
     n_balls: Annotated[list[int] | None, typer.Option(
         help="Numbers of balls (repeatable; default 6 7 8 9 10).")] = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time, s.")] = None,

@@ -17,9 +17,9 @@ from __future__ import annotations
 import dataclasses
 from typing import ClassVar, Literal
 
-import sympy as sp
 from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 
 Owner = Literal["body", "bearing"]

@@ -17,13 +17,13 @@ from __future__ import annotations
 
 from typing import ClassVar, Literal
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.base import Owner, Term
 
-HARRIS_STEEL_COEFFICIENT = sp.Float("2.26e-11")
-"""Harris' coefficient for steel balls, N/(mm^3 · mm · rpm^2); Eq. 9 of the paper uses it."""
+HARRIS_STEEL_COEFFICIENT = "2.26e-11"
+"""Harris' coefficient for steel balls, N/(mm^3 · mm · rpm^2), as the text of its SymPy
+Float; Eq. 9 of the paper uses it."""
 
 
 def paper_eq9_force(ctx: Context) -> sp.Expr:
@@ -31,7 +31,7 @@ def paper_eq9_force(ctx: Context) -> sp.Expr:
     d_b_mm = 1000 * ctx.p("ball_diameter")
     d_m_mm = 1000 * ctx.p("pitch_diameter")
     cage_rpm = ctx.omega_cage * 30 / sp.pi
-    return HARRIS_STEEL_COEFFICIENT * d_b_mm**2 * cage_rpm * d_m_mm
+    return sp.Float(HARRIS_STEEL_COEFFICIENT) * d_b_mm**2 * cage_rpm * d_m_mm
 
 
 def harris_force(ctx: Context) -> sp.Expr:

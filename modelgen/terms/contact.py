@@ -19,9 +19,8 @@ from __future__ import annotations
 
 from typing import ClassVar, Literal
 
-import sympy as sp
-
-from modelgen.hertz import RaceStiffness, combined_stiffness
+from modelgen.hertz import combined_stiffness, race_stiffness_class
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.base import Owner, Term
 from modelgen.terms.contact_damping import (
@@ -66,8 +65,9 @@ def race_stiffnesses(ctx: Context) -> tuple[sp.Expr, sp.Expr]:
     """(K_i, K_o): ball–inner-race and ball–outer-race Hertz constants (N/m^1.5)."""
     args = [ctx.p(n) for n in ("ball_diameter", "pitch_diameter")]
     material = [ctx.p("youngs_modulus"), ctx.p("poisson_ratio")]
-    return (RaceStiffness(*args, ctx.p("groove_conformity_inner"), *material, 1),
-            RaceStiffness(*args, ctx.p("groove_conformity_outer"), *material, -1))
+    race_stiffness = race_stiffness_class()
+    return (race_stiffness(*args, ctx.p("groove_conformity_inner"), *material, 1),
+            race_stiffness(*args, ctx.p("groove_conformity_outer"), *material, -1))
 
 
 class HertzContact(Term):

@@ -22,8 +22,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 
 DampingLaw = Literal["none", "hunt_crossley"]

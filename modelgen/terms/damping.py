@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from typing import ClassVar, Literal
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.base import Owner, Term
 

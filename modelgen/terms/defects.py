@@ -61,9 +61,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, ClassVar, Literal
 
-import sympy as sp
 from pydantic import Field
 
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.base import Owner, Term
 

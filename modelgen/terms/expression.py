@@ -25,10 +25,10 @@ from __future__ import annotations
 
 from typing import ClassVar, Literal
 
-import sympy as sp
 from pydantic import ValidationInfo, field_validator, model_validator
 
 from modelgen.expressions import check_expression, parse_expression
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import STATE_NAMES, Context
 from modelgen.terms.base import Owner, Term
 from modelgen.terms.contact import deflection

@@ -24,15 +24,15 @@ from __future__ import annotations
 
 from typing import ClassVar, Literal
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.contact import CLEARANCE_PARAMETER, HertzContact, deflection
 
 PALMGREN_MM = 3.84e-5
 """Palmgren's coefficient: δ = 3.84e-5 Q^0.9 / l^0.8 with δ, l in mm and Q in N."""
-EXPONENT = sp.Float(10 / 9, 17)
-"""10/9, as the double nearest to it (the generated code prints it as 1.1111111111111112)."""
+EXPONENT = (10 / 9, 17)
+"""10/9, as the double nearest to it (the generated code prints it as 1.1111111111111112):
+the arguments of its SymPy Float."""
 LINE_STIFFNESS: dict[str, tuple[str, ...]] = {
     "given": ("line_contact_stiffness",), "geometry": ("roller_length",),
 }
@@ -76,7 +76,7 @@ class LineContact(HertzContact):
 
     def ball_load(self, ctx: Context) -> sp.Expr:
         delta = deflection(ctx, self.clearance)
-        return self.stiffness_constant(ctx) * sp.Max(0, delta) ** EXPONENT
+        return self.stiffness_constant(ctx) * sp.Max(0, delta) ** sp.Float(*EXPONENT)
 
     def _describe_stiffness(self) -> str:
         if self.stiffness == "given":

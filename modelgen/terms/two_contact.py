@@ -25,14 +25,14 @@ as with ``hertz15``.
 
 from __future__ import annotations
 
+import functools
 from typing import Any, ClassVar, Literal
 
-import sympy as sp
-
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.centrifugal import harris_force
 from modelgen.terms.contact import HertzContact, deflection, race_stiffnesses
-from modelgen.unrolled import NUMPY, Ops, Unrolled, numpy_call
+from modelgen.unrolled import NUMPY, Ops, numpy_call, unrolled_base
 
 STEPS = 4
 """Newton steps per ball: the force error is below 1e-15 of K_i δ^{3/2} over F_c/K_o from
@@ -65,27 +65,42 @@ def race_loads(delta: Any, k_i: Any, k_o: Any, f_c: Any) -> dict[str, Any]:
             "outer_deflection": delta_o}
 
 
-class InnerRaceLoad(Unrolled):
-    """Q_i(δ; K_i, K_o, F_c): inner-race load of a ball between two races, N."""
+@functools.cache
+def inner_race_load_class() -> type:
+    """The class ``InnerRaceLoad`` (made on first use: an ``Unrolled`` SymPy function needs
+    SymPy, and validating a spec does not; ``modelgen.lazy``)."""
 
-    nargs = 4
-    code_name = "inner_race_load"
-    arg_names = ("delta", "k_i", "k_o", "f_c")
-    doc = ("Inner-race load Q_i (N) of a ball with total approach delta (m) between races of "
-           "Hertz constants k_i, k_o (N/m^1.5), centrifugal force f_c (N): "
-           f"{STEPS} Newton steps on the inner deflection (modelgen/terms/two_contact.py).")
-    is_nonnegative = True
+    class InnerRaceLoad(unrolled_base()):
+        """Q_i(δ; K_i, K_o, F_c): inner-race load of a ball between two races, N."""
 
-    @staticmethod
-    def algorithm(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops) -> Any:
-        return inner_race_load(delta, k_i, k_o, f_c, ops)
+        nargs = 4
+        code_name = "inner_race_load"
+        arg_names = ("delta", "k_i", "k_o", "f_c")
+        doc = ("Inner-race load Q_i (N) of a ball with total approach delta (m) between races of "
+               "Hertz constants k_i, k_o (N/m^1.5), centrifugal force f_c (N): "
+               f"{STEPS} Newton steps on the inner deflection (modelgen/terms/two_contact.py).")
+        is_nonnegative = True
 
-    def latex_name(self) -> str:
-        return r"Q_{in}"
+        @staticmethod
+        def algorithm(delta: Any, k_i: Any, k_o: Any, f_c: Any, ops: Ops) -> Any:
+            return inner_race_load(delta, k_i, k_o, f_c, ops)
 
-    def latex_args(self, printer: Any) -> str:
-        delta, *rest = (printer._print(a) for a in self.args)
-        return rf"{delta};\ {', '.join(rest)}"
+        def latex_name(self) -> str:
+            return r"Q_{in}"
+
+        def latex_args(self, printer: Any) -> str:
+            delta, *rest = (printer._print(a) for a in self.args)
+            return rf"{delta};\ {', '.join(rest)}"
+
+    InnerRaceLoad.__module__, InnerRaceLoad.__qualname__ = __name__, "InnerRaceLoad"
+    return InnerRaceLoad
+
+
+def __getattr__(name: str) -> Any:
+    """``InnerRaceLoad``, made on first use (``inner_race_load_class``)."""
+    if name == "InnerRaceLoad":
+        return inner_race_load_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class TwoContact(HertzContact):
@@ -110,7 +125,8 @@ class TwoContact(HertzContact):
 
     def ball_load(self, ctx: Context) -> sp.Expr:
         k_i, k_o = race_stiffnesses(ctx)
-        return InnerRaceLoad(deflection(ctx, self.clearance), k_i, k_o, harris_force(ctx))
+        return inner_race_load_class()(deflection(ctx, self.clearance), k_i, k_o,
+                                       harris_force(ctx))
 
     def describe(self) -> str:
         return (super().describe() + "; F_c = ½ m_b D_m ω_cage² (Harris), m_b = ρ_b π D_b³/6; "

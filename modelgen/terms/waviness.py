@@ -31,9 +31,9 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, ClassVar, Literal
 
-import sympy as sp
 from pydantic import Field, model_validator
 
+from modelgen.lazy import sympy as sp
 from modelgen.symbols import Context
 from modelgen.terms.base import Owner, Term
 from modelgen.terms.defects import ball_selector
