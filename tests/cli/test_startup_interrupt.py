@@ -39,12 +39,19 @@ def _interrupted(delay: float, cwd) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
+ENTRY = ROOT / "analysis" / "cli" / "entry.py"
+HANDLED_FROM = next(i for i, line in enumerate(ENTRY.read_text().splitlines(), 1)
+                    if line.strip().startswith("signal.signal(signal.SIGINT"))
+"""The line of the entry that installs the handler: frames before it are Python's window."""
+
+
 def _ours_ran(traceback: str) -> list[str]:
-    """The frames of a traceback in files of this repository after the entry's first
-    statement (an interrupt our handler should have caught)."""
-    files = re.findall(r'File "([^"]+)"', traceback)
-    return [f for f in files if f.startswith(str(ROOT)) and
-            not any(f == str(p) for p in BEFORE_OUR_CODE)]
+    """The frames of a traceback in files of this repository once the entry's handler was
+    installed (an interrupt our handler should have caught)."""
+    frames = re.findall(r'File "([^"]+)", line (\d+)', traceback)
+    return [f"{f}:{n}" for f, n in frames if f.startswith(str(ROOT))
+            and f not in {str(p) for p in BEFORE_OUR_CODE}
+            and not (f == str(ENTRY) and int(n) < HANDLED_FROM)]
 
 
 def test_ctrl_c_while_the_command_starts_is_one_line_and_exit_130(tmp_path):
