@@ -2,10 +2,11 @@
 
 The modules register their commands when first needed (``main``, or ``analysis.cli.app``),
 in the order ``bearingdyn --help`` lists them: models, runs, stability, continuation, sweeps,
-reports. ``main`` is the console entry: the app with command-line usage errors (a mistyped
-option, a value of the wrong type) cut to one line and exit code 2, as every other bad
-input. ``import analysis.cli`` itself loads nothing heavy, so a Ctrl-C while the commands
-are still loading (the first fraction of a second) ends as every other one does: the line
+reports. ``main`` runs the app with command-line usage errors (a mistyped option, a value
+of the wrong type) cut to one line and exit code 2, as every other bad input. The console
+script is ``analysis.cli.entry``, whose first statement installs a Ctrl-C handler;
+``import analysis.cli`` itself loads nothing heavy, so a Ctrl-C while the commands are still
+loading (the first fraction of a second) ends as every other one does: the line
 ``interrupted`` and exit code 130, never a traceback.
 """
 
