@@ -355,9 +355,11 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
                    f"{data.attrs['circle_change_points']}: "
                    f"{float(data.attrs['circle_change']):.1e}; lambda1 {float(lam[0]):.4g} ± "
                    f"{float(data.lambda1_ci95.values[0]):.2g} 1/s; amplitude {amp}")
-        typer.echo(f"between the sections: the stored series is "
-                   f"{float(data.attrs['between_error']):.1e} of the amplitude from the "
-                   "RK4 run of the circle (--run integrates it)")
+        typer.echo(f"between the sections: --run integrates each revolution from its "
+                   f"circle point (at half the RK4 step it moves "
+                   f"{float(data.attrs.get('run_step_error', math.nan)):.1e} of the "
+                   f"amplitude; at the sections it is the circle, change above); the stored "
+                   f"2-D series is {float(data.attrs['between_error']):.1e} from that run")
     elif not param:
         amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
             data.state.values, data.amplitude.values[0], data.state_units.values,
