@@ -31,6 +31,18 @@ table of docs/frequency.md, "Tori by the invariant circle of the shaft map").
 
     python benchmarks/bench_torus.py [--harmonics 8,4 12,6 16,8] [--window 1]
         [--points 33 65 129]
+
+``--between SECONDS`` measures instead the default torus at every time, as issue 32 does:
+the circle of N = ``--points``' first value (default 65) is solved (its wall time, without
+and with the 2N check), its run integrated from each section's circle point
+(``circle_run.circle_states``, what ``torus --run`` writes) over SECONDS s, and compared
+with simulations started on the circle at RK4 steps 1e-5, 5e-6, 2.5e-6, 1.25e-6 and
+6.25e-7 s (every time kept at 1e-5 s after 0.5 s, the largest difference relative to each
+state's amplitude, at every time and at the shaft sections); each simulation against the
+next finer one says how far the reference itself is from the flow; the stored 2-D series is
+compared over 1 s.
+
+    python benchmarks/bench_torus.py --between 20
 """
 
 from __future__ import annotations
@@ -41,7 +53,7 @@ import time
 
 import numpy as np
 
-from analysis.frequency.circle.solve import solve_circle
+from analysis.frequency.circle.solve import DEFAULT_POINTS, solve_circle
 from analysis.frequency.torus.solve import solve_torus
 from analysis.integrate.simulate import simulate
 from analysis.model import System
@@ -77,10 +89,19 @@ def main() -> None:
     parser.add_argument("--harmonics", nargs="+", default=["8,4", "12,6", "16,8"])
     parser.add_argument("--window", type=float, default=1.0,
                         help="Attractor time after t* in the second integration row, s.")
-    parser.add_argument("--points", nargs="*", type=int, default=[33, 65, 129],
-                        help="Circle points N of the shooting rows.")
+    parser.add_argument("--points", nargs="*", type=int, default=None,
+                        help="Circle points N of the shooting rows (default 33 65 129; "
+                             "with --between its first value, default 65).")
+    parser.add_argument("--between", type=float, default=None, metavar="SECONDS",
+                        help="Measure the default circle's run at every time over SECONDS s "
+                             "against simulations at finer and finer steps (only this).")
     args = parser.parse_args()
     system = System.make(MODEL, n_balls=N_BALLS, speed_rpm=SPEED)
+    if args.between is not None:
+        between(system, args.points[0] if args.points else DEFAULT_POINTS, args.between)
+        return
+    if args.points is None:
+        args.points = [33, 65, 129]
     names = system.state_names
     simulate(system, duration=0.01, transient=0.0)  # load the compiled blocks once
     long_run, _ = timed(lambda: simulate(system, duration=SETTLE + REFERENCE, transient=0.0,
@@ -148,6 +169,53 @@ def main() -> None:
         print(f"{n:>5} {circle_s:>8.2f} {circle.tail:>8.1e} {at_k.max():>9.2e} "
               f"{every.max():>8.2e} {at_k[outside].max():>12.2e}  "
               f"{', '.join(f'{v:.2g}' for v in at_k.max(axis=0))}")
+
+
+REFERENCE_STEPS = (1e-5, 5e-6, 2.5e-6, 1.25e-6, 6.25e-7)
+"""RK4 steps (s) of the simulations the circle's run is compared with (``--between``)."""
+
+
+def between(system: System, points: int, duration: float) -> None:
+    """The ``--between`` measurement (module docstring)."""
+    from analysis.frequency.circle.solve import circle_dataset
+    from analysis.frequency.circle_run import circle_states
+    from analysis.frequency.torus.dataset import torus_of
+
+    simulate(system, duration=0.01, transient=0.0)  # load the compiled blocks once
+    _, with_check = timed(lambda: solve_circle(system, None, "shaft,vc", points,
+                                               stability=False))
+    circle, circle_s = timed(lambda: solve_circle(system, None, "shaft,vc", points,
+                                                  convergence=False, stability=False))
+    print(f"{MODEL}, N_b = {N_BALLS}, {SPEED:g} rpm, N = {points}; load average "
+          f"{os.getloadavg()[0]:.2f}; cores {os.cpu_count()}")
+    print(f"circle: {circle_s:.2f} s (with the 2N check {with_check:.2f} s), "
+          f"{circle.steps} RK4 steps per revolution")
+    data = circle_dataset(circle)
+    (t, z), run_s = timed(lambda: circle_states(data, duration))
+    print(f"run integrated from the circle over {duration:g} s: {run_s:.1f} s")
+    amp = np.ptp(z, axis=0) / 2
+    keep = t >= 0.5
+    section = np.arange(len(t)) % circle.steps == 0
+    refs = {}
+    for dt in REFERENCE_STEPS:
+        run = simulate(system.replace(state=z[0]), duration=duration, transient=0.0, dt=dt,
+                       save_every=round(float(t[1] - t[0]) / dt))
+        refs[dt] = states(run, system.state_names)[:len(z)]
+
+    def worst(a, b, where):
+        return float(np.max(np.abs(a[where] - b[where]) / amp))
+
+    print(f"{'reference dt':>12} {'run: every t':>12} {'sections':>9} "
+          f"{'ref vs next finer':>17}")
+    for dt, finer in zip(REFERENCE_STEPS, (*REFERENCE_STEPS[1:], None), strict=True):
+        own = worst(refs[dt], refs[finer], keep) if finer else float("nan")
+        print(f"{dt:>12.3g} {worst(z, refs[dt], keep):>12.2e} "
+              f"{worst(z, refs[dt], keep & section):>9.2e} {own:>17.2e}")
+    ts, coeffs = torus_of(data)
+    window = keep & (t < 1.5)
+    best = refs[REFERENCE_STEPS[-1]]
+    print(f"stored 2-D series (N1 = {circle.samples}) over 0.5-1.5 s against the finest: "
+          f"{float(np.max(np.abs(ts.at_times(coeffs, t[window]) - best[window]) / amp)):.2e}")
 
 
 if __name__ == "__main__":
