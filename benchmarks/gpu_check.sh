@@ -17,13 +17,16 @@
 #
 # Everything goes under $OUT (default: ./gpu-check), one file per part, and a summary line
 # per part in $OUT/summary.txt. Each part has its own time limit (seconds, PART_LIMIT);
-# the default parts together stay under about 9 minutes on an H200 with 16 cores. Needs
+# the default parts together take about 8 minutes (ptxas needs no GPU: where device time is
+# short, run `env tests engine chart` on the GPU machine and ptxas anywhere). Needs
 # bearingdyn installed with its GPU extra (pip install -e ".[gpu-cuda13]" on a CUDA 13
-# driver, ".[gpu]" on CUDA 12) and, for ptxas, nvcc on PATH.
+# driver, ".[gpu]" on CUDA 12) and, for ptxas, nvcc on PATH; PYTHON names the interpreter
+# (default python3).
 set -u
 OUT=${OUT:-gpu-check}
 PART_LIMIT=${PART_LIMIT:-240}
-mkdir -p "$OUT"
+PY=${PYTHON:-python3}
+mkdir -p "$OUT" && OUT=$(cd "$OUT" && pwd)
 cd "$(dirname "$0")/.." || exit 2
 parts=("$@")
 [ ${#parts[@]} -eq 0 ] && parts=(env tests ptxas engine chart)
@@ -34,29 +37,36 @@ run_part() {  # name, limit (s), command...: output to $OUT/name.txt, a line to 
   local start=$SECONDS
   timeout "$limit" "$@" > "$OUT/$name.txt" 2>&1
   local rc=$?
-  echo "$name: rc $rc, $((SECONDS - start)) s: $*" | tee -a "$OUT/summary.txt"
+  echo "$name: rc $rc, $((SECONDS - start)) s (limit $limit s)" | tee -a "$OUT/summary.txt"
 }
+
+env_report() {  # the machine and what bearingdyn sees
+  date -u; git rev-parse HEAD; nproc; uptime
+  nvidia-smi
+  "$PY" -c "import cupy; print('cupy', cupy.__version__)"
+  bearingdyn devices --json
+}
+export -f env_report
+export PY
 
 for part in "${parts[@]}"; do
   case $part in
     env)
-      run_part env 60 bash -c 'date -u; git rev-parse HEAD; nvidia-smi; nproc; uptime;
-        python -c "import cupy; print(\"cupy\", cupy.__version__)";
-        bearingdyn devices --json' ;;
+      run_part env 60 bash -c env_report ;;
     tests)
-      run_part tests "$PART_LIMIT" python -m pytest -q -rs tests/integrate/test_kernels_gpu.py \
+      run_part tests "$PART_LIMIT" "$PY" -m pytest -q -rs tests/integrate/test_kernels_gpu.py \
         tests/integrate/test_kernel_chart.py ;;
     ptxas)
       if command -v nvcc > /dev/null; then
-        run_part ptxas "$PART_LIMIT" python benchmarks/ptxas_table.py --json "$OUT/ptxas.json"
+        run_part ptxas "$PART_LIMIT" "$PY" benchmarks/ptxas_table.py --json "$OUT/ptxas.json"
       else
         echo "ptxas: skipped, no nvcc on PATH" | tee -a "$OUT/summary.txt"
       fi ;;
     engine)
       run_part engine "$PART_LIMIT" bash -c \
-        "python benchmarks/bench_engine.py --size 1000 --json > '$OUT/engine.json'" ;;
+        "$PY benchmarks/bench_engine.py --size 1000 --json > '$OUT/engine.json'" ;;
     chart)
-      run_part chart "$PART_LIMIT" python benchmarks/bench_chart.py --speeds 20000 \
+      run_part chart "$PART_LIMIT" "$PY" benchmarks/bench_chart.py --speeds 20000 \
         --device gpu --reference-points 0 --host-points 0 --host-speeds 20000 ;;
     *)
       echo "unknown part $part (env tests ptxas engine chart)" | tee -a "$OUT/summary.txt"
