@@ -191,21 +191,24 @@ def _torus_frequencies(system: System, end: System | None, request: Request,
 
 FORCING_PERIODS = 20
 """Periods of F1 of the short run on which ``_check_forcing`` compares the torus forcing
-with the model's (the solve compares them again on its settled run)."""
+with the model's (the solve compares them again on its settled run)..."""
+FORCING_SECONDS = 0.5
+"""... and at most this many seconds of it."""
 
 
 def _check_forcing(system: System, freqs, dt: float | None) -> None:
     """The torus forcing of ``freqs`` is the model's (``torus.check_phases``) on a short run
-    from the initial state (``FORCING_PERIODS`` periods of F1), before the cost is said and
-    any work done (RK4 steps of ``dt`` s, the spec's when None): 'do not carry' in one
-    line, not after the estimate."""
+    from the initial state (``FORCING_PERIODS`` periods of F1, at most ``FORCING_SECONDS``;
+    RK4 steps of ``dt`` s, the spec's when None), before the cost is said and any work
+    done: 'do not carry' in one line, not after the estimate."""
     from analysis.frequency.torus.equations import check_phases, omegas_of, torus_function
     from analysis.integrate.plan import RunPlan
     from analysis.integrate.simulate import simulate
 
     period = 2 * math.pi / omegas_of(system, freqs)[0]
     dt = RunPlan.step(system, dt, warn=lambda message: None).dt
-    run = simulate(system, duration=FORCING_PERIODS * period, transient=0.0, dt=dt)
+    run = simulate(system, duration=min(FORCING_PERIODS * period, FORCING_SECONDS),
+                   transient=0.0, dt=dt)
     t = run.t.values[::max(1, run.sizes["t"] // 50)]
     z = np.column_stack([run[name].values[::max(1, run.sizes["t"] // 50)]
                          for name in system.state_names])
