@@ -79,6 +79,23 @@ def circle_run(data: xr.Dataset, duration: float, dt: float | None = None) -> xr
     return to_dataset(t, z.T, attrs, ts.system.model)
 
 
+def _apart(a: np.ndarray, z: np.ndarray) -> float:
+    """max over the states of max |a − z| / ((max − min)/2 of z)."""
+    amp = np.maximum(np.ptp(z, axis=0) / 2, 1e-300)
+    return float(np.max(np.max(np.abs(a - z), axis=0) / amp))
+
+
+def run_errors(data: xr.Dataset, duration: float | None = None) -> tuple[float, float]:
+    """(``between_error``, ``step_error``) over ``duration`` s (default 10 revolutions),
+    from one integrated run (module docstring)."""
+    ts, coeffs = torus_of(data, -1)
+    period = 2 * math.pi / omegas_of(ts.system, ts.frequencies)[0]
+    span = 10 * period if duration is None else duration
+    t, z = circle_states(data, span)
+    return (_apart(ts.at_times(coeffs, t), z),
+            _apart(circle_states(data, span, refine=2)[1], z))
+
+
 def between_error(data: xr.Dataset, duration: float | None = None) -> float:
     """Largest |series − integrated| over ``duration`` s (default 10 revolutions), relative
     to each state's amplitude, the largest over the states: the interpolation's error
@@ -86,32 +103,17 @@ def between_error(data: xr.Dataset, duration: float | None = None) -> float:
     ts, coeffs = torus_of(data, -1)
     period = 2 * math.pi / omegas_of(ts.system, ts.frequencies)[0]
     t, z = circle_states(data, 10 * period if duration is None else duration)
-    series = ts.at_times(coeffs, t)
-    amp = np.maximum(np.ptp(z, axis=0) / 2, 1e-300)
-    return float(np.max(np.max(np.abs(series - z), axis=0) / amp))
-
-
-def step_error(data: xr.Dataset, duration: float | None = None) -> float:
-    """Largest |run − run at half the step| over ``duration`` s (default 10 revolutions),
-    relative to each state's amplitude, the largest over the states: the RK4's share of the
-    integrated run's error between the sections (the rest is the circle's own at the
-    sections, carried over one revolution)."""
-    ts, _ = torus_of(data, -1)
-    period = 2 * math.pi / omegas_of(ts.system, ts.frequencies)[0]
-    span = 10 * period if duration is None else duration
-    _, z = circle_states(data, span)
-    _, fine = circle_states(data, span, refine=2)
-    amp = np.maximum(np.ptp(z, axis=0) / 2, 1e-300)
-    return float(np.max(np.max(np.abs(fine - z), axis=0) / amp))
+    return _apart(ts.at_times(coeffs, t), z)
 
 
 def with_between_error(data: xr.Dataset) -> xr.Dataset:
     """An invariant-circle torus (one point) with the attrs ``between_error`` (the stored
     series against the integrated run) and ``run_step_error`` (the integrated run against
-    one at half the step), each over 10 revolutions; any other Dataset unchanged."""
+    one at half the RK4 step: the RK4's share of the run's error between the sections, the
+    rest being the circle's own at the sections carried over one revolution), each over 10
+    revolutions; any other Dataset unchanged."""
     if not _is_circle(data) or data.sizes["point"] != 1:
         return data
     data = data.copy()
-    data.attrs["between_error"] = between_error(data)
-    data.attrs["run_step_error"] = step_error(data)
+    data.attrs["between_error"], data.attrs["run_step_error"] = run_errors(data)
     return data
