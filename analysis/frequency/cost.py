@@ -14,7 +14,8 @@ short timed probe of the method's own equations.
   (the convergence check's 2N points included) per circle.
 
 Left out of both: the guess's settled simulation and λ1 (compiled RK4, seconds at most),
-and ``hb``'s two error-estimate solves (each about a first solve at 2H or 2x samples).
+the CasADi builds (seconds) and ``hb``'s two error-estimate solves (each about a first
+solve at 2H or 2x samples).
 Nothing here prints: the command line renders ``CostEstimate.lines()``.
 """
 
