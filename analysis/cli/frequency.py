@@ -76,7 +76,6 @@ def hb(
     and cage frequencies) use `torus`, whose default invariant circle is accurate on
     contact. Prints its error estimate: the change at 2H and at twice the samples. Says
     its expected cost first (a timed Newton iteration x iterations x points)."""
-    from analysis.frequency.accuracy import hb_error
     from analysis.frequency.methods import PERIODIC, Request
     from analysis.model import as_system
 
@@ -87,8 +86,7 @@ def hb(
                           max_points=max_points, ds_max=ds_max,
                           options=given_options(dt=dt, settle=settle, samples=samples),
                           progress=progress_lines(quiet))
-        data = hb_error(PERIODIC["hb"], system, request, PERIODIC["hb"].run(
-            system, request, end, cost_lines(quiet)))
+        data = PERIODIC["hb"].measured(system, request, end, cost_lines(quiet))
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
             {k: data.attrs[k] for k in ("error_harmonics", "error_aliasing", "error_at")})
@@ -275,7 +273,7 @@ def torus(
     --method hb (or --harmonics): 2-D harmonic balance, for smooth forces only: on contact
     models 20-38 % off whatever its residual; prints its change at 2H and its aliasing.
     Says its expected cost first."""
-    from analysis.frequency.circle_run import circle_run, with_between_error
+    from analysis.frequency.circle_run import circle_run
     from analysis.frequency.methods import TORUS, Request, default_torus_method, method_of
     from analysis.model import as_system
 
@@ -292,11 +290,7 @@ def torus(
                           stability_every=stability_every,
                           options=given_options(dt=dt, settle=settle),
                           progress=progress_lines(quiet))
-        data = with_between_error(chosen.run(system, request, end, cost_lines(quiet)))
-        if chosen.name == "hb":  # its own error estimate: the change at 2H, the aliasing
-            from analysis.frequency.accuracy import hb_error
-
-            data = hb_error(chosen, system, request, data)
+        data = chosen.measured(system, request, end, cost_lines(quiet))
     also = {}
     if run:  # an invariant circle's run is integrated between its sections
         also[run] = circle_run(data, duration, dt)

@@ -106,6 +106,15 @@ class Method:
     follow: Callable[[System, Request], xr.Dataset]
     estimate: Callable[[System, Request], CostEstimate] | None = None
     """The cost of a checked request, from a short timed probe (``frequency.cost``)."""
+    error: Callable[[Method, System, Request, xr.Dataset], xr.Dataset] | None = None
+    """``data`` with the method's own error estimate in its attrs (``accuracy.hb_error``;
+    the invariant circle's ``circle_run.with_between_error``)."""
+
+    def measured(self, system: System, request: Request, end: System | None = None,
+                 cost: Callable[[CostEstimate], None] | None = None) -> xr.Dataset:
+        """``run``, then the method's own error estimate (``error``) in the attrs."""
+        data = self.run(system, request, end, cost)
+        return data if self.error is None else self.error(self, system, request, data)
 
     def run(self, system: System, request: Request, end: System | None = None,
             cost: Callable[[CostEstimate], None] | None = None) -> xr.Dataset:
@@ -272,17 +281,32 @@ def _follow_circle(system: System, request: Request) -> xr.Dataset:
                            points=request.resolution, **request.branch)
 
 
+def _hb_error(method: Method, system: System, request: Request,
+              data: xr.Dataset) -> xr.Dataset:
+    from analysis.frequency.accuracy import hb_error
+
+    return hb_error(method, system, request, data)
+
+
+def _circle_error(method: Method, system: System, request: Request,
+                  data: xr.Dataset) -> xr.Dataset:
+    from analysis.frequency.circle_run import with_between_error
+
+    return with_between_error(data)
+
+
 PERIODIC: dict[str, Method] = {
     "hb": Method("hb", "harmonics", 10, "harmonic balance is resolved by --harmonics",
-                 _check_periodic, _solve_periodic, _follow_periodic, hb_cost),
+                 _check_periodic, _solve_periodic, _follow_periodic, hb_cost, _hb_error),
 }
 """The methods of a periodic response (``bearingdyn hb``)."""
 
 TORUS: dict[str, Method] = {
     "hb": Method("hb", "harmonics", "8,4", "harmonic balance is resolved by --harmonics",
-                 _check_torus, _solve_torus, _follow_torus, torus_hb_cost),
+                 _check_torus, _solve_torus, _follow_torus, torus_hb_cost, _hb_error),
     "shooting": Method("shooting", "points", DEFAULT_POINTS,
                        "the shooting torus is resolved by --points",
-                       _check_circle, _solve_circle, _follow_circle, circle_cost),
+                       _check_circle, _solve_circle, _follow_circle, circle_cost,
+                       _circle_error),
 }
 """The methods of a 2-torus (``bearingdyn torus --method``)."""

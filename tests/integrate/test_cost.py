@@ -77,4 +77,6 @@ def test_attractors_say_their_cost_before_the_work(tmp_path, cli):
     lines = res.stderr.splitlines()
     assert lines[0].startswith("estimate: 4 initial states x up to ")
     assert "on 1 worker(s)" in lines[0]
-    assert lines[1].startswith("attractors: 0/4"), "the estimate comes before the progress"
+    progress = [i for i, line in enumerate(lines) if line.startswith("attractors: ")]
+    assert progress and progress[0] == 1, "the estimate comes before the progress"
+    assert lines[progress[-1]].startswith("attractors: 4/4"), "progress reaches every state"
