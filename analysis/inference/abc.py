@@ -457,7 +457,7 @@ def run(problem: Problem, *, executor=None, store=None,
     ``PointStore`` whose stored blocks are reused (resuming) and to which each finished
     block is saved. ``progress(done, total)`` counts members × rows, moving as the member
     kernels finish sets within a block (on the CPU every ~0.5 s of work; from worker
-    processes too, ``attractor_blocks.WorkerCounts``); ``log(line)`` reports each round."""
+    processes too, ``worker_counts.WorkerCounts``); ``log(line)`` reports each round."""
     import time
 
     start = time.perf_counter()
@@ -513,8 +513,8 @@ def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
                options: Options, coordinates: Sequence[str], model_ref: str, executor,
                store, progress, done_count: list[int], total: int) -> list[list[MemberRow]]:
     """Run one round's sets in blocks (resuming stored blocks); rows[member][row]."""
-    from analysis.sweeps.attractor_blocks import WorkerCounts
     from analysis.sweeps.executors import SerialExecutor, run_with_progress
+    from analysis.sweeps.worker_counts import WorkerCounts
 
     blocks = list(range(0, len(values), options.block))
     found: dict[int, list[list[MemberRow]]] = {}
@@ -556,7 +556,7 @@ def _block_task(item: tuple) -> list[list[dict]]:
     """A picklable executor task: (block start, evaluation task[, counts file, slot]);
     with a counts file (``WorkerCounts``) the block's sets × rows run so far are written to
     its slot as the kernels go."""
-    from analysis.sweeps.attractor_blocks import WorkerCounts
+    from analysis.sweeps.worker_counts import WorkerCounts
 
     _, task, *where = item
     return _evaluate_task(task, WorkerCounts.writer(*where) if where else None)

@@ -200,6 +200,9 @@ class PointStore:
             return None
         kept = self.point_count()
         count = f"{kept} of {total}" if total is not None else f"{kept}"
+        if kept == 1 and total is None:  # "1 block (256 states) kept", not "1 blocks"
+            noun, _, rest = what.partition(" ")
+            what = f"{noun.removesuffix('s')} {rest}".strip()
         return f"{count} {what} kept in {self.folder}; run the same command to resume"
 
     def stopped(self, exc: BaseException, total: int | None = None,

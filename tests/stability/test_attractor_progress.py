@@ -138,7 +138,7 @@ def test_an_interrupted_study_says_how_many_states_it_kept(system, tmp_path, mon
     with pytest.raises(KeyboardInterrupt) as caught:
         basins_to_file(system, X, Y, out, block=BLOCK)
     assert caught.value.__notes__ == [
-        f"1 blocks ({BLOCK} initial states) kept in {out}.parts; run the same command to "
+        f"1 block ({BLOCK} initial states) kept in {out}.parts; run the same command to "
         "resume"]
 
 

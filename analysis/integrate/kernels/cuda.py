@@ -48,7 +48,8 @@ def cupy_module() -> Any:
     try:
         import cupy
     except ImportError:
-        raise CudaUnavailable("cupy is not installed (pip install bearingdyn[gpu])") from None
+        raise CudaUnavailable("cupy is not installed (pip install bearingdyn[gpu] for CUDA 12, "
+                              "bearingdyn[gpu-cuda13] for CUDA 13)") from None
     try:
         count = cupy.cuda.runtime.getDeviceCount()
     except Exception as exc:  # no driver, no device: CuPy raises its own runtime errors

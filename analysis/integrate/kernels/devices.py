@@ -89,7 +89,8 @@ def resolve_device(device: str, members: int, steps: int) -> str:
     if device == "gpu":
         if problem is not None:
             raise InputError(f"--device gpu: {problem}; install the GPU extra with "
-                             "`pip install bearingdyn[gpu]` on a machine with an NVIDIA GPU, "
+                             "`pip install bearingdyn[gpu]` (CUDA 12; `[gpu-cuda13]` for CUDA "
+                             "13) on a machine with an NVIDIA GPU, "
                              "or use --device cpu")
         return "gpu"
     wide = members >= AUTO_MIN_MEMBERS and members * steps >= AUTO_MIN_STEPS
