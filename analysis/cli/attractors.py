@@ -245,7 +245,8 @@ def basins(
     settings = dict(period=period, dt=dt, options=options, block=block,
                     **_mapping(mapper, device, transient_periods, sections))
     check_basins(system, x_range, y_range, **settings)  # before any work or file
-    _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings)
+    _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings,
+              (x_range, y_range))
     ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
         system, x_range, y_range, output, **settings, executor=ex,
         progress=ProgressReporter("basins", quiet or as_json, unit="states"),
@@ -333,7 +334,8 @@ def attractors(
 
     if along is None:
         check_fractions(system, sides, samples, **settings)  # before any work or file
-        _say_cost(quiet or as_json, system, samples, executor, workers, settings)
+        _say_cost(quiet or as_json, system, samples, executor, workers, settings,
+                  sides.sides)
         ds = _run(executor_made, lambda ex: fractions_to_file(
             system, sides, samples, output, **settings, executor=ex,
             progress=ProgressReporter("attractors", quiet or as_json, unit="states"),
@@ -344,7 +346,7 @@ def attractors(
         check_continuation(system, along.coordinate, along.points, sides, samples,
                            **settings)
         _say_cost(quiet or as_json, system, (samples + 16) * along.num, executor, workers,
-                  settings)
+                  settings, sides.sides)
         ds = _run(executor_made, lambda ex: continuation_to_file(
             system, along.coordinate, along.points, sides, samples, output, **settings,
             executor=ex, progress=say, on_damaged=_recomputing))
@@ -352,8 +354,9 @@ def attractors(
 
 
 def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | None,
-              settings: dict) -> None:
-    """The cost estimate (``analysis.integrate.cost``) on stderr, before the work."""
+              settings: dict, sides) -> None:
+    """The cost estimate (``analysis.integrate.cost``; ``sides``: the states' box or grid,
+    for the recurrence mapper's timed probe) on stderr, before the work."""
     if quiet:
         return
     import os
@@ -361,8 +364,8 @@ def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | N
     from analysis.sweeps.attractor_blocks import study_cost
 
     count = 1 if executor == "serial" else (workers or os.cpu_count() or 1)
-    typer.echo("\n".join(study_cost(system, members, workers=count, **settings).lines()),
-               err=True)
+    typer.echo("\n".join(study_cost(system, members, workers=count, sides=sides,
+                                     **settings).lines()), err=True)
 
 
 def _input_error(text: str):

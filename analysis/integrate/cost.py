@@ -55,6 +55,11 @@ class CostEstimate:
     unit: str = RK4_STEPS
     """What ``steps`` counts: RK4 steps of ``dt`` s, or another unit of work (``Newton
     iterations`` of harmonic balance: ``dt`` unused, ``step_seconds`` per iteration)."""
+    expected_seconds: float | None = None
+    """With ``bound``: the expected wall time (s) from a probe that ran whole members
+    (``probe_note`` says which), where the bound alone would overstate it; None: the
+    expectation is the bound."""
+    probe_note: str = ""
 
     @property
     def total_steps(self) -> int:
@@ -62,9 +67,16 @@ class CostEstimate:
         return self.members * self.steps
 
     @property
+    def bound_seconds(self) -> float:
+        """Wall time (s) of every member running all its ``steps``."""
+        return self.total_steps * self.step_seconds / max(1, min(self.workers, self.members))
+
+    @property
     def seconds(self) -> float:
         """Expected wall time, s."""
-        return self.total_steps * self.step_seconds / max(1, min(self.workers, self.members))
+        if self.expected_seconds is not None:
+            return min(self.expected_seconds, self.bound_seconds)
+        return self.bound_seconds
 
     def lines(self) -> list[str]:
         """The estimate in words (one line), then the advice (none, one or two lines)."""
@@ -75,10 +87,17 @@ class CostEstimate:
         else:
             unit, total = self.unit, self.unit.split()[-1]
             each = f"{self.step_seconds:.3g} s per {total.removesuffix('s')}"
+        workers = min(self.workers, self.members)
+        if self.bound and self.expected_seconds is not None:
+            expected = (f"expected {duration_text(self.seconds)} on {workers} worker(s) "
+                        f"({self.probe_note}), at most {duration_text(self.bound_seconds)} "
+                        f"({each})")
+        else:
+            expected = (f"expected {'at most ' if self.bound else ''}"
+                        f"{duration_text(self.seconds)} on {workers} worker(s) ({each}, "
+                        "probed)")
         head = (f"estimate: {self.members:,} {self.what} x {steps} {unit} = "
-                f"{self.total_steps:.3g} {total}; expected "
-                f"{'at most ' if self.bound else ''}{duration_text(self.seconds)} on "
-                f"{min(self.workers, self.members)} worker(s) ({each}, probed)")
+                f"{self.total_steps:.3g} {total}; {expected}")
         return [head, *self.advice()]
 
     def advice(self) -> list[str]:

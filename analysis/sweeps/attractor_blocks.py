@@ -23,9 +23,10 @@ is written, and a study refused before its first block leaves nothing behind.
 from __future__ import annotations
 
 import functools
+import time
 import zipfile
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -229,23 +230,62 @@ def check_sides(system: System, sides: Sequence[Range], field: str) -> None:
                           limits)
 
 
+PROBE_BLOCKS = (2, 8)
+"""Initial states of the two timed blocks of the recurrence mapper's probe (after one
+untimed state): their difference gives the cost of one more state of a block, the rest the
+cost of a block's start (finding its attractors)."""
+PROBE_LIMIT = 20.0
+"""The most the probe may cost (s) were its states to run their bound: above, no probe."""
+
+
 def study_cost(system: System, members: int, *, workers: int | None = None,
                period: str | None = None, dt: float | None = None,
                options: MapperOptions | None = None, block: int | None = None,
                mapper: str = "auto", device: str = "auto",
-               feature_options: FeatureOptions | None = None, **_: object) -> CostEstimate:
+               feature_options: FeatureOptions | None = None,
+               sides: Sequence[Range] | None = None, **_: object) -> CostEstimate:
     """The cost of mapping ``members`` initial states (``analysis.integrate.cost``), said before
     the work: the featurizing mapper runs every member its transient and section periods;
-    the recurrence mapper at most ``max_periods`` (most stop far earlier: a bound). Takes
-    the settings of the ``*_to_file`` functions (others, such as ``seed``, ignored)."""
+    the recurrence mapper at most ``max_periods`` (most stop far earlier: a bound), and,
+    given the ``sides`` of the states' box or grid, an expectation from a timed probe that
+    maps a few states drawn in them (``recurrence_probe``). Takes the settings of the
+    ``*_to_file`` functions (others, such as ``seed``, ignored)."""
     study = check_study(system, members, period, dt, options, None, block, mapper, device,
                         feature_options)
     if study.mapper_kind == "features":
         periods, bound = study.feature_options.transient + study.feature_options.sections, False
     else:
         periods, bound = study.options.max_periods, True
-    return estimate_cost(study.system, members, periods * study.map.steps, dt=study.map.dt,
+    cost = estimate_cost(study.system, members, periods * study.map.steps, dt=study.map.dt,
                          workers=workers, what="initial states", bound=bound)
+    per_state = cost.steps * cost.step_seconds
+    if bound and sides and (1 + sum(PROBE_BLOCKS)) * per_state <= PROBE_LIMIT:
+        expected, note = recurrence_probe(study, Box(tuple(sides)), members,
+                                          block or study.default_block, cost.workers)
+        cost = replace(cost, expected_seconds=expected, probe_note=note)
+    return cost
+
+
+def recurrence_probe(study: AttractorStudy, box: Box, members: int, block: int,
+                     workers: int) -> tuple[float, str]:
+    """The expected wall time (s) of mapping ``members`` states in blocks of ``block`` on
+    ``workers`` workers, and the probe in words: one untimed state, then blocks of
+    ``PROBE_BLOCKS`` states drawn uniformly in ``box`` (a fixed seed), each by a fresh mapper
+    as the study's blocks are. A block of k states costs ``start + k · each``."""
+    rng = np.random.default_rng(0)
+    study.map_block(box.sample(study.system, 1, rng))  # the scale, the library: untimed
+    times = []
+    for count in PROBE_BLOCKS:
+        start = time.perf_counter()
+        study.map_block(box.sample(study.system, count, rng))
+        times.append(time.perf_counter() - start)
+    (k1, k2), (t1, t2) = PROBE_BLOCKS, times
+    each = max((t2 - t1) / (k2 - k1), 0.0) or t2 / k2
+    begin = max(t1 - k1 * each, 0.0)
+    blocks = -(-members // block)
+    seconds = (blocks * begin + members * each) / max(1, min(workers, blocks))
+    return seconds, (f"a probe mapped {sum(PROBE_BLOCKS)} states in "
+                     f"{sum(times):.2g} s")
 
 
 def system_definition(system: System) -> dict:

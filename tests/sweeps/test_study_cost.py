@@ -1,0 +1,66 @@
+"""The recurrence mapper's cost said up front (issue 32, section 3): its states stop when
+they settle, so the bound of ``max_periods`` each overstates a study by one to two orders of
+magnitude; a probe that maps a few states in the study's own box gives the expectation."""
+
+from __future__ import annotations
+
+import pytest
+
+from analysis.integrate.cost import CostEstimate
+from analysis.model import System
+from analysis.stability.attractors import Box, Range
+from analysis.sweeps import attractor_blocks
+from analysis.sweeps.attractor_blocks import PROBE_BLOCKS, recurrence_probe, study_cost
+
+
+class Clock:
+    """A clock that a fake study's ``map_block`` advances by ``start + k · each``."""
+
+    def __init__(self, start: float, each: float):
+        self.now, self.start, self.each, self.sizes = 0.0, start, each, []
+
+    def perf_counter(self) -> float:
+        return self.now
+
+    def map_block(self, states, progress=None):
+        self.sizes.append(len(states))
+        self.now += self.start + len(states) * self.each
+
+
+def test_the_probe_separates_a_blocks_start_from_its_states(monkeypatch):
+    clock = Clock(start=0.3, each=0.01)
+    monkeypatch.setattr(attractor_blocks.time, "perf_counter", clock.perf_counter)
+    study = type("Study", (), {"map_block": staticmethod(clock.map_block),
+                               "system": System.make("duffing")})()
+    box = Box((Range("x", -1.0, 1.0), Range("vx", -1.0, 1.0)))
+    seconds, note = recurrence_probe(study, box, members=1000, block=256, workers=2)
+    assert clock.sizes == [1, *PROBE_BLOCKS], "one untimed state, then the timed blocks"
+    blocks = 4  # 1000 states in blocks of 256
+    assert seconds == pytest.approx((blocks * 0.3 + 1000 * 0.01) / 2)
+    timed = (0.3 + 2 * 0.01) + (0.3 + 8 * 0.01)
+    assert note == f"a probe mapped {sum(PROBE_BLOCKS)} states in {timed:.2g} s"
+
+
+def test_an_expectation_below_the_bound_is_said_beside_it():
+    est = CostEstimate(members=3600, steps=708_000, workers=2, step_seconds=4e-7, dt=1e-5,
+                       what="initial states", bound=True, expected_seconds=17.0,
+                       probe_note="a probe mapped 10 states in 0.34 s")
+    assert est.bound_seconds == pytest.approx(3600 * 708_000 * 4e-7 / 2)
+    assert est.seconds == 17.0
+    assert ("expected about 17 s on 2 worker(s) (a probe mapped 10 states in 0.34 s), at most "
+            "about 8.5 min (0.4 us per step)") in est.lines()[0]
+    assert est.advice() == [], "the advice follows the expectation, not the bound"
+    capped = CostEstimate(10, 100, 1, 1e-3, 1e-5, bound=True, expected_seconds=50.0)
+    assert capped.seconds == pytest.approx(1.0), "never more than the bound"
+
+
+def test_a_basin_study_probes_its_own_grid():
+    system = System.make("duffing", linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1,
+                         forcing_amplitude=0.3, speed_rpm=1.4 * 60 / (2 * 3.141592653589793))
+    sides = (Range("x", -2.0, 2.0, 30), Range("vx", -2.0, 2.0, 30))
+    est = study_cost(system, 900, workers=1, sides=sides)
+    assert est.bound and est.expected_seconds is not None
+    assert 0 < est.seconds < est.bound_seconds
+    assert "a probe mapped 10 states in" in est.lines()[0]
+    without = study_cost(system, 900, workers=1)
+    assert without.expected_seconds is None and without.seconds == without.bound_seconds
