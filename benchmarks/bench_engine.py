@@ -18,7 +18,14 @@ In one run, on the same model and step:
   share of the subset labelled alike is printed.
 
     python benchmarks/bench_engine.py [--size 100] [--members 65536] [--steps 2000]
-        [--gpu-members 1048576] [--json]
+        [--gpu-members 1048576] [--cuda-variants] [--json]
+
+``--cuda-variants`` (with a GPU) also times, in the same run, the CUDA build compiled with
+fused multiply-adds (NVRTC ``--fmad=true``; the default keeps a·b + c two roundings, as the
+CPU build does) and at 64 and 256 threads per block (default 128), each with the largest
+difference of its final states from the default build's on the same 4096 members after
+``--steps`` steps (relative to the largest state): where the GPU's throughput is lost, and
+what a faster option would cost in agreement with the CPU build.
 
 The whole check of issue 33 on an H200 is ``python benchmarks/bench_engine.py --size 1000
 --json``. Steps/s are member-steps per second of wall time (the best of ``--repeat``); the
@@ -92,6 +99,36 @@ def kernel(system: System, h: float, steps: int, members: int, repeat: int,
             "steps_per_s": members * steps / seconds}
 
 
+def cuda_variants(system: System, h: float, steps: int, members: int,
+                  repeat: int) -> dict:
+    """The CUDA build's throughput with other NVRTC options and block sizes (the module's
+    ``NVRTC_OPTIONS`` and ``THREADS_PER_BLOCK`` set for the call, the kernel cache
+    cleared), and each variant's largest final-state difference from the default build."""
+    from analysis.integrate.kernels import cuda
+
+    z = members_of(system, 4096)
+    schedule = Schedule(0, steps, 1, keep_sections=False)
+    reference = run_members(system, z, None, h, schedule, device="gpu").final
+    scale = float(np.max(np.abs(reference)))
+    default = (cuda.NVRTC_OPTIONS, cuda.THREADS_PER_BLOCK)
+    plain = tuple(o for o in default[0] if not o.startswith("--fmad"))
+    out = {}
+    for name, options, threads in (("fmad", (*plain, "--fmad=true"), default[1]),
+                                   ("tpb64", default[0], 64), ("tpb256", default[0], 256)):
+        cuda.NVRTC_OPTIONS, cuda.THREADS_PER_BLOCK = options, threads
+        cuda.cuda_kernel.cache_clear()
+        try:
+            row = kernel(system, h, steps, members, repeat, "gpu")
+            final = run_members(system, z, None, h, schedule, device="gpu").final
+        finally:
+            cuda.NVRTC_OPTIONS, cuda.THREADS_PER_BLOCK = default
+            cuda.cuda_kernel.cache_clear()
+        row["options"], row["threads_per_block"] = list(options), threads
+        row["max_difference_over_max_state"] = float(np.max(np.abs(final - reference)) / scale)
+        out[name] = row
+    return out
+
+
 def basin(system: System, size: int, device: str) -> dict:
     """A ``size`` × ``size`` basin by the featurizing mapper on ``device``: the whole
     ``studies.basins`` call (cell scale, grid, kernel runs, clustering, each attractor
@@ -140,6 +177,8 @@ def main() -> None:
     parser.add_argument("--one-core-members", type=int, default=256)
     parser.add_argument("--steps", type=int, default=2000, help="RK4 steps per member")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--cuda-variants", action="store_true",
+                        help="also time fmad=true and 64/256 threads per block (GPU)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     system = System.make("balanced-rotor", **ROTOR)
@@ -162,6 +201,9 @@ def main() -> None:
         out["cuda_over_cpu"] = out["cuda_build"]["steps_per_s"] / out["cpu_build"]["steps_per_s"]
         out["cuda_over_one_core"] = (out["cuda_build"]["steps_per_s"]
                                      / out["one_core"]["steps_per_s"])
+        if args.cuda_variants:
+            out["cuda_variants"] = cuda_variants(system, h, args.steps, args.gpu_members,
+                                                 args.repeat)
     else:
         out["cuda_build"] = None
         out["no_gpu"] = gpu_problem()
@@ -188,6 +230,11 @@ def main() -> None:
     if gpu:
         print(f"  CUDA / CPU build: {out['cuda_over_cpu']:.1f}×;  CUDA / one core: "
               f"{out['cuda_over_one_core']:.1f}×")
+        for name, row in out.get("cuda_variants", {}).items():
+            print(f"  CUDA variant {name:19s} {row['steps_per_s']:10.3e} steps/s "
+                  f"({row['steps_per_s'] / out['cuda_build']['steps_per_s']:.2f}× the "
+                  f"default; final states differ by "
+                  f"{row['max_difference_over_max_state']:.1e} of the largest)")
     b = out["basin"]
     print(f"  basin {b['size']} × {b['size']} on the {b['device']}: {b['seconds']:.3g} s "
           f"({b['member_steps'] / b['seconds']:.3e} steps/s); attractors "

@@ -9,9 +9,10 @@
 #           ptxas spills of every shipped model): tests/integrate/test_kernels_gpu.py and
 #           the kernel chart's tests
 #   ptxas   registers and spills of every shipped model, both variants (sm_90)
-#   engine  benchmarks/bench_engine.py --size 1000 --json: steps/s of the one-core compiled
-#           path, the CPU build (all cores and one), the CUDA build at 2^20 members, and the
-#           1000 x 1000 basin (target: >= 1e10 steps/s, >= 100x the CPU build, basin <= 10 s)
+#   engine  benchmarks/bench_engine.py --size 1000 --cuda-variants --json: steps/s of the
+#           one-core compiled path, the CPU build (all cores and one), the CUDA build at 2^20
+#           members (and with fmad=true, 64 and 256 threads per block), and the 1000 x 1000
+#           basin (target: >= 1e10 steps/s, >= 100x the CPU build, basin <= 10 s)
 #   chart   the 160 000-point chart on the GPU (20 000 speeds x N_b 5-12, lambda1; target
 #           <= 30 s), then the host side of the same chart alone (kernel replayed)
 #
@@ -64,7 +65,7 @@ for part in "${parts[@]}"; do
       fi ;;
     engine)
       run_part engine "$PART_LIMIT" bash -c \
-        "$PY benchmarks/bench_engine.py --size 1000 --json > '$OUT/engine.json'" ;;
+        "$PY benchmarks/bench_engine.py --size 1000 --cuda-variants --json > '$OUT/engine.json'" ;;
     chart)
       run_part chart "$PART_LIMIT" "$PY" benchmarks/bench_chart.py --speeds 20000 \
         --device gpu --reference-points 0 --host-points 0 --host-speeds 20000 ;;
