@@ -12,7 +12,9 @@ Compiled, the members run in the member kernel's CPU build (``analysis.integrate
 the step written as scalar C from the same SX Function, one member per OpenMP iteration on
 every core, each member's numbers those of the scalar step); without it (``compiled=False``,
 an operation the kernel writer does not know, no compiler, a failed self-test) one by one
-through the RK4 blocks, with the same results.
+through the RK4 blocks, with the same results. ``device="gpu"`` runs them in the kernel's
+CUDA build instead (the same C text, equal to the CPU build to the last bits of CUDA's libm),
+``"auto"`` there when the ensemble is wide enough (``kernels.resolve_device``).
 
 - ``StroboscopicMap``: the System sampled once per forcing period T, z_{j+1} = F(z_j) with
   N fixed RK4 steps of h = T/N; ``advance`` moves K rows ``[z, k]`` by whole periods.
@@ -36,6 +38,7 @@ from analysis.errors import InputError
 from analysis.integrate.checks import check_start
 from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
+from analysis.integrate.kernels.devices import resolve_device
 from analysis.integrate.kernels.members import Schedule
 from analysis.integrate.kernels.members import run_members as run_kernel
 from analysis.integrate.kernels.source import Unsupported
@@ -65,26 +68,46 @@ def run_scalar(lib: Library, p: np.ndarray, h: float, s: np.ndarray, n_out: int,
     return out
 
 
+def device_of(device: str, members: int, steps: int, compiled: bool = True) -> str:
+    """``"cpu"`` or ``"gpu"``: ``device`` (``cpu``, ``gpu`` or ``auto``) resolved for
+    ``members`` members of ``steps`` RK4 steps (``kernels.resolve_device``; ``InputError``
+    for another name or ``gpu`` without CuPy or a GPU). ``compiled=False`` (the CasADi
+    virtual machine) runs on the CPU: ``auto`` is then ``cpu``, ``gpu`` an ``InputError``."""
+    resolved = resolve_device(device, members, steps)
+    if not compiled and device == "gpu":
+        raise InputError("device: 'gpu' runs the compiled member kernel; compiled=False runs "
+                         "on the CPU (device='cpu' or 'auto')")
+    return resolved if compiled else "cpu"
+
+
 def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_out: int,
-                every: int, compiled: bool = True) -> np.ndarray:
+                every: int, compiled: bool = True, device: str = "cpu") -> np.ndarray:
     """``n_out · every`` RK4 steps of every member of ``system``'s model and balls: ``p``
     (K × n_par) and ``h`` (K, s) per member, ``s`` (K × (n + 1) rows ``[z, k]``, changed in
     place), step k from ``k·h``. Returns (K, n_out, n): each member's z after every
     ``every`` steps.
 
-    Compiled: all members in one call of the member kernel's CPU build
-    (``kernels.run_members``, every core; a member that blows up stops there, its later
-    states NaN, its row the first bad state); without it (``compiled=False``, an operation
-    the writer does not know, no compiler) member by member through the RK4 blocks
-    (``run_scalar``). Both give ``simulate``'s steps bit for bit."""
+    Compiled: all members in one call of the member kernel (``kernels.run_members``; a
+    member that blows up stops there, its later states NaN, its row the first bad state)
+    on ``device`` (``device_of``): ``cpu``, the CPU build on every core; ``gpu``, the CUDA
+    build (``InputError`` naming the reason when the model's kernel cannot be written or
+    built); ``auto``, the GPU for wide ensembles. On the CPU without a kernel
+    (``compiled=False``, an operation the writer does not know, no compiler) member by
+    member through the RK4 blocks (``run_scalar``). The CPU paths give ``simulate``'s steps
+    bit for bit, the CUDA build the same to the last bits of CUDA's libm."""
     k, n = s.shape[0], s.shape[1] - 1
+    device = device_of(device, k, n_out * every, compiled)
     if n_out == 0:
         return np.empty((k, 0, n))
     out = None
     if compiled:
         try:
-            out = run_kernel(system, s[:, :n], p, h, Schedule(0, every, n_out), k0=s[:, n])
-        except (Unsupported, CompileError):
+            out = run_kernel(system, s[:, :n], p, h, Schedule(0, every, n_out), k0=s[:, n],
+                             device=device)
+        except (Unsupported, CompileError) as exc:
+            if device == "gpu":
+                raise InputError(f"device: 'gpu': the member kernel of model "
+                                 f"'{system.model.name}' cannot be built: {exc}") from None
             out = None
     if out is None:
         result = np.empty((k, n_out, n))
@@ -124,17 +147,23 @@ class StroboscopicMap:
     non-finite values count)."""
     compiled: bool = True
     """Run compiled C (the RK4 blocks' cache); False: the CasADi virtual machine."""
+    device: str = "cpu"
+    """Where ``advance`` runs the members: ``cpu``, ``gpu`` or ``auto`` (resolved per call
+    by its members and steps: ``device_of``)."""
 
     @classmethod
     def make(cls, system: System, period: str | Period, dt: float | None = None,
-             compiled: bool = True) -> StroboscopicMap:
+             compiled: bool = True, device: str = "cpu") -> StroboscopicMap:
         """The map of ``system`` over ``period`` (a ``Period`` or its name: ``vc``,
         ``shaft``, ``vc[left]:4``, ``ratio:p/q``, ``param:NAME``; required here, since the
         default period's rule lives in ``analysis.stability``, a layer above:
         ``stability.periodic.as_period(model, None)`` gives it). ``dt``: the largest RK4
         step in s (None: the spec's), checked as a flow map's step is (``RunPlan.step``:
         finite and > 0, resolving the fastest forcing, RK4-stable; ``InputError``
-        otherwise)."""
+        otherwise). ``device``: ``cpu``, ``gpu`` or ``auto`` (``device_of``; checked here:
+        ``InputError`` for another name, for ``gpu`` without CuPy or a GPU, or with
+        ``compiled=False``)."""
+        device_of(device, 1, 1, compiled)
         per = period if isinstance(period, Period) else Period.parse(period)
         per.check(system.model)
         plan = RunPlan.step(system, dt)
@@ -142,7 +171,7 @@ class StroboscopicMap:
         seconds = period_seconds(system.model, system.structure, per, values)
         steps = steps_per_period(system.model, system.structure, per, values, plan.dt)
         return cls(system, per, seconds, steps, seconds / steps,
-                   blow_up_limit(system.model, values), compiled)
+                   blow_up_limit(system.model, values), compiled, device)
 
     def advance(self, s: np.ndarray, n_periods: int) -> np.ndarray:
         """Move every member ``n_periods`` periods on.
@@ -161,7 +190,7 @@ class StroboscopicMap:
         k = len(s)
         p = np.repeat(self.system.p[None, :], k, axis=0)
         return run_members(self.system, p, np.full(k, self.dt), s, n_periods, self.steps,
-                           self.compiled)
+                           self.compiled, self.device)
 
     def diverged(self, points: np.ndarray) -> np.ndarray:
         """(K,) bool: whether any of a member's ``points`` ((K, m, n) as ``advance``
@@ -204,14 +233,19 @@ def ensemble(system: System, states: np.ndarray | None = None,
              duration: float | None = None, *,
              parameters: Sequence[Mapping[str, float]] | None = None,
              dt: float | None = None, save_every: int = 1,
-             compiled: bool = True) -> xr.Dataset:
+             compiled: bool = True, device: str = "cpu") -> xr.Dataset:
     """K runs of ``system`` from t = 0 (no transient), one per member.
 
     ``states`` (K, n): the members' initial states (SI units; None: the system's);
     ``parameters``: K mappings of parameter overrides (SI units, speed in rpm; None: the
     system's); ``duration`` (s; None: the spec's), ``dt`` (s; None: the spec's) and
     ``save_every`` as in ``simulate``, each member's run checked as ``simulate`` checks it
-    (``RunPlan.make``; ``InputError``).
+    (``RunPlan.make``; ``InputError``). ``device``: where the members run: ``"cpu"`` (the
+    member kernel's CPU build on every core), ``"gpu"`` (its CUDA build: CuPy and a visible
+    GPU, ``pip install bearingdyn[gpu]``) or ``"auto"`` (the GPU from
+    ``kernels.devices.AUTO_MIN_MEMBERS`` members and ``AUTO_MIN_STEPS`` member-steps, else
+    the CPU); any other value, or ``gpu`` without CuPy or a GPU, is an ``InputError`` of one
+    line before anything runs.
 
     Returns a Dataset over (member, t): one variable per state (units as ``simulate``'s),
     ``diverged_at`` (member; s): the time of the first saved sample that is not finite or
@@ -220,7 +254,7 @@ def ensemble(system: System, states: np.ndarray | None = None,
     parameters and the initial states are variables over member; ``attrs`` are the
     provenance of ``system`` (``provenance.completed_attrs``) with ``members`` = K. A
     bounded member equals ``simulate(member system, duration=duration, transient=0, dt=dt,
-    save_every=save_every)`` bit for bit."""
+    save_every=save_every)`` bit for bit on the CPU, to round-off on the GPU."""
     members = _members(system, None if states is None else np.asarray(states, dtype=float),
                        parameters)
     plans = [RunPlan.make(m, duration=duration, transient=0.0, dt=dt,
@@ -228,11 +262,13 @@ def ensemble(system: System, states: np.ndarray | None = None,
     plan = plans[0]
     n, k = system.n_state, len(members)
     check_memory(k * (n + 1) - 1, plan.n_saved, save_every)
+    device = device_of(device, k, plan.n_saved * save_every, compiled)
     states_out = np.empty((k, plan.n_saved + 1, n))
     s = np.array([np.append(m.state, 0.0) for m in members])
     states_out[:, 0] = s[:, :n]
     states_out[:, 1:] = run_members(system, np.array([m.p for m in members]),
-                                    np.full(k, plan.dt), s, plan.n_saved, save_every, compiled)
+                                    np.full(k, plan.dt), s, plan.n_saved, save_every, compiled,
+                                    device)
     return _dataset(system, members, plan, states_out)
 
 

@@ -6,6 +6,7 @@ counters, through a blow-up beside them, and the same without a kernel (the scal
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from analysis.integrate.kernels.cpu import cpu_library
 from analysis.integrate.kernels.source import Unsupported, scalar_c, state_functions
 from analysis.integrate.simulate import check_bounded
 from analysis.model import System
+from tests.integrate.fake_cupy import FakeCupy, fake_gpu
 
 CASES = {
     "balanced-rotor": (dict(n_balls=8, speed_rpm=8000.0, radial_load=50.0), "vc"),
@@ -195,3 +197,67 @@ def test_without_a_kernel_the_members_run_one_by_one_with_the_same_bits(monkeypa
     finally:
         cpu_library.cache_clear()
         members._self_test.cache_clear()
+
+
+def _speeds_ensemble(system: System, **kwargs):
+    starts = _starts(StroboscopicMap.make(system, "vc"), 3)
+    speeds = [{"speed_rpm": 7000.0}, {"speed_rpm": 8000.0}, {"speed_rpm": 9100.0}]
+    return ensemble(system, starts, 0.002, parameters=speeds, save_every=2, **kwargs)
+
+
+def test_device_cpu_is_the_default_bit_for_bit():
+    """``device="cpu"``: the same bits as the default call (and so ``simulate``'s), for
+    ``ensemble`` and the stroboscopic map."""
+    system = _map("balanced-rotor").system
+    default, cpu = _speeds_ensemble(system), _speeds_ensemble(system, device="cpu")
+    for v in system.state_names:
+        assert np.array_equal(default[v].values, cpu[v].values)
+    starts = _rows(_starts(_map("balanced-rotor"), 3), np.zeros(3))
+    smap = StroboscopicMap.make(system, "vc", device="cpu")
+    assert smap.device == "cpu"
+    assert np.array_equal(smap.advance(starts.copy(), 2), _map("balanced-rotor").advance(
+        starts.copy(), 2))
+
+
+def test_unknown_device_and_gpu_without_cupy_are_one_line(monkeypatch):
+    """``device="tpu"`` is refused naming the allowed values; ``device="gpu"`` with CuPy
+    not importable in one line naming cupy and the extra to install."""
+    system = _map("balanced-rotor").system
+    for call in (lambda d: _speeds_ensemble(system, device=d),
+                 lambda d: StroboscopicMap.make(system, "vc", device=d)):
+        with pytest.raises(InputError, match=r"device: one of cpu, gpu, auto, got 'tpu'") as bad:
+            call("tpu")
+        assert "\n" not in str(bad.value)
+        monkeypatch.setitem(sys.modules, "cupy", None)  # `import cupy` raises ImportError
+        with pytest.raises(InputError, match=r"cupy is not installed.*bearingdyn\[gpu\]") \
+                as missing:
+            call("gpu")
+        assert "\n" not in str(missing.value)
+        monkeypatch.delitem(sys.modules, "cupy")
+
+
+def test_device_gpu_with_a_cpu_twin_equals_the_cpu_build(monkeypatch):
+    """With CuPy's stand-in (``tests/integrate/fake_cupy.py``: the GPU path, its launches
+    run by the CPU build) ``device="gpu"`` takes the GPU path and gives the CPU build's
+    results to round-off; ``auto`` stays on the CPU for so few members; ``gpu`` with
+    ``compiled=False`` is refused."""
+    smap = _map("balanced-rotor")
+    system = smap.system
+    cpu = _speeds_ensemble(system, device="cpu")
+    starts = _rows(_starts(smap, 3), np.array([0.0, 5.0, 0.0]))
+    points_cpu = smap.advance(starts.copy(), 2)
+    seen: list = []
+    with fake_gpu(monkeypatch, FakeCupy(system, seen)):
+        assert _speeds_ensemble(system, device="auto").attrs == cpu.attrs and not seen
+        gpu = _speeds_ensemble(system, device="gpu")
+        assert seen == [False]
+        for v in system.state_names:
+            want = cpu[v].values
+            assert np.all(np.abs(gpu[v].values - want) <= 1e-12 * np.abs(want).max()), v
+        gmap = StroboscopicMap.make(system, "vc", device="gpu")
+        rows = starts.copy()
+        points = gmap.advance(rows, 2)
+        assert np.all(np.abs(points - points_cpu) <= 1e-12 * np.abs(points_cpu).max())
+        assert np.array_equal(rows[:, -1], starts[:, -1] + 2 * smap.steps)
+        with pytest.raises(InputError, match="compiled=False"):
+            _speeds_ensemble(system, device="gpu", compiled=False)

@@ -10,11 +10,12 @@ import pytest
 
 from analysis import simulate
 from analysis.errors import InputError
-from analysis.integrate.kernels import MemberResult, Schedule, resolve_device, run_members
+from analysis.integrate.kernels import MemberResult, Schedule, devices, resolve_device, run_members
 from analysis.integrate.kernels.source import Unsupported, scalar_c
 from analysis.integrate.simulate import bad_states, blow_up_limit
 from analysis.integrate.tangent import tangent_block
-from analysis.model import System
+from analysis.model import System, available_models
+from tests.integrate.fake_cupy import FakeCupy, fake_gpu
 
 BALANCED = dict(n_balls=8, speed_rpm=8000.0, radial_load=50.0)
 
@@ -70,6 +71,44 @@ def test_tangent_lambda1_is_the_tangent_blocks_to_round_off():
     scale = np.abs(states.sections).max(axis=1)
     assert np.all(np.abs(out.sections - states.sections) <= 1e-12 * scale[:, None, :] * 10)
     assert np.allclose(s_end.ravel()[:n], out.final[0], rtol=1e-10, atol=1e-18)
+
+
+SHIPPED_TRANSIENT, SHIPPED_EVERY, SHIPPED_SECTIONS = 1000, 40, 6
+"""The every-model comparison: 1000 steps of transient (every shipped model's members are
+then in contact, their tangent logs not 0), then 6 sections of 40 steps: kept short for CI,
+as each model compiles three libraries (two member variants, the RK4 blocks of
+``simulate``) and the CasADi virtual machine runs the tangent path's 240 steps."""
+
+
+@pytest.mark.parametrize("name", available_models())
+def test_every_shipped_model_both_variants_match_the_compiled_path(name):
+    """Every shipped model with its own balls and parameters, two members (the spec's state
+    and one 10 % larger, the second 3 % faster where there is a speed): the state variant's
+    sections are ``simulate``'s states (today's compiled path) bit for bit; the tangent
+    variant's sections and growth factors (exp of the logs) are those of the scalar CasADi
+    tangent path (``tangent_block``: forward AD through the RK4 step, from e1 after the
+    transient, renormalised at the same steps) to 1e-12 relative."""
+    system = System.make(name)
+    model, n, dt = system.model, system.n_state, float(system.model.simulation_defaults["dt"])
+    speed = system.parameters.get("speed_rpm")
+    members = [system, system.replace(speed_rpm=1.03 * speed) if speed else system]
+    z0 = np.array([system.state, system.state * 1.1])
+    p = np.array([m.p for m in members])
+    tr, every, count = SHIPPED_TRANSIENT, SHIPPED_EVERY, SHIPPED_SECTIONS
+    states = run_members(system, z0, p, dt, Schedule(tr, every, count))
+    tangent = run_members(system, z0, p, dt, Schedule(tr, every, count, tangent=True))
+    assert np.all(states.diverged_at == -1) and np.all(tangent.diverged_at == -1)
+    block = tangent_block(model, system.structure, 1, every, count, with_states=True)
+    for i, member in enumerate(members):
+        want = _simulated(member, z0[i], dt, tr + every * count)
+        assert np.array_equal(states.sections[i], want[tr + every::every]), (name, i)
+        s = np.concatenate([want[tr], [tr], np.eye(n)[:, 0]])
+        _, logs, path = (np.asarray(x) for x in block(s, member.p, dt, 0.0))
+        scale = np.abs(want).max(axis=0) + 1e-300
+        cas = path[:n, every - 1::every].T  # [z; k] after every step: the section states
+        assert np.all(np.abs(tangent.sections[i] - cas) <= 1e-12 * scale), (name, i)
+        assert np.all(logs != 0.0), (name, i)  # the tangent moves: a test of the Jacobian
+        assert np.all(np.abs(tangent.logs[i] - logs.ravel()) <= 1e-12), (name, i)
 
 
 def test_a_blow_up_stops_one_member_only():
@@ -138,6 +177,23 @@ def test_bad_inputs_and_devices():
         resolve_device("tpu", 10, 10)
     assert resolve_device("cpu", 10, 10) == "cpu"
     assert resolve_device("auto", 10, 10) == "cpu"
+
+
+def test_auto_takes_a_visible_gpu_from_both_thresholds_on(monkeypatch):
+    """With a GPU visible (CuPy's stand-in), ``auto`` is ``gpu`` at and above
+    ``AUTO_MIN_MEMBERS`` members and ``AUTO_MIN_STEPS`` member-steps, ``cpu`` just below
+    either; ``cpu`` stays ``cpu``."""
+    members, total = devices.AUTO_MIN_MEMBERS, devices.AUTO_MIN_STEPS
+    steps, wide = -(-total // members), -(-total // (10 * members))  # fewest steps that reach
+    assert members * (steps - 1) < total <= members * steps         # the member-steps bound
+    with fake_gpu(monkeypatch, FakeCupy(_system(), [])):
+        assert devices.gpu_problem() is None
+        for m, k, want in ((members, steps, "gpu"), (members + 1, steps, "gpu"),
+                           (10 * members, wide, "gpu"), (members - 1, 10 * steps, "cpu"),
+                           (members, steps - 1, "cpu"), (10 * members, wide - 1, "cpu")):
+            assert resolve_device("auto", m, k) == want, (m, k)
+        assert resolve_device("cpu", 10 * members, 10 * steps) == "cpu"
+        assert resolve_device("gpu", 1, 1) == "gpu"
 
 
 def test_the_writer_refuses_what_it_cannot_write():

@@ -7,12 +7,9 @@ models."""
 
 from __future__ import annotations
 
-import ctypes
-import hashlib
 import re
 import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,21 +18,10 @@ from analysis.integrate.kernels import Schedule, cuda_source, run_members
 from analysis.integrate.kernels.cuda import NVRTC_OPTIONS
 from analysis.integrate.kernels.devices import gpu_problem
 from analysis.model import System, available_models
+from tests.integrate.fake_cupy import STUB, FakeCupy, fake_gpu
 
 CASES = {"balanced-rotor": dict(n_balls=8, speed_rpm=8000.0, radial_load=50.0),
          "vakharia2015": dict(n_balls=8, speed_rpm=5000.0, radial_load=50.0)}
-STUB = """\
-#include <cmath>
-#define __device__
-#define __forceinline__ inline
-#define __noinline__ __attribute__((noinline))
-#define __global__
-#define __restrict__
-struct bd_dim { unsigned x; };
-static bd_dim blockIdx, blockDim, threadIdx;
-static inline double __longlong_as_double(unsigned long long v) {
-  double d; __builtin_memcpy(&d, &v, 8); return d; }
-"""
 
 
 def _system(name: str) -> System:
@@ -100,64 +86,11 @@ def test_ptxas_reports_no_spills_for_the_shipped_models(tmp_path, name, n_balls)
         assert spills and all(a == "0" and b == "0" for a, b in spills), (tangent, report)
 
 
-class _FakeCupy:
-    """CuPy's surface that ``kernels.cuda`` uses, on NumPy, whose ``RawModule`` runs the
-    CPU build of the same model: the GPU path's marshalling, blocks and device choice,
-    tested by its CPU twin."""
-
-    __version__ = "fake"
-
-    def __init__(self, system: System, tangent_seen: list, twin_dir: Path | None = None):
-        from analysis.integrate.kernels.cpu import cpu_library
-
-        class Runtime:
-            @staticmethod
-            def getDeviceCount():
-                return 1
-
-            @staticmethod
-            def memGetInfo():
-                return (1 << 16, 1 << 30)  # 64 KiB free: blocks of ~50 members
-
-        class Cuda:
-            runtime = Runtime
-
-        class RawModule:
-            def __init__(self, code: str, options: tuple):
-                assert options == NVRTC_OPTIONS and "BD_GLOBAL" in code
-                self.tangent, self.code = "bd_members_tangent" in code, code
-
-            def get_function(self, name: str):
-                tangent_seen.append(self.tangent)
-                if twin_dir is not None:  # the CUDA text itself, as C++ on the CPU
-                    return _cuda_twin(self.code, name, twin_dir)
-                lib = cpu_library(system.model, system.structure, self.tangent)
-
-                def launch(grid, block, args):
-                    count, rest = int(args[0]), list(args[1:])
-                    assert grid[0] * block[0] >= count
-                    lib.run(count, 1, rest[:12], int(rest[12]), bool(rest[13]), rest[14:])
-                return launch
-
-        self.cuda, self.RawModule = Cuda, RawModule
-
-    asarray = staticmethod(lambda a: np.ascontiguousarray(np.array(a)))
-    empty = staticmethod(lambda shape, dtype: np.empty(shape, dtype=dtype))
-    asnumpy = staticmethod(lambda a: np.asarray(a))
-
-
 @pytest.mark.parametrize("tangent", [False, True])
 def test_the_gpu_path_with_a_cpu_twin_gives_the_cpu_results(monkeypatch, tangent):
-    from analysis.integrate.kernels import cuda, members
-
     system = _system("vakharia2015")
     seen: list = []
-    monkeypatch.setattr(cuda, "cupy_module", lambda: _FakeCupy(system, seen))
-    monkeypatch.setattr("analysis.integrate.kernels.devices.cupy_module",
-                        lambda: _FakeCupy(system, seen))
-    cuda.cuda_kernel.cache_clear()
-    members._self_test_gpu.cache_clear()
-    try:
+    with fake_gpu(monkeypatch, FakeCupy(system, seen)):
         z0 = system.state * (1 + 0.05 * np.arange(300))[:, None]
         schedule = Schedule(100, 50, 6, tangent=tangent)
         cpu = run_members(system, z0, None, 1e-5, schedule, device="cpu")
@@ -170,40 +103,6 @@ def test_the_gpu_path_with_a_cpu_twin_gives_the_cpu_results(monkeypatch, tangent
         assert np.array_equal(gpu.final, cpu.final)
         if tangent:
             assert np.array_equal(gpu.lambda1, cpu.lambda1)
-    finally:
-        cuda.cuda_kernel.cache_clear()
-        members._self_test_gpu.cache_clear()
-
-
-def _cuda_twin(code: str, name: str, folder: Path):
-    """The CUDA text ``code`` compiled as C++ (g++, the CUDA keywords stubbed, no
-    contraction as ``--fmad=false``) and its kernel ``name`` as a launch function: each
-    member one call with ``blockIdx.x`` set to it, as one thread of the GPU runs it."""
-    digest = hashlib.sha256(code.encode()).hexdigest()[:16]
-    library = folder / f"twin-{digest}.so"
-    if not library.exists():
-        source = folder / f"twin-{digest}.cpp"
-        source.write_text("#define __CUDACC__ 1\n" + STUB + code
-                          + "\nextern \"C\" void bd_twin_at(unsigned m) { blockIdx.x = m; "
-                            "blockDim.x = 1; threadIdx.x = 0; }\n")
-        done = subprocess.run(["g++", "-std=c++11", "-O2", "-ffp-contract=off", "-fPIC",
-                               "-shared", "-w", "-o", str(library), str(source)],
-                              capture_output=True, text=True, timeout=300)
-        assert done.returncode == 0, done.stderr[-2000:]
-    lib = ctypes.CDLL(str(library))
-    kernel, at = getattr(lib, name), lib.bd_twin_at
-    kernel.restype = at.restype = None
-
-    def launch(grid, block, args):
-        count, rest = int(args[0]), list(args[1:])
-        assert grid[0] * block[0] >= count
-        ptrs = [a.ctypes.data_as(ctypes.c_void_p) for a in rest[:12]]
-        outs = [a.ctypes.data_as(ctypes.c_void_p) for a in rest[14:]]
-        for m in range(count):
-            at(ctypes.c_uint(m))
-            kernel(ctypes.c_longlong(count), *ptrs, ctypes.c_longlong(int(rest[12])),
-                   ctypes.c_int(int(rest[13])), *outs)
-    return launch
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="no g++ to run the CUDA text")
@@ -216,17 +115,10 @@ def test_the_cuda_text_run_as_cpp_matches_the_cpu_build(monkeypatch, tmp_path, n
     and run through the GPU path: states equal the CPU build's to 1e-12 relative after
     2000 steps of non-chaotic members, λ1 to 1e-9 (the two differ by rounding only; glibc's
     libm on both sides, so CUDA's libm is not checked here)."""
-    from analysis.integrate.kernels import cuda, members
-
     system = System.make(name, speed_rpm=8000.0, radial_load=50.0) \
         if name == "balanced-rotor" else System.make(name)
     seen: list = []
-    fake = _FakeCupy(system, seen, tmp_path)
-    monkeypatch.setattr(cuda, "cupy_module", lambda: fake)
-    monkeypatch.setattr("analysis.integrate.kernels.devices.cupy_module", lambda: fake)
-    cuda.cuda_kernel.cache_clear()
-    members._self_test_gpu.cache_clear()
-    try:
+    with fake_gpu(monkeypatch, FakeCupy(system, seen, tmp_path)):
         z0 = system.state * (1 + 0.02 * np.arange(4))[:, None]
         schedule = Schedule(400, 200, 8, tangent=tangent, lyapunov_skip=2 if tangent else 0)
         cpu = run_members(system, z0, None, 1e-5, schedule, device="cpu")
@@ -237,6 +129,3 @@ def test_the_cuda_text_run_as_cpp_matches_the_cpu_build(monkeypatch, tmp_path, n
         assert np.all(np.abs(gpu.sections - cpu.sections) <= 1e-12 * scale), name
         if tangent:
             np.testing.assert_allclose(gpu.lambda1, cpu.lambda1, rtol=1e-9, atol=1e-9)
-    finally:
-        cuda.cuda_kernel.cache_clear()
-        members._self_test_gpu.cache_clear()
