@@ -5,11 +5,14 @@ read back, JSON with provenance, figures rendered to PNG, and bad input refused 
 from __future__ import annotations
 
 import json
+import math
+import re
 
 import pytest
 
 from analysis.io import open_result
 from analysis.provenance import provenance
+from analysis.stability.attractors.mapper import SPECIAL_LABELS
 
 DUFFING = ["--set", "linear_stiffness=1", "--set", "cubic_stiffness=0.5", "--set",
            "damping=0.1", "--set", "forcing_amplitude=0.3", "--speed-rpm", "13.369"]
@@ -66,6 +69,64 @@ def test_attractors_json_layout_for_fractions_and_for_a_continuation(cli, tmp_pa
     assert out["values"][-1]["transitions"] == {}
     assert ds.attrs["match_distance"] == 0.25
     assert (tmp_path / "c.png").read_bytes()[:4] == b"\x89PNG"
+
+
+ROW = re.compile(r"^\s+(?P<id>-?\d+)\s+\S+\s+(?P<pct>\d+\.\d) % ± (?P<se>\d+\.\d)",
+                 flags=re.M)
+"""A table row of `attractors` (no --param): id, class, fraction % ± standard error %."""
+SHARE = re.compile(r"(?P<label>\w+) (?P<pct>\d+\.\d) ± (?P<se>\d+\.\d)")
+"""One 'label fraction ± stderr' of a continuation's value line (in %)."""
+VALUE_LINE = re.compile(r"^    (?P<value>\S+): (?P<shares>.*)$", flags=re.M)
+
+
+def _check_share(fraction: float, stderr: float, pct: str, se: str, n: int) -> None:
+    """A printed fraction and standard error (%, one decimal) are the stored ones, and the
+    stored standard error is √(p(1−p)/n) of the stored fraction p over the ``n`` states."""
+    assert f"{100 * fraction:.1f}" == pct and f"{100 * stderr:.1f}" == se, \
+        (fraction, stderr, pct, se)
+    assert fraction * n == pytest.approx(round(fraction * n)), "p is not a count over n"
+    assert stderr == pytest.approx(math.sqrt(fraction * (1 - fraction) / n), rel=1e-12)
+
+
+def test_attractors_text_prints_each_fraction_with_its_standard_error(cli, tmp_path):
+    args = ["attractors", "duffing", *DUFFING, "--samples", "40", "--box", "x:-3:3",
+            "--box", "vx:-3:3", "--seed", "4"]
+    res = cli(*args, "-o", "t.nc", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    ds = open_result(tmp_path / "t.nc")
+    n = int(ds.attrs["samples"])
+    assert n == 40
+    rows = {int(m["id"]): m for m in ROW.finditer(res.stdout)}
+    assert sorted(rows) == sorted(ds.attractor.values.tolist()) and rows
+    for i, m in rows.items():
+        _check_share(float(ds.fraction.sel(attractor=i)),
+                     float(ds.fraction_stderr.sel(attractor=i)), m["pct"], m["se"], n)
+    again = cli(*args, "--json", "-o", "j.nc", cwd=tmp_path)  # same seed: the same study
+    for row in json.loads(again.stdout)["attractors"]:
+        _check_share(row["fraction"], row["fraction_stderr"], rows[row["id"]]["pct"],
+                     rows[row["id"]]["se"], n)
+
+
+def test_attractor_continuation_prints_fractions_with_standard_errors(cli, tmp_path):
+    res = cli("attractors", "duffing", *DUFFING[:-2], "--samples", "20", "--box", "x:-3:3",
+              "--box", "vx:-3:3", "--param", "speed_rpm:12.5:15.5:3", "-o", "c.nc",
+              "--quiet", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    ds = open_result(tmp_path / "c.nc")
+    n = int(ds.attrs["samples"])
+    assert f"{n} states per value" in res.stdout
+    ids = {name: k for k, name in SPECIAL_LABELS.items()}
+    lines = [m for m in VALUE_LINE.finditer(res.stdout) if SHARE.search(m["shares"])]
+    assert [float(m["value"]) for m in lines] == pytest.approx(ds.value.values.tolist())
+    for k, line in enumerate(lines):
+        here = ds.isel(value=k)
+        shares = list(SHARE.finditer(line["shares"]))
+        assert len(shares) == int(here.present.sum()) > 0
+        for m in shares:
+            i = ids.get(m["label"]) or int(m["label"])
+            assert bool(here.present.sel(attractor=i))
+            _check_share(float(here.fraction.sel(attractor=i)),
+                         float(here.fraction_stderr.sel(attractor=i)), m["pct"], m["se"], n)
 
 
 BAD = [
