@@ -11,6 +11,12 @@ In one run, on the same model and step:
   being the build's scaling over the cores;
 - **CUDA build**, when a GPU is visible (CuPy installed): the same call on the GPU, at
   ``--gpu-members`` members (default 2²⁰, where an H200 reaches its throughput);
+- **the tangent variant** (λ1, as charts run it: ``sweeps.points.kernel_points``), on the
+  CPU build (all cores) and, with a GPU, the CUDA build, on the same members and steps: one
+  tangent vector renormalised at every VC section (``--steps`` // N sections of N steps
+  per VC period, the rest a transient), the sections kept; its steps/s (tangent steps: a
+  member-step carrying the tangent) and its ratio to the state variant on the same build
+  (issue 33's target on an H200: >= 3·10⁹ tangent steps/s);
 - **a basin**: ``--size`` × ``--size`` initial states of the balanced rotor (50 N, N_b 8,
   8000 rpm; x from −20 to 30 µm, y from −20 to 20 µm) mapped by the featurizing mapper
   (0.5 s transient = 213 VC periods, 24 VC sections) on the GPU when there is one, else on
@@ -55,6 +61,8 @@ ROTOR = dict(n_balls=8, radial_load=50.0, speed_rpm=8000.0)
 X, Y = ("x", -20e-6, 30e-6), ("y", -20e-6, 20e-6)
 BASIN_FEATURES = FeatureOptions(transient=213, sections=24)
 """0.5 s of transient at 8000 rpm (VC period 2.35 ms) and 24 VC sections: issue 33's run."""
+TANGENT_TARGET = 3e9
+"""Issue 33's target for the CUDA build's tangent variant on an H200, tangent steps/s."""
 
 
 def members_of(system: System, count: int) -> np.ndarray:
@@ -84,19 +92,39 @@ def one_core(system: System, h: float, steps: int, members: int, repeat: int) ->
             "steps_per_s": members * steps / seconds}
 
 
+def tangent_schedule(steps: int, every: int) -> Schedule:
+    """The chart's schedule of the tangent variant (``sweeps.points.kernel_points``) over
+    ``steps`` RK4 steps: sections every ``every`` steps (one period), the tangent
+    renormalised at each and its first quarter not averaged, the sections kept; the steps
+    before the last whole section are a transient (fewer ``steps`` than ``every``: one
+    section of ``steps``)."""
+    every = min(every, steps)
+    count = steps // every
+    return Schedule(steps - count * every, every, count, tangent=True,
+                    lyapunov_skip=count // 4)
+
+
 def kernel(system: System, h: float, steps: int, members: int, repeat: int,
-           device: str, threads: int | None = None) -> dict:
-    """The member kernel's build on ``device`` (state only, nothing kept), on ``threads``
-    CPU threads (None: every core)."""
+           device: str, threads: int | None = None, every: int | None = None) -> dict:
+    """The member kernel's build on ``device`` on ``threads`` CPU threads (None: every
+    core): the state variant (nothing kept), or with ``every`` the tangent variant by
+    ``tangent_schedule`` (sections every ``every`` steps)."""
     z = members_of(system, members)
-    schedule = Schedule(0, steps, 1, keep_sections=False)
+    tangent = every is not None
+    schedule = tangent_schedule(steps, every) if tangent \
+        else Schedule(0, steps, 1, keep_sections=False)
     start = time.perf_counter()
-    run_members(system, z[:1], None, h, Schedule(0, 1, 1), device=device)  # built, loaded
+    run_members(system, z[:1], None, h, Schedule(0, 1, 1, tangent=tangent),
+                device=device)  # built, loaded
     first = time.perf_counter() - start
     seconds = best_of(repeat, lambda: run_members(system, z, None, h, schedule,
                                                   device=device, threads=threads))
-    return {"members": members, "steps": steps, "seconds": seconds, "first_use_s": first,
-            "steps_per_s": members * steps / seconds}
+    out = {"members": members, "steps": steps, "seconds": seconds, "first_use_s": first,
+           "steps_per_s": members * steps / seconds}
+    if tangent:
+        out["steps_per_section"] = int(schedule.counts("steps_per_section"))
+        out["sections"] = schedule.max_sections
+    return out
 
 
 def cuda_variants(system: System, h: float, steps: int, members: int,
@@ -182,7 +210,8 @@ def main() -> None:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     system = System.make("balanced-rotor", **ROTOR)
-    h = StroboscopicMap.make(system, "vc").dt
+    smap = StroboscopicMap.make(system, "vc")
+    h = smap.dt
     gpu = gpu_problem() is None
     out: dict = {"model": "balanced-rotor", **ROTOR, "h_s": h, "cores": cores(),
                  "threads_env": os.environ.get("BEARINGDYN_THREADS"),
@@ -196,16 +225,27 @@ def main() -> None:
     out["cpu_scaling"] = out["cpu_build"]["steps_per_s"] / out["cpu_build_1"]["steps_per_s"]
     out["cpu_1_over_one_core"] = (out["cpu_build_1"]["steps_per_s"]
                                   / out["one_core"]["steps_per_s"])
+    out["cpu_tangent"] = kernel(system, h, args.steps, args.members, args.repeat, "cpu",
+                                every=smap.steps)
+    out["cpu_tangent_over_state"] = (out["cpu_tangent"]["steps_per_s"]
+                                     / out["cpu_build"]["steps_per_s"])
     if gpu:
         out["cuda_build"] = kernel(system, h, args.steps, args.gpu_members, args.repeat, "gpu")
         out["cuda_over_cpu"] = out["cuda_build"]["steps_per_s"] / out["cpu_build"]["steps_per_s"]
         out["cuda_over_one_core"] = (out["cuda_build"]["steps_per_s"]
                                      / out["one_core"]["steps_per_s"])
+        out["cuda_tangent"] = kernel(system, h, args.steps, args.gpu_members, args.repeat,
+                                     "gpu", every=smap.steps)
+        out["cuda_tangent_over_state"] = (out["cuda_tangent"]["steps_per_s"]
+                                          / out["cuda_build"]["steps_per_s"])
+        out["cuda_tangent_over_cpu_tangent"] = (out["cuda_tangent"]["steps_per_s"]
+                                                / out["cpu_tangent"]["steps_per_s"])
+        out["cuda_tangent_target_met"] = out["cuda_tangent"]["steps_per_s"] >= TANGENT_TARGET
         if args.cuda_variants:
             out["cuda_variants"] = cuda_variants(system, h, args.steps, args.gpu_members,
                                                  args.repeat)
     else:
-        out["cuda_build"] = None
+        out["cuda_build"] = out["cuda_tangent"] = None
         out["no_gpu"] = gpu_problem()
     out["basin"], ds = basin(system, args.size, "gpu" if gpu else "cpu")
     if gpu:
@@ -217,19 +257,29 @@ def main() -> None:
           f"load {', '.join(f'{v:.2f}' for v in out['load'])}")
     for key, name in (("one_core", "one core, compiled RK4 blocks"),
                       ("cpu_build", "CPU build, all cores"),
-                      ("cpu_build_1", "CPU build, one core"), ("cuda_build", "CUDA build")):
+                      ("cpu_build_1", "CPU build, one core"), ("cuda_build", "CUDA build"),
+                      ("cpu_tangent", "CPU build, all cores, tangent"),
+                      ("cuda_tangent", "CUDA build, tangent")):
         row = out[key]
         if row is None:
-            print(f"  {name:32s} no GPU: {out['no_gpu']}")
+            if key == "cuda_build":
+                print(f"  {name:32s} no GPU: {out['no_gpu']}")
             continue
         print(f"  {name:32s} {row['steps_per_s']:10.3e} steps/s ({row['members']} members "
               f"× {row['steps']} steps in {row['seconds']:.3g} s)")
     print(f"  CPU build / one core: {out['cpu_over_one_core']:.1f}×; CPU build all cores / "
           f"one core: {out['cpu_scaling']:.2f}× on {out['cores']} cores; CPU build on one "
           f"core / compiled path: {out['cpu_1_over_one_core']:.2f}×")
+    print(f"  tangent / state, CPU build: {out['cpu_tangent_over_state']:.2f}× (λ1 with "
+          f"{out['cpu_tangent']['sections']} section(s) of "
+          f"{out['cpu_tangent']['steps_per_section']} steps)")
     if gpu:
         print(f"  CUDA / CPU build: {out['cuda_over_cpu']:.1f}×;  CUDA / one core: "
               f"{out['cuda_over_one_core']:.1f}×")
+        print(f"  tangent / state, CUDA build: {out['cuda_tangent_over_state']:.2f}×;  "
+              f"CUDA tangent / CPU tangent: {out['cuda_tangent_over_cpu_tangent']:.1f}×;  "
+              f"target >= {TANGENT_TARGET:.0e} tangent steps/s (H200): "
+              f"{'met' if out['cuda_tangent_target_met'] else 'NOT met'}")
         for name, row in out.get("cuda_variants", {}).items():
             print(f"  CUDA variant {name:19s} {row['steps_per_s']:10.3e} steps/s "
                   f"({row['steps_per_s'] / out['cuda_build']['steps_per_s']:.2f}× the "
