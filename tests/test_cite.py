@@ -85,6 +85,27 @@ def test_the_top_level_citation_file_is_valid_and_names_the_package_version():
     assert data["references"][0]["title"] == SEED_PAPER_TITLE
 
 
+UNSTATED_KEYS = ("journal", "doi", "year", "volume", "issue", "start", "end", "pages",
+                 "publisher", "date-published", "conference", "collection-title", "url")
+"""CFF reference keys of what the seed text does not state (a venue, a date, a DOI)."""
+
+
+def test_the_top_level_citation_file_cites_the_seed_paper_as_cite_does():
+    """CITATION.cff's reference to the seed paper is the one `bearingdyn cite --format cff`
+    prints: type ``generic`` with its note, nothing the seed does not state (issue 32)."""
+    root = _validate_cff((ROOT / "CITATION.cff").read_text())["references"]
+    done = run_cli("cite", "vakharia2015", "--format", "cff")
+    assert done.returncode == 0, done.stderr
+    cited = _validate_cff(done.stdout)["references"]
+    seed, = (r for r in root if r["title"] == SEED_PAPER_TITLE)
+    said, = (r for r in cited if r["title"] == SEED_PAPER_TITLE)
+    assert seed["type"] == said["type"] == "generic"
+    assert seed["notes"] == said["notes"] and "no venue" in seed["notes"]
+    for key in UNSTATED_KEYS:
+        assert key not in seed and key not in said, key
+    assert seed == said
+
+
 @pytest.fixture
 def user_spec(tmp_path, monkeypatch) -> Path:
     """The Mathieu spec renamed, in a folder of the user's own whose path holds '_'."""
