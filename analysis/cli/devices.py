@@ -67,7 +67,9 @@ def devices(as_json: JsonOption = False):
             typer.echo(f"gpu: {d['name']}, {_gib(d['memory_bytes'])} ({_gib(d['free_bytes'])} "
                        f"free), CuPy {d['cupy_version']}, CUDA {d['cuda_version']}")
     if info["gpu_problem"]:
-        typer.echo(f"no GPU: {info['gpu_problem']}")
+        from analysis.integrate.kernels.devices import INSTALL_HINT
+
+        typer.echo(f"no GPU: {info['gpu_problem']}; {INSTALL_HINT}")
     rule = info["auto"]
     typer.echo(f"--device auto: the GPU from {rule['min_members']} members and "
                f"{rule['min_member_steps']:.0e} member-steps, else the cores")

@@ -64,6 +64,7 @@ def sweep(
     from analysis.sweeps.diagram import bifurcation_diagram
     from analysis.sweeps.executors import workers_of
     from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
+    from analysis.sweeps.points import grid_device
 
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
                       section, dt)
@@ -72,6 +73,8 @@ def sweep(
     if device is not None and follow:
         raise InputError("--device: the member kernels run the values of a --no-follow sweep "
                          "(a followed sweep is one trajectory); add --no-follow")
+    if device is not None:  # the GPU and the kernels, before the estimate and any executor
+        grid_device(setting, [axis], device, len(axis.values) * (2 if direction == "both" else 1))
     ex = executor_of(executor, workers, scheduler)
     if not quiet and direction in ("up", "down", "both"):  # the cost, said before it is
         # paid (a followed sweep: one run at a time); another direction is refused below
@@ -130,7 +133,7 @@ def chart(
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.chart import chart_table, stability_chart
+    from analysis.sweeps.chart import chart_device, chart_table, stability_chart
     from analysis.sweeps.executors import workers_of
     from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid, grid_cost
     from analysis.sweeps.multistability import parse_ics
@@ -145,6 +148,7 @@ def chart(
     several = parse_ics(ics, ics_box, ics_seed)
     if several is not None:  # its box within the model's bounds, before the estimate
         several.check(setting.system_at(**{a.name: a.values[0] for a in axes}))
+    chart_device(setting, *axes, device)  # the GPU and the kernels, before the estimate
     ex = executor_of(executor, workers, scheduler)
     if not quiet:  # the cost, said before it is paid
         typer.echo("\n".join(grid_cost(setting, *axes, workers=workers_of(ex), members_per_point=(

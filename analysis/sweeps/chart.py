@@ -30,7 +30,6 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import SimulationError
-from analysis.integrate.kernels import resolve_device
 from analysis.integrate.kernels.cpu import cores
 from analysis.io import save_dataset
 from analysis.model import System, as_system
@@ -52,7 +51,7 @@ from analysis.sweeps.grid import (
     record,
 )
 from analysis.sweeps.multistability import Ics, point_attractors
-from analysis.sweeps.points import chart_points
+from analysis.sweeps.points import chart_points, grid_device
 from analysis.sweeps.store import PointStore
 
 
@@ -157,6 +156,17 @@ def _chart_groups(setting: Setting, tasks: list[tuple],
     return groups
 
 
+def chart_device(setting: Setting, x: Axis, y: Axis, device: str) -> str:
+    """``"cpu"`` or ``"gpu"``: where the chart's points with λ1 run (``device``: ``cpu``,
+    ``gpu`` or ``auto``), judged before any point, store or estimate
+    (``points.grid_device``): with λ1 the tangent kernel of every balls of the grid is
+    built first, and one that cannot be built on ``cpu`` or ``gpu`` is one ``InputError``
+    naming the model and the reason; ``auto`` keeps the points-one-by-one fallback of the
+    cores (``points.kernel_points``)."""
+    return grid_device(setting, (x, y), device, len(x.values) * len(y.values), tangent=True,
+                       kernels=setting.lyapunov, fallback=True)
+
+
 def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
                     executor: Executor | None = None,
                     progress: Callable[[int, int], None] | None = None,
@@ -168,10 +178,9 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
     classed ``failed: …`` (``nature_code`` 0) and the chart goes on. ``ics``: also map K
     initial states per point (``multistability``: ``n_attractors``, ``multistable``,
     ``attractor_codes``, ``diverged_share``). ``device``: where the points with λ1 run
-    (``cpu``, ``gpu`` or ``auto``: ``kernels.resolve_device``, checked before any point)."""
+    (``cpu``, ``gpu`` or ``auto``: ``chart_device``, checked before any point)."""
     check_grid(setting, x, y)
-    device = resolve_device(device, len(x.values) * len(y.values),
-                            max(1, round(setting.transient / setting.step())))
+    device = chart_device(setting, x, y, device)
     if ics is not None:  # its box fits the model, before any point runs
         ics.check(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
     definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),

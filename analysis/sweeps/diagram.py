@@ -304,6 +304,9 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
                              "--no-follow for the ensemble on a device")
         device = resolve_device(device, len(axis.values) * len(directions),
                                 max(1, round(setting.transient / setting.step())))
+        from analysis.sweeps.points import check_grid_kernels  # its kernels, before any work
+
+        check_grid_kernels(setting, [axis], device)
     definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
                   "structure": list(setting.loaded().structure(setting.n_balls)),
                   "directions": directions, "follow": follow}

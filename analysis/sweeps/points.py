@@ -29,7 +29,9 @@ two-pass run's bit for bit and non-chaotic points classify alike.
 """
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cache
 
@@ -53,6 +55,7 @@ from analysis.integrate.kernels import (
     run_members,
     section_step,
 )
+from analysis.integrate.kernels.devices import check_kernels
 from analysis.integrate.plan import RunPlan, check_times
 from analysis.integrate.simulate import (
     blow_up_limit,
@@ -82,7 +85,7 @@ from analysis.stability.lyapunov import (
     tangent_block,
 )
 from analysis.sweeps.classes import chart_classes
-from analysis.sweeps.grid import Setting
+from analysis.sweeps.grid import Axis, Setting, axis_bearing
 
 RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
@@ -379,6 +382,50 @@ def _kernel_point(system: System, duration: float, transient: float, dt: float,
                         averaged, (run.first, run.n_steps))
 
 
+def grid_balls(setting: Setting, axes: Sequence[Axis]) -> list[System]:
+    """One System per model and balls of the grid over ``axes``: every value of its
+    structure axes (``n_balls``, ``n_balls[BEARING]``), a parameter axis at its first value
+    (a member kernel is one per model and balls)."""
+    choices = [[(a.name, v) for v in (a.values if axis_bearing(a.name) is not None
+                                      else a.values[:1])] for a in axes]
+    systems: dict[tuple, System] = {}
+    for coords in itertools.product(*choices):
+        system = setting.system_at(**dict(coords))
+        systems.setdefault((id(system.model), system.structure), system)
+    return list(systems.values())
+
+
+def check_grid_kernels(setting: Setting, axes: Sequence[Axis], device: str,
+                       tangent: bool = False) -> None:
+    """Build (or load) the member kernels of every balls of the grid on ``device``
+    (``"cpu"`` or ``"gpu"``, resolved) before any work: ``kernels.devices.check_kernels``,
+    one ``InputError`` naming the model and the reason when one cannot be built."""
+    check_kernels(grid_balls(setting, axes), device, tangent)
+
+
+def grid_device(setting: Setting, axes: Sequence[Axis], device: str, members: int, *,
+                tangent: bool = False, kernels: bool = True, fallback: bool = False) -> str:
+    """``"cpu"`` or ``"gpu"``: where a grid's ``members`` members run (``resolve_device``
+    with the steps of the setting's transient), judged before the estimate, any executor,
+    store or work. With ``kernels`` the member kernels of its balls (the tangent variant
+    with ``tangent``) are built and checked first (``check_grid_kernels``); a kernel that
+    cannot be built on ``--device cpu`` or ``gpu`` is one ``InputError``. With ``fallback``
+    (a chart: ``kernel_points`` runs points one by one where the cores have no build),
+    ``auto`` is never refused: a GPU that cannot build them leaves the grid to the cores,
+    whose builds are not judged here."""
+    resolved = resolve_device(device, members,
+                              max(1, round(setting.transient / setting.step())))
+    if not kernels or (fallback and device == "auto" and resolved == "cpu"):
+        return resolved
+    try:
+        check_grid_kernels(setting, axes, resolved, tangent)
+    except InputError:
+        if fallback and device == "auto":  # the GPU could not build them: the cores
+            return "cpu"
+        raise
+    return resolved
+
+
 def kernel_points(systems: list[System], durations: list[float], transient: float,
                   dt: float, section: str | None, device: str = "cpu",
                   threads: int | None = None, datasets: bool = True) -> list:
@@ -396,10 +443,12 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
     whole run check (``RunPlan.make``), the others their times only (a chart's grid is
     checked at its corners first, ``grid.check_grid``). Without a CPU build (an operation
     the writer does not know, no compiler) the points run one by one (``one_pass``); on the
-    GPU that is an error (``Unsupported``, ``CompileError``). Without ``datasets`` a point's
-    result is its chart row (``chart_row``'s fields) instead of a ``PointResult``, the
-    points of equal section counts classified together (``_kernel_rows``: no Dataset, the
-    class with numpy over the points; identical rows, ``tests/sweeps/test_chart_host.py``)."""
+    GPU that is an error (``Unsupported``, ``CompileError``; a chart judges its kernels
+    before any point, ``grid_device``: only ``--device auto`` on the cores gets here).
+    Without ``datasets`` a point's result is its chart row (``chart_row``'s fields) instead
+    of a ``PointResult``, the points of equal section counts classified together
+    (``_kernel_rows``: no Dataset, the class with numpy over the points; identical rows,
+    ``tests/sweeps/test_chart_host.py``)."""
     results: list = [None] * len(systems)
     groups: dict[tuple, list[tuple[int, _KernelPoint]]] = {}
     for i, (system, duration) in enumerate(zip(systems, durations, strict=True)):

@@ -92,3 +92,46 @@ def test_sweep_takes_the_device_option_without_follow_only(cli, tmp_path):
     res = cli(*base, "--no-follow", "--device", "xpu", cwd=tmp_path)
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "xpu" in res.stderr
     assert nothing_written(tmp_path)
+
+
+CHART = ("chart", "vakharia2015", "--x", "speed_rpm:4000:5000:4", "--y", "n_balls:8:8",
+         "-o", "c.nc")
+SWEEP = ("sweep", "vakharia2015", "--param", "speed_rpm", "--from", "4000", "--to", "5000",
+         "--num", "4", "--no-follow", "-o", "d.nc")
+NO_COMPILER = {"BEARINGDYN_CC": "/nonexistent/bin/cc"}
+"""A C compiler that is not there: no member kernel can be built (none is cached for it)."""
+
+
+@pytest.mark.skipif(NO_GPU is None, reason="a GPU is visible: --device gpu would run")
+@pytest.mark.parametrize("command", [CHART, SWEEP], ids=["chart", "sweep"])
+def test_chart_and_sweep_refuse_gpu_first_in_one_line(cli, tmp_path, command):
+    """Before the estimate's probe and any executor: one line, the install hint once."""
+    res = cli(*command, "--device", "gpu", cwd=tmp_path)
+    assert res.returncode == 2
+    assert res.stderr.count("\n") == 1, res.stderr
+    assert res.stderr.startswith(f"error: --device gpu: {NO_GPU}; ")
+    assert res.stderr.count("pip install") == 1 and res.stdout == ""
+    assert nothing_written(tmp_path)  # no output file, no .parts folder
+
+
+@pytest.mark.parametrize("device", ["cpu", pytest.param("gpu", marks=pytest.mark.skipif(
+    NO_GPU is not None, reason=f"--device gpu: {NO_GPU}"))])
+@pytest.mark.parametrize("command", [CHART, SWEEP], ids=["chart", "sweep"])
+def test_a_kernel_that_cannot_be_built_is_one_line_naming_model_and_reason(cli, tmp_path,
+                                                                           command, device):
+    res = cli(*command, "--device", device, cwd=tmp_path, env=NO_COMPILER)
+    assert res.returncode == 2
+    assert res.stderr.count("\n") == 1, res.stderr
+    assert res.stderr.startswith(f"error: --device {device}: the member kernel of model "
+                                 "'vakharia2015' with N_b ")
+    assert res.stderr.rstrip().endswith("cannot be built: C compiler '/nonexistent/bin/cc' "
+                                        "not found")
+    assert nothing_written(tmp_path)
+
+
+def test_a_chart_on_auto_without_a_kernel_runs_point_by_point(cli, tmp_path):
+    res = cli("chart", "vakharia2015", "--x", "speed_rpm:4000:5000:2", "--y", "n_balls:8:8",
+              "--transient", "0.05", "--revolutions", "10", "--executor", "serial",
+              "-o", "c.nc", cwd=tmp_path, env=NO_COMPILER)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.nc"]

@@ -39,7 +39,8 @@ THREADS_PER_BLOCK = 128
 
 
 class CudaUnavailable(RuntimeError):
-    """CuPy is not installed, or no GPU is visible; the message says which."""
+    """CuPy is not installed, or no GPU is visible; the message says which (how to install
+    the extra is added once by whoever reports it: ``devices.INSTALL_HINT``)."""
 
 
 def cupy_module() -> Any:
@@ -48,8 +49,7 @@ def cupy_module() -> Any:
     try:
         import cupy
     except ImportError:
-        raise CudaUnavailable("cupy is not installed (pip install bearingdyn[gpu] for CUDA 12, "
-                              "bearingdyn[gpu-cuda13] for CUDA 13)") from None
+        raise CudaUnavailable("cupy is not installed") from None
     try:
         count = cupy.cuda.runtime.getDeviceCount()
     except Exception as exc:  # no driver, no device: CuPy raises its own runtime errors

@@ -3,13 +3,17 @@
 ``device_info()`` lists the CPU (cores this process may use) and, when CuPy is installed and
 a GPU visible, each GPU (name, memory, CuPy and CUDA versions). ``resolve_device`` turns the
 user's ``cpu | gpu | auto`` into ``cpu`` or ``gpu`` (``InputError`` naming ``--device`` for
-anything else, or for ``gpu`` without CuPy or a GPU).
+anything else, or for ``gpu`` without CuPy or a GPU). ``check_kernels`` builds (or loads from
+the cache) the member kernels a run will call, before any of its work: a model whose kernel
+cannot be written or built is one ``InputError`` naming the model and the reason.
 """
 
 from __future__ import annotations
 
 import platform
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 from analysis.errors import InputError
 from analysis.integrate.kernels.cpu import cores
@@ -24,6 +28,9 @@ of threads idle; on the H200 of issue 33, 2¹⁴ members already ran at 4.9·10�
 AUTO_MIN_STEPS = 2 * 10**8
 """… and when members × steps is at least this (about 10 s of a 2-core CPU build at
 2·10⁷ steps/s, beyond the GPU's one-off NVRTC compilation and start-up, a few seconds)."""
+INSTALL_HINT = ("install the GPU extra with pip install bearingdyn[gpu] (CUDA 12; "
+                "bearingdyn[gpu-cuda13] for CUDA 13) on a machine with an NVIDIA GPU")
+"""How to get a usable GPU, said once after what is missing (``gpu_problem``)."""
 
 
 @dataclass(frozen=True)
@@ -88,10 +95,51 @@ def resolve_device(device: str, members: int, steps: int) -> str:
     problem = gpu_problem()
     if device == "gpu":
         if problem is not None:
-            raise InputError(f"--device gpu: {problem}; install the GPU extra with "
-                             "`pip install bearingdyn[gpu]` (CUDA 12; `[gpu-cuda13]` for CUDA "
-                             "13) on a machine with an NVIDIA GPU, "
-                             "or use --device cpu")
+            raise _no_gpu(problem)
         return "gpu"
     wide = members >= AUTO_MIN_MEMBERS and members * steps >= AUTO_MIN_STEPS
     return "gpu" if problem is None and wide else "cpu"
+
+
+def _no_gpu(problem: str) -> InputError:
+    return InputError(f"--device gpu: {problem}; {INSTALL_HINT}, or use --device cpu")
+
+
+def check_kernels(systems: Iterable[Any], device: str, tangent: bool = False) -> None:
+    """Build, or load from the cache, and self-test the member kernel (the state variant,
+    or the tangent variant with ``tangent``) of each model and balls among ``systems``
+    (``System``s) on ``device`` (``"cpu"`` or ``"gpu"``, as ``resolve_device`` gives it),
+    before a run's work: what the run then calls is loaded at once. ``InputError``, one line
+    naming ``--device``, the model and its balls and the reason, when the kernel cannot be
+    written (``source.Unsupported``: an operation the writer does not emit), built or
+    loaded (``compiled.CompileError``: no compiler, a failed compilation, a self-test;
+    NVRTC's ``CompileException`` on a GPU), or when no GPU can be used."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels.members import _kernel
+    from analysis.integrate.kernels.source import Unsupported
+
+    errors: tuple[type[Exception], ...] = (Unsupported, CompileError)
+    if device == "gpu":
+        problem = gpu_problem()
+        if problem is not None:
+            raise _no_gpu(problem)
+        try:
+            from cupy.cuda.compiler import CompileException  # NVRTC's refusal
+        except ImportError:  # a stand-in for CuPy (tests/integrate/fake_cupy.py)
+            pass
+        else:
+            errors += (CompileException,)
+    seen = set()
+    for system in systems:
+        key = (id(system.model), system.structure)
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            _kernel(system, tangent, device)
+        except errors as exc:
+            reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+            balls = ", ".join(str(n) for n in system.structure)
+            raise InputError(f"--device {device}: the member kernel of model "
+                             f"'{system.model.name}' with N_b {balls} cannot be built: "
+                             f"{reason}") from None
