@@ -36,6 +36,9 @@ A diagram runs through one executor (``analysis.sweeps.executors``: serial, loca
 or Dask) and stores each finished point at once (``analysis.sweeps.store``): re-running an
 interrupted command computes only the missing points. Followed chains write their points
 from the worker (a Dask cluster on several machines needs a shared file system for them).
+A brute-force diagram on the member kernels (``device``) stores each call's
+``ENSEMBLE_BLOCK`` values as one entry (``PointStore.save_block``) and resumes from the
+last stored block.
 """
 
 from __future__ import annotations
@@ -269,6 +272,14 @@ def _ensemble_task(chain: Chain, indices: list[int], device: str) -> list[tuple[
             for i, point in zip(indices, points, strict=True)]
 
 
+def _padded(point: dict, samples: int) -> dict:
+    """``point`` with section points of a failed value (none) as ``samples`` NaN, the shape
+    of a good value's: the points of a block are stacked (``PointStore.save_block``), and
+    the diagram's arrays hold NaN where a value has no point either way."""
+    return {k: np.full(samples, np.nan) if np.ndim(v) == 1 and len(v) == 0 else v
+            for k, v in point.items()}
+
+
 def _displacements(model) -> tuple[str, ...]:
     """The first body's displacements of ``model`` (the variables of its 1X record)."""
     return tuple(name[len("amplitude_"):] for name in amplitude_fields(model))
@@ -321,16 +332,19 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
             run_with_progress(executor, run_chain, chains, lambda: len(store.done()), total,
                               progress, None)
         elif device is not None:
-            done = store.done()
+            done = store.keys()  # a block's entry is named by its first key only
+            stored = len(done)
             for chain in chains:
                 todo = [i for i in range(len(axis.values))
                         if f"{chain.direction}-{i:05d}" not in done]
                 size = ENSEMBLE_BLOCK[device]
                 for start in range(0, len(todo), size):
-                    for key, point in _ensemble_task(chain, todo[start:start + size], device):
-                        store.save(key, point)
+                    block = _ensemble_task(chain, todo[start:start + size], device)
+                    store.save_block([(key, _padded(point, setting.samples))
+                                      for key, point in block])
+                    stored += len(block)
                     if progress is not None:
-                        progress(len(store.done()), total)
+                        progress(stored, total)
         else:
             todo = [(c, i) for c in chains for i in range(len(axis.values))
                     if f"{c.direction}-{i:05d}" not in store.done()]
@@ -351,7 +365,8 @@ def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, direction
     model = setting.loaded()
     units = model.state_units
     section = setting.record_section
-    first = store.load(f"{directions[0]}-{0:05d}")
+    stored = store.points()  # single points (followed, value by value) and blocks (device)
+    first = stored[f"{directions[0]}-{0:05d}"]
     arrays = {v: np.full((len(directions), n, setting.samples), np.nan)
               for v in model.state_names}
     amplitude_names = [v for v in first if v.startswith("amplitude_")]
@@ -361,7 +376,7 @@ def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, direction
     status = np.full((len(directions), n), "", dtype=object)
     for d, direction in enumerate(directions):
         for i in range(n):
-            point = store.load(f"{direction}-{i:05d}")
+            point = stored[f"{direction}-{i:05d}"]
             for v in arrays:
                 arrays[v][d, i, :len(point[v])] = point[v]
             for v in per_value:

@@ -259,6 +259,18 @@ class PointStore:
                 found[key] = {f: entry[f][j] for f in fields}
         return found
 
+    def keys(self) -> set[str]:
+        """The keys of the stored points (a block's own ``keys``, read without its
+        fields): what ``done`` is for a store of single points."""
+        found = set()
+        for name in self.done():
+            if not name.startswith(BLOCK):
+                found.add(name)
+                continue
+            with np.load(self.folder / f"{name}.npz", allow_pickle=False) as data:
+                found.update(data["keys"].tolist())
+        return found
+
     def point_count(self) -> int:
         """How many points are stored (a block counts its points)."""
         return sum(len(self.load(name)["keys"]) if name.startswith(BLOCK) else 1
