@@ -55,7 +55,7 @@ from analysis.integrate.kernels import (
     run_members,
     section_step,
 )
-from analysis.integrate.kernels.devices import check_kernels
+from analysis.integrate.kernels.members import check_kernels
 from analysis.integrate.plan import RunPlan, check_times
 from analysis.integrate.simulate import (
     blow_up_limit,
@@ -398,7 +398,7 @@ def grid_balls(setting: Setting, axes: Sequence[Axis]) -> list[System]:
 def check_grid_kernels(setting: Setting, axes: Sequence[Axis], device: str,
                        tangent: bool = False) -> None:
     """Build (or load) the member kernels of every balls of the grid on ``device``
-    (``"cpu"`` or ``"gpu"``, resolved) before any work: ``kernels.devices.check_kernels``,
+    (``"cpu"`` or ``"gpu"``, resolved) before any work: ``kernels.members.check_kernels``,
     one ``InputError`` naming the model and the reason when one cannot be built."""
     check_kernels(grid_balls(setting, axes), device, tangent)
 

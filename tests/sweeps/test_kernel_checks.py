@@ -1,4 +1,4 @@
-"""Member kernels judged before any work (``kernels.devices.check_kernels`` through
+"""Member kernels judged before any work (``kernels.members.check_kernels`` through
 ``points.grid_device``): a chart or a brute-force diagram whose member kernel cannot be
 written is one ``InputError`` naming the model and the reason on ``device="cpu"`` or
 ``"gpu"``, before the store or any point; ``auto`` keeps the chart's point-by-point
@@ -95,7 +95,7 @@ def test_a_chart_without_lyapunov_builds_no_kernel(unwritable):
 @pytest.mark.skipif(devices.gpu_problem() is None, reason="a GPU is visible")
 def test_gpu_without_one_says_what_is_missing_and_how_to_install_once():
     with pytest.raises(InputError) as refused:
-        devices.check_kernels(grid_balls(EIGHT, [X]), "gpu")
+        members.check_kernels(grid_balls(EIGHT, [X]), "gpu")
     text = str(refused.value)
     assert text.startswith(f"--device gpu: {devices.gpu_problem()}; ")
     assert text.count("pip install") == 1 and "\n" not in text

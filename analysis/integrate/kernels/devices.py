@@ -3,17 +3,16 @@
 ``device_info()`` lists the CPU (cores this process may use) and, when CuPy is installed and
 a GPU visible, each GPU (name, memory, CuPy and CUDA versions). ``resolve_device`` turns the
 user's ``cpu | gpu | auto`` into ``cpu`` or ``gpu`` (``InputError`` naming ``--device`` for
-anything else, or for ``gpu`` without CuPy or a GPU). ``check_kernels`` builds (or loads from
-the cache) the member kernels a run will call, before any of its work: a model whose kernel
-cannot be written or built is one ``InputError`` naming the model and the reason.
+anything else, or for ``gpu`` without CuPy or a GPU). ``members.check_kernels`` builds (or
+loads from the cache) the member kernels a run will call, before any of its work: a model
+whose kernel cannot be written or built is one ``InputError`` naming the model and the
+reason.
 """
 
 from __future__ import annotations
 
 import platform
-from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 from analysis.errors import InputError
 from analysis.integrate.kernels.cpu import cores
@@ -95,51 +94,12 @@ def resolve_device(device: str, members: int, steps: int) -> str:
     problem = gpu_problem()
     if device == "gpu":
         if problem is not None:
-            raise _no_gpu(problem)
+            raise no_gpu_error(problem)
         return "gpu"
     wide = members >= AUTO_MIN_MEMBERS and members * steps >= AUTO_MIN_STEPS
     return "gpu" if problem is None and wide else "cpu"
 
 
-def _no_gpu(problem: str) -> InputError:
+def no_gpu_error(problem: str) -> InputError:
+    """The one line of ``--device gpu`` where no GPU can be used (``problem``: why)."""
     return InputError(f"--device gpu: {problem}; {INSTALL_HINT}, or use --device cpu")
-
-
-def check_kernels(systems: Iterable[Any], device: str, tangent: bool = False) -> None:
-    """Build, or load from the cache, and self-test the member kernel (the state variant,
-    or the tangent variant with ``tangent``) of each model and balls among ``systems``
-    (``System``s) on ``device`` (``"cpu"`` or ``"gpu"``, as ``resolve_device`` gives it),
-    before a run's work: what the run then calls is loaded at once. ``InputError``, one line
-    naming ``--device``, the model and its balls and the reason, when the kernel cannot be
-    written (``source.Unsupported``: an operation the writer does not emit), built or
-    loaded (``compiled.CompileError``: no compiler, a failed compilation, a self-test;
-    NVRTC's ``CompileException`` on a GPU), or when no GPU can be used."""
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels.members import _kernel
-    from analysis.integrate.kernels.source import Unsupported
-
-    errors: tuple[type[Exception], ...] = (Unsupported, CompileError)
-    if device == "gpu":
-        problem = gpu_problem()
-        if problem is not None:
-            raise _no_gpu(problem)
-        try:
-            from cupy.cuda.compiler import CompileException  # NVRTC's refusal
-        except ImportError:  # a stand-in for CuPy (tests/integrate/fake_cupy.py)
-            pass
-        else:
-            errors += (CompileException,)
-    seen = set()
-    for system in systems:
-        key = (id(system.model), system.structure)
-        if key in seen:
-            continue
-        seen.add(key)
-        try:
-            _kernel(system, tangent, device)
-        except errors as exc:
-            reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-            balls = ", ".join(str(n) for n in system.structure)
-            raise InputError(f"--device {device}: the member kernel of model "
-                             f"'{system.model.name}' with N_b {balls} cannot be built: "
-                             f"{reason}") from None

@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
 
+import analysis.integrate.kernels.devices as devices
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import test_state
 from analysis.integrate.kernels.cpu import cores, cpu_library
@@ -482,3 +483,42 @@ def _self_test_gpu(model, structure: tuple[int, ...], tangent: bool) -> None:
     if not ok:
         raise CompileError(f"the CUDA member kernel of {model.name} does not reproduce the "
                            "CPU build (NVRTC options: see kernels/cuda.py)")
+
+
+def check_kernels(systems: Iterable[System], device: str, tangent: bool = False) -> None:
+    """Build, or load from the cache, and self-test the member kernel (the state variant,
+    or the tangent variant with ``tangent``) of each model and balls among ``systems``
+    (``System``s) on ``device`` (``"cpu"`` or ``"gpu"``, as ``resolve_device`` gives it),
+    before a run's work: what the run then calls is loaded at once. ``InputError``, one line
+    naming ``--device``, the model and its balls and the reason, when the kernel cannot be
+    written (``source.Unsupported``: an operation the writer does not emit), built or
+    loaded (``compiled.CompileError``: no compiler, a failed compilation, a self-test;
+    NVRTC's ``CompileException`` on a GPU), or when no GPU can be used."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels.source import Unsupported
+
+    errors: tuple[type[Exception], ...] = (Unsupported, CompileError)
+    if device == "gpu":
+        problem = devices.gpu_problem()
+        if problem is not None:
+            raise devices.no_gpu_error(problem)
+        try:
+            from cupy.cuda.compiler import CompileException  # NVRTC's refusal
+        except ImportError:  # a stand-in for CuPy (tests/integrate/fake_cupy.py)
+            pass
+        else:
+            errors += (CompileException,)
+    seen = set()
+    for system in systems:
+        key = (id(system.model), system.structure)
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            _kernel(system, tangent, device)
+        except errors as exc:
+            reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+            balls = ", ".join(str(n) for n in system.structure)
+            raise InputError(f"--device {device}: the member kernel of model "
+                             f"'{system.model.name}' with N_b {balls} cannot be built: "
+                             f"{reason}") from None
