@@ -1269,6 +1269,12 @@ TORUS = ("torus", "vakharia2015", "--frequencies", "shaft,vc", "--harmonics", "4
          "t.nc", "--run", "tr.nc")
 
 
+BASINS_QUICK = ("--max-periods", "40", "--revisits", "5", "--hits", "2", "--executor", "serial",
+                "--quiet")
+RAMP_FIXED = (*SIM_SHORT, "--speed-rpm", "3000:4000")
+"""The corrected command of a bad speed table: a ramp given inline."""
+
+
 def _speed_table(rows: int) -> Callable[[Path], None]:
     return _spec_file("table.csv", "t_s,speed_rpm\n" + "".join(
         f"{0.001 * i:g},{1000 + i}\n" for i in range(rows)))
@@ -1339,26 +1345,31 @@ CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
     ("basins-grid-vx-1e300", THIRD, "a basins grid of velocities of +-1e300 m/s (was "
      "accepted)", ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:4", "--y",
                    "vx:-1e300:1e300:4", "-o", "b.nc"),
-     ("--y: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",)),
+     ("--y: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",), None,
+     ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:4", "--y", "vx:-0.01:0.01:4", "-o",
+      "b.nc", *BASINS_QUICK)),
     ("chart-ics-box-vx-1e300", THIRD, "chart --ics states drawn among velocities of +-1e300 "
      "m/s (was accepted)", (*CHART, "--ics", "2", "--ics-box", "vx:-1e300:1e300"),
-     ("--ics-box: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",)),
+     ("--ics-box: vx from -1e+300 to 1e+300 m/s reaches beyond the velocity bound",), None,
+     (*CHART, "--ics", "2", "--ics-box", "vx:-0.01:0.01", "--quiet")),
     ("attractors-param-count-1e9", THIRD, "a --param count of 1e9 (was allocated first)",
      (*ATTR, "--param", "speed_rpm:5000:6000:1000000000"),
      ("--param: must be a whole number in [1, 100000] (values of the parameter), got "
-      "1000000000",)),
+      "1000000000",), None, (*ATTR, "--param", "speed_rpm:5000:6000:2")),
     ("basins-grid-names-axes", BLAME, "a basins grid too large for memory (named 'samples')",
      ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:100000", "--y", "y:-1e-5:1e-5:100000",
       "-o", "b.nc"),
-     ("x, y: a 100000 x 100000 grid: 10000000000 initial states would need about",)),
+     ("x, y: a 100000 x 100000 grid: 10000000000 initial states would need about",), None,
+     ("basins", "vakharia2015", "--x", "x:-1e-5:1e-5:4", "--y", "y:-1e-5:1e-5:4", "-o",
+      "b.nc", *BASINS_QUICK)),
     ("attractors-branch-other-model", "accepted without a word (now judged)", "a "
      "continuation branch of another model given to --branch",
      (*ATTR, "--param", "speed_rpm:5000:5500:2", "--branch", "b.nc"),
      ("--branch 'b.nc': the branch is of model 'duffing'; give a branch of model "
-      "'vakharia2015'",), _branch_of("duffing")),
+      "'vakharia2015'",), _branch_of("duffing"), (*ATTR, "--param", "speed_rpm:5000:5500:2")),
     ("attractors-workers-serial", "accepted without a word (now judged)", "--workers with "
      "--executor serial", (*ATTR, "--workers", "2"),
-     ("--workers: --executor serial runs on one worker",)),
+     ("--workers: --executor serial runs on one worker",), None, ATTR),
     ("spectrum-noise-seed-alone", "accepted without a word (now judged)", "--noise-seed "
      "without --noise", ("spectrum", *RUN, "--noise-seed", "3"),
      ("--noise-seed: only with --noise SNR_DB",), _run_file(),
@@ -1373,22 +1384,22 @@ CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
      ("waterfall", *RUN, "--orders", "--samples-per-rev", "64")),
     ("speed-table-folder", BLAME, "a speed table that is a folder (was 'not found')",
      (*SIM_SHORT, "--speed-rpm", "table.csv"),
-     ("--speed-rpm: the speed table 'table.csv' is a folder",), _folder("table.csv")),
+     ("--speed-rpm: the speed table 'table.csv' is a folder",), _folder("table.csv"), RAMP_FIXED),
     ("speed-table-fifo", BLAME, "a speed table that is a pipe (was 'not found')",
      (*SIM_SHORT, "--speed-rpm", "table.csv"),
      ("--speed-rpm: the speed table 'table.csv' is a pipe (FIFO), not a plain file",),
-     _fifo("table.csv")),
+     _fifo("table.csv"), RAMP_FIXED),
     ("speed-table-device", BLAME, "a speed table that is a device (was 'not found')",
      (*SIM_SHORT, "--speed-rpm", "/dev/null"),
-     ("--speed-rpm: the speed table '/dev/null' is a device or socket",)),
+     ("--speed-rpm: the speed table '/dev/null' is a device or socket",), None, RAMP_FIXED),
     ("speed-table-rows", THIRD, "a speed table over the row limit (was read whole first)",
      (*SIM_SHORT, "--speed-rpm", "table.csv"),
      ("speed table 'table.csv': must have 2 to 257 rows, got more than 257",),
-     _speed_table(300)),
+     _speed_table(300), RAMP_FIXED),
     ("speed-table-bytes", THIRD, "a speed table of 1,000,000 rows (16 MB; was read whole)",
      (*SIM_SHORT, "--speed-rpm", "table.csv"),
      ("--speed-rpm: the speed table 'table.csv' is ", "bytes; at most 1048576 bytes"),
-     _speed_table(1_000_000)),
+     _speed_table(1_000_000), RAMP_FIXED),
     ("plot-kind-tampered", BLAME, "a run whose kind attribute was edited to 'chart' (was a "
      "KeyError inside plot)", ("plot", *RUN, "-o", "p.png"),
      ("result file: 'run.nc': attribute kind says 'chart', but the file lacks the chart's",),
@@ -1398,6 +1409,24 @@ CLI_CASES += [CliCase(*row[:5], setup=row[5] if len(row) > 5 else None,
      ("result file: 'r.nc' is not a sweep's diagram (it has no kind attribute)",),
      _no_kind),
 ]]
+
+NO_CC = (("BEARINGDYN_CC", "/nonexistent/bin/cc"),)
+"""A machine without a C compiler: no member kernel can be built."""
+SWEEP_NO_FOLLOW = ("sweep", "vakharia2015", "--param", "speed_rpm", "--from", "4000", "--to",
+                   "5000", "--num", "4", "--no-follow", "-o", "d.nc")
+CLI_CASES += [
+    CliCase("chart-kernel-unbuildable", THIRD, "chart --device cpu where the member kernel "
+            "cannot be built (no C compiler; was run point by point without a word)",
+            (*CHART, "--device", "cpu"),
+            ("--device cpu: the member kernel of model 'vakharia2015' with N_b 7 cannot be "
+             "built: C compiler '/nonexistent/bin/cc' not found",), env=NO_CC,
+            fixed=(*CHART, "--device", "auto", "--quiet")),
+    CliCase("sweep-kernel-unbuildable", THIRD, "sweep --no-follow --device cpu where the "
+            "member kernel cannot be built (was an estimate, then an internal error)",
+            (*SWEEP_NO_FOLLOW, "--device", "cpu"),
+            ("--device cpu: the member kernel of model 'vakharia2015' with N_b 6 cannot be "
+             "built: C compiler '/nonexistent/bin/cc' not found",), env=NO_CC),
+]
 
 _GENERATED: dict[str, bytes] = {}
 
@@ -1660,6 +1689,12 @@ Notes:
   Ctrl-C there is Python's own (a `KeyboardInterrupt` traceback from `site`, or the process
   killed before Python handles signals). `tests/cli/test_startup_interrupt.py` interrupts at
   0–1 s.
+- *A writer killed during its final write* (SIGKILL, a power cut) leaves its hidden
+  temporary beside the output (`.OUT.<pid>-<random>.tmp`, the whole streamed run so far);
+  the next run to the same output removes every such temporary whose process is gone
+  (`analysis.io.remove_stale_temporaries`, called before every write), and keeps one a
+  running writer still fills. `tests/cli/test_interrupts.py` kills a 30 s `simulate` with a
+  real SIGKILL and runs the next command.
 - Generated code is written whole or not at all (a temporary folder, renamed into
   place): a disk that fills during `bearingdyn generate` ends in one line naming the file
   (`error: cannot use '…/__init__.py': No space left on device`, exit code 1) and leaves

@@ -74,3 +74,34 @@ def test_the_next_run_cleans_up_after_a_killed_one(tmp_path, cli):
               "--no-compile", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.nc"]
+
+
+def test_a_writer_killed_by_sigkill_leaves_a_temporary_the_next_run_removes(tmp_path, cli):
+    """A real SIGKILL while ``simulate`` streams its 30 s run to the hidden temporary (the
+    issue's 76 MB case): the temporary stays, and the next run to the same output removes
+    it and leaves only its own file."""
+    import signal
+
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    writer = subprocess.Popen([sys.executable, "-m", "analysis.cli", "simulate", "vakharia2015",
+                               "-o", "r.nc", "--duration", "30", "--transient", "0"],
+                              cwd=tmp_path, env=env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(tmp_path.glob(".r.nc.*.tmp")) and time.monotonic() < deadline:
+            assert writer.poll() is None, "the 30 s run ended before its temporary was seen"
+            time.sleep(0.05)
+        temporaries = list(tmp_path.glob(".r.nc.*.tmp"))
+        assert temporaries, "no temporary appeared within 120 s"
+        os.kill(writer.pid, signal.SIGKILL)
+    finally:
+        writer.kill()
+        writer.wait()
+    assert writer.returncode == -signal.SIGKILL
+    assert [p.name for p in tmp_path.iterdir()] == [temporaries[0].name], \
+        "the killed writer leaves its temporary and no output"
+    res = cli("simulate", "duffing", "-o", "r.nc", "--duration", "0.05", "--transient", "0",
+              "--no-compile", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.nc"]
