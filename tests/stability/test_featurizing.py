@@ -239,3 +239,31 @@ def test_distinct_rows_are_numpys_by_a_key_or_row_wise_past_2_to_the_62():
         expect, expect_inverse = np.unique(cells, axis=0, return_inverse=True)
         np.testing.assert_array_equal(unique, expect)
         np.testing.assert_array_equal(inverse, expect_inverse.ravel())
+
+
+def test_continuation_matches_across_values_alike_with_either_mapper():
+    """Matching across parameter values is the same with the featurizing mapper (issue 33,
+    item 5): the Duffing resonance at ω = 1.3, 1.4, 1.5 rad/s continued with each mapper
+    from the same random states; the same attractor ids present at each value, of the same
+    class, with fractions within two standard errors of each other."""
+    from analysis.stability.attractors import global_continuation
+
+    system = System.make("duffing", speed_rpm=1.3 * RPM, **DUFFING)
+    values = [1.3 * RPM, 1.4 * RPM, 1.5 * RPM]
+    found = {m: global_continuation(system, "speed_rpm", values, DUFFING_BOX, 60, seed=3,
+                                    mapper=m, device="cpu")
+             for m in ("recurrence", "features")}
+    rec, feat = found["recurrence"], found["features"]
+    assert feat.attrs["mapper"] == "features"
+    assert rec.attractor.values.tolist() == feat.attractor.values.tolist()
+    np.testing.assert_array_equal(rec.present.values, feat.present.values)
+    assert rec.present.sum() >= 4, "both orbits of the resonance are followed"
+    assert (rec.nature.values == feat.nature.values).all(), "of the same class"
+    for a in rec.attractor.values:
+        for k in range(len(values)):
+            if not bool(rec.present.sel(attractor=a).isel(value=k)):
+                continue
+            f, g = (float(d.fraction.sel(attractor=a).isel(value=k)) for d in (rec, feat))
+            se = np.hypot(*(float(d.fraction_stderr.sel(attractor=a).isel(value=k))
+                            for d in (rec, feat)))
+            assert abs(f - g) <= 2 * se + 1e-12, (int(a), k, f, g)
