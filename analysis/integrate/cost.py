@@ -55,6 +55,8 @@ class CostEstimate:
     unit: str = RK4_STEPS
     """What ``steps`` counts: RK4 steps of ``dt`` s, or another unit of work (``Newton
     iterations`` of harmonic balance: ``dt`` unused, ``step_seconds`` per iteration)."""
+    average: bool = False
+    """``steps`` is the members' mean (a grid whose points record different times)."""
     expected_seconds: float | None = None
     """With ``bound``: the expected wall time (s) from a probe that ran whole members
     (``probe_note`` says which), where the bound alone would overstate it; None: the
@@ -81,6 +83,8 @@ class CostEstimate:
     def lines(self) -> list[str]:
         """The estimate in words (one line), then the advice (none, one or two lines)."""
         steps = f"up to {self.steps:,}" if self.bound else f"{self.steps:,}"
+        if self.average:
+            steps = f"{steps} (mean)"
         if self.unit == RK4_STEPS:
             unit, total = f"RK4 steps (dt = {self.dt:.3g} s)", "steps"
             each = f"{self.step_seconds * 1e6:.3g} us per step"
@@ -172,6 +176,35 @@ def probe_step_seconds(system: System, dt: float, steps: int = PROBE_STEPS,
         run_rk4(lib, p, z0, dt, steps)
         best = min(best, time.perf_counter() - start)
     return best / steps
+
+
+def tangent_step_factor(system: System, dt: float, members: int = 64,
+                        steps: int = 240) -> float | None:
+    """How many state steps one RK4 step with its tangent (λ1, the member kernels' tangent
+    variant: one Jacobian–vector product per stage) costs for ``system``, timed on one thread
+    of the CPU build: ``members`` members of ``steps`` steps each way, the faster of two runs
+    each. None when the member kernel cannot be built here (the scalar path then carries the
+    tangent's ``n`` columns: ``n + 1``). ``dt``: the RK4 step (s)."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels import Schedule, Unsupported, run_members
+
+    z = np.tile(np.asarray(system.state, dtype=float), (members, 1))
+    every = max(1, steps // 6)
+    kinds = (Schedule(0, steps, 1, keep_sections=False),
+             Schedule(steps - 6 * every, every, 6, tangent=True, keep_sections=False))
+    best = []
+    try:
+        for schedule in kinds:
+            run_members(system, z[:1], None, dt, schedule, threads=1)  # loaded
+            times = []
+            for _ in range(2):
+                start = time.perf_counter()
+                run_members(system, z, None, dt, schedule, threads=1)
+                times.append(time.perf_counter() - start)
+            best.append(min(times))
+    except (Unsupported, CompileError, InputError):
+        return None
+    return max(1.0, best[1] / best[0])
 
 
 def estimate_cost(system: System, members: int, steps: int, *, dt: float,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +22,12 @@ import xarray as xr
 
 from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_seconds
-from analysis.integrate.cost import CostEstimate, estimate_cost
+from analysis.integrate.cost import (
+    CostEstimate,
+    coarsest_step,
+    estimate_cost,
+    tangent_step_factor,
+)
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
 from analysis.model import BallCounts, Model, System, as_system, load_model
@@ -278,22 +283,40 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
         setting.plan(system, warn=warn)  # times, resolution, RK4 step at the grid's corners
 
 
+GRID_COST_SAMPLES = 64
+"""Grid points whose record lengths are averaged for a grid's expected cost (evenly spaced
+over the grid in its order)."""
+
+
 def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
               members_per_point: int = 1, lyapunov: bool | None = None) -> CostEstimate:
-    """The cost of a grid's points (``analysis.integrate.cost``), said before they run: every
-    point's RK4 steps taken at the corner with the longest record (the slowest forcing),
-    ``members_per_point`` runs a point (initial states, directions), λ1 (``lyapunov``;
-    None: the setting's) counted as the tangent's ``n + 1`` columns. Call after
-    ``check_grid``."""
-    corners = [setting.system_at(**dict(zip([a.name for a in axes], values, strict=True)))
+    """The cost of a grid's points (``analysis.integrate.cost``), said before they run: the
+    mean RK4 steps of up to ``GRID_COST_SAMPLES`` points evenly spread over the grid (a
+    point records ``samples`` periods of its own section: a speed axis spans a factor of
+    ten), ``members_per_point`` runs a point (initial states, directions), λ1 (``lyapunov``;
+    None: the setting's) by the measured cost of a step with its tangent
+    (``tangent_step_factor``; ``n + 1`` state steps where the member kernel cannot be built).
+    The step per second is probed at the corner with the longest record; the coarser
+    ``--dt`` offered is one every corner accepts. Call after ``check_grid``."""
+    names = [a.name for a in axes]
+    corners = [setting.system_at(**dict(zip(names, values, strict=True)))
                for values in itertools.product(*((a.values[0], a.values[-1]) for a in axes))]
     system = max(corners, key=setting.seconds)
     dt = setting.step()
-    steps = math.ceil(setting.seconds(system) / dt)
+    shape = [len(axis.values) for axis in axes]
+    total = math.prod(shape)
+    picked = np.unique(np.linspace(0, total - 1, min(total, GRID_COST_SAMPLES)).round())
+    seconds = [setting.seconds(setting.system_at(**{
+        n: a.values[i] for n, a, i in zip(names, axes, np.unravel_index(int(k), shape),
+                                          strict=True)})) for k in picked]
+    steps = math.ceil(float(np.mean(seconds)) / dt)
+    est = estimate_cost(system, total * members_per_point, steps, dt=dt, workers=workers)
+    factor = 1.0
     if setting.lyapunov if lyapunov is None else lyapunov:
-        steps *= system.n_state + 1
-    points = math.prod(len(axis.values) for axis in axes) * members_per_point
-    return estimate_cost(system, points, steps, dt=dt, workers=workers)
+        factor = tangent_step_factor(system, dt) or float(system.n_state + 1)
+    steps_fine = [c for c in (coarsest_step(corner) for corner in corners) if c is not None]
+    return replace(est, step_seconds=est.step_seconds * factor, average=len(picked) > 1,
+                   coarsest_dt=min(steps_fine) if len(steps_fine) == len(corners) else None)
 
 
 def _check_section_at(setting: Setting, name: str, value: float) -> None:

@@ -8,9 +8,16 @@ import math
 import pytest
 
 from analysis.errors import InputError
-from analysis.integrate.cost import CostEstimate, coarsest_step, estimate_cost, probe_step_seconds
+from analysis.integrate.cost import (
+    CostEstimate,
+    coarsest_step,
+    estimate_cost,
+    probe_step_seconds,
+    tangent_step_factor,
+)
 from analysis.integrate.plan import RunPlan
 from analysis.model import System
+from analysis.sweeps import grid
 from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
 
 
@@ -57,16 +64,47 @@ def test_the_coarsest_step_passes_the_plan_and_a_larger_one_does_not():
     assert warned
 
 
-def test_a_grid_costs_its_slowest_corner():
+def test_a_grid_costs_the_mean_record_of_its_points(monkeypatch):
+    """Every point records ``samples`` periods of its own section: the estimate takes the
+    mean of their steps (all 15 points here), not 15 times the slowest corner's; λ1 by the
+    measured cost of a step with its tangent (``n + 1`` state steps where no member kernel
+    can be built); the coarser step offered is one every corner accepts."""
+    from analysis.integrate import cost
+
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *a, **k: 1e-6)
     setting = Setting("vakharia2015", None, {}, 0.05, 10, lyapunov=False)
     axes = Axis.parse("speed_rpm:3000:9000:5"), Axis.parse("n_balls:6:8")
     check_grid(setting, *axes)
     est = grid_cost(setting, *axes, workers=2)
-    slow = setting.system_at(speed_rpm=3000.0, n_balls=6)
-    assert est.members == 15
-    assert est.steps == math.ceil(setting.seconds(slow) / setting.step())
-    with_lyapunov = grid_cost(Setting("vakharia2015", None, {}, 0.05, 10), *axes, workers=2)
-    assert with_lyapunov.steps == est.steps * 5  # the tangent's n + 1 columns, n = 4
+    every = [setting.seconds(setting.system_at(speed_rpm=v, n_balls=n))
+             for n in (6, 7, 8) for v in axes[0].values]
+    assert est.members == 15 and est.average and "(mean) RK4 steps" in est.lines()[0]
+    assert est.steps == math.ceil(sum(every) / len(every) / setting.step())
+    assert est.steps < math.ceil(max(every) / setting.step())
+    corners = [setting.system_at(speed_rpm=v, n_balls=n) for v in (3000.0, 9000.0)
+               for n in (6, 8)]
+    assert est.coarsest_dt == min(coarsest_step(c) for c in corners)
+    for factor, want in ((1.7, 1.7), (None, 5.0)):  # vakharia2015: n = 4
+        monkeypatch.setattr(grid, "tangent_step_factor", lambda *a, f=factor: f)
+        with_lyapunov = grid_cost(Setting("vakharia2015", None, {}, 0.05, 10), *axes,
+                                  workers=2)
+        assert with_lyapunov.steps == est.steps
+        assert with_lyapunov.step_seconds == pytest.approx(want * 1e-6)
+
+
+def test_a_long_axis_is_sampled_evenly():
+    setting = Setting("vakharia2015", 8, {}, 0.05, 10, lyapunov=False)
+    axis = Axis.parse("speed_rpm:1000:10000:1000")
+    check_grid(setting, axis)
+    est = grid_cost(setting, axis, workers=1)
+    every = [setting.seconds(setting.system_at(speed_rpm=v)) for v in axis.values]
+    assert est.steps == pytest.approx(sum(every) / len(every) / setting.step(), rel=0.02)
+
+
+def test_a_step_with_its_tangent_costs_more_than_one_state_step():
+    system = System.make("vakharia2015", 8, speed_rpm=5000)
+    factor = tangent_step_factor(system, 1e-5)
+    assert factor is not None and math.isfinite(factor) and factor >= 1.0
 
 
 def test_attractors_say_their_cost_before_the_work(tmp_path, cli):
