@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -170,12 +171,17 @@ def probe_step_seconds(system: System, dt: float, steps: int = PROBE_STEPS,
     p = np.asarray(system.p, dtype=float)
     z0 = np.asarray(system.state, dtype=float)
     run_rk4(lib, p, z0, dt, 8)  # warm-up: the library loaded, the buffers made
+    return best_seconds(lambda: run_rk4(lib, p, z0, dt, steps)) / steps
+
+
+def best_seconds(run: Callable[[], object], repeat: int = 2) -> float:
+    """The shortest wall time (s) of ``repeat`` calls of ``run`` (a probe's timing)."""
     best = math.inf
-    for _ in range(2):
+    for _ in range(repeat):
         start = time.perf_counter()
-        run_rk4(lib, p, z0, dt, steps)
+        run()
         best = min(best, time.perf_counter() - start)
-    return best / steps
+    return best
 
 
 def tangent_step_factor(system: System, dt: float, members: int = 64,
@@ -196,12 +202,8 @@ def tangent_step_factor(system: System, dt: float, members: int = 64,
     try:
         for schedule in kinds:
             run_members(system, z[:1], None, dt, schedule, threads=1)  # loaded
-            times = []
-            for _ in range(2):
-                start = time.perf_counter()
-                run_members(system, z, None, dt, schedule, threads=1)
-                times.append(time.perf_counter() - start)
-            best.append(min(times))
+            best.append(best_seconds(lambda s=schedule: run_members(system, z, None, dt, s,
+                                                                   threads=1)))
     except (Unsupported, CompileError, InputError):
         return None
     return max(1.0, best[1] / best[0])

@@ -39,7 +39,7 @@ from analysis.integrate.checks import check_start
 from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.kernels.devices import resolve_device
-from analysis.integrate.kernels.members import Schedule
+from analysis.integrate.kernels.members import Schedule, unbuildable
 from analysis.integrate.kernels.members import run_members as run_kernel
 from analysis.integrate.kernels.source import Unsupported
 from analysis.integrate.plan import RunPlan, check_memory
@@ -106,8 +106,7 @@ def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_o
                              device=device)
         except (Unsupported, CompileError) as exc:
             if device == "gpu":
-                raise InputError(f"device: 'gpu': the member kernel of model "
-                                 f"'{system.model.name}' cannot be built: {exc}") from None
+                raise unbuildable(system, device, exc) from None
             out = None
     if out is None:
         result = np.empty((k, n_out, n))

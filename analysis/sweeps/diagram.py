@@ -55,7 +55,6 @@ from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.kernels import (
     Schedule,
     blow_up_error,
-    resolve_device,
     run_members,
     section_step,
 )
@@ -313,11 +312,9 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
         if follow:
             raise InputError("--device: a followed diagram runs value by value; use "
                              "--no-follow for the ensemble on a device")
-        device = resolve_device(device, len(axis.values) * len(directions),
-                                max(1, round(setting.transient / setting.step())))
-        from analysis.sweeps.points import check_grid_kernels  # its kernels, before any work
+        from analysis.sweeps.points import grid_device  # the device and its kernels, first
 
-        check_grid_kernels(setting, [axis], device)
+        device = grid_device(setting, [axis], device, len(axis.values) * len(directions))
     definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
                   "structure": list(setting.loaded().structure(setting.n_balls)),
                   "directions": directions, "follow": follow}

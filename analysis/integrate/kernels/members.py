@@ -517,8 +517,13 @@ def check_kernels(systems: Iterable[System], device: str, tangent: bool = False)
         try:
             _kernel(system, tangent, device)
         except errors as exc:
-            reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-            balls = ", ".join(str(n) for n in system.structure)
-            raise InputError(f"--device {device}: the member kernel of model "
-                             f"'{system.model.name}' with N_b {balls} cannot be built: "
-                             f"{reason}") from None
+            raise unbuildable(system, device, exc) from None
+
+
+def unbuildable(system: System, device: str, exc: Exception) -> InputError:
+    """The one line of a member kernel of ``system`` that cannot be written or built on
+    ``device`` (``exc``: why; a compiler's lines joined by ``;``)."""
+    reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+    balls = ", ".join(str(n) for n in system.structure)
+    return InputError(f"--device {device}: the member kernel of model '{system.model.name}' "
+                      f"with N_b {balls} cannot be built: {reason}")
