@@ -45,11 +45,19 @@ HANDLED_FROM = next(i for i, line in enumerate(ENTRY.read_text().splitlines(), 1
 """The line of the entry that installs the handler: frames before it are Python's window."""
 
 
+ENVIRONMENT = (sys.prefix, sys.base_prefix)
+"""The interpreter's environment: its files (``site``, the editable install's ``.pth``
+finder) are Python's start even where the environment lies inside the repository (CI makes
+``.venv-ci`` there)."""
+
+
 def _ours_ran(traceback: str) -> list[str]:
     """The frames of a traceback in files of this repository once the entry's handler was
-    installed (an interrupt our handler should have caught)."""
+    installed (an interrupt our handler should have caught); files of the interpreter's
+    environment are not the repository's."""
     frames = re.findall(r'File "([^"]+)", line (\d+)', traceback)
     return [f"{f}:{n}" for f, n in frames if f.startswith(str(ROOT))
+            and not any(f.startswith(prefix + "/") for prefix in ENVIRONMENT)
             and f not in {str(p) for p in BEFORE_OUR_CODE}
             and not (f == str(ENTRY) and int(n) < HANDLED_FROM)]
 
