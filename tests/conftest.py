@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.extras import REQUIRE, extras_required
+
 ROOT = Path(__file__).resolve().parent.parent
 SPECS = ROOT / "modelgen" / "specs"
 
@@ -37,3 +39,14 @@ def user_cache(tmp_path, monkeypatch):
     load_model.cache_clear()
     yield tmp_path
     load_model.cache_clear()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Under ``BEARINGDYN_REQUIRE_EXTRAS=1`` (.ci/run's second stage, where the extras are
+    installed) a ``needs_extra`` test that skips has failed: its extra did not install."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.skipped and extras_required() and item.get_closest_marker("needs_extra"):
+        report.outcome = "failed"
+        report.longrepr = f"{REQUIRE}=1 but the test skipped: {report.longrepr}"

@@ -21,6 +21,7 @@ import typer.main
 
 from analysis.cli import app
 from tests.conftest import ROOT
+from tests.extras import install_line, require
 
 DOCS = ROOT / "docs"
 PAGES = sorted(DOCS.rglob("*.md"))
@@ -57,8 +58,8 @@ def _missing_docs_tools() -> str | None:
 def site(tmp_path_factory) -> Path:
     missing = _missing_docs_tools()
     if missing:
-        pytest.skip(f"{missing} is not installed: python3 -m pip install -e '.[docs]' "
-                    "(CI installs it)")
+        pytest.skip(f"{missing} is not installed: {install_line('docs')} "
+                    "(.ci/run's second stage installs it)")
     out = tmp_path_factory.mktemp("site")
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
     res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict",
@@ -68,11 +69,13 @@ def site(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.needs_extra
 def test_site_builds_strictly(site):
     assert (site / "index.html").exists()
     assert (site / "getting-started.html").exists()
 
 
+@pytest.mark.needs_extra
 def test_site_has_a_guide_page_with_options_for_every_command(site):
     for name, cmd in COMMANDS.items():
         page = site / "guide" / f"{name}.html"
@@ -85,6 +88,7 @@ def test_site_has_a_guide_page_with_options_for_every_command(site):
                     assert opt in html, f"guide/{name}: option {opt} not shown"
 
 
+@pytest.mark.needs_extra
 def test_site_shows_every_model_card(site):
     assert {"mathieu", "rotor_housing", "two_bearing_rotor", "vakharia2015"} <= {
         card.parent.name for card in MODEL_CARDS}
@@ -95,6 +99,7 @@ def test_site_shows_every_model_card(site):
         assert sha and sha.group(1) in page.read_text(encoding="utf-8")
 
 
+@pytest.mark.needs_extra
 def test_site_has_the_api_reference_from_docstrings(site):
     modules = ["analysis.integrate.simulate", "analysis.signal.spectrum",
                "analysis.signal.poincare", "analysis.stability.lyapunov",
@@ -116,6 +121,7 @@ def test_site_has_the_api_reference_from_docstrings(site):
         assert f'id="analysis.model.{name}"' in model, f"analysis.model.{name} not shown"
 
 
+@pytest.mark.needs_extra
 def test_site_has_the_spec_guide_and_the_reference_from_the_schema(site):
     from modelgen.quantities import QUANTITIES
     from modelgen.terms import TERMS
@@ -132,6 +138,7 @@ def test_site_has_the_spec_guide_and_the_reference_from_the_schema(site):
     assert 'href="spec-guide.html"' in index and 'href="spec-reference.html"' in index
 
 
+@pytest.mark.needs_extra
 def test_site_math_is_mathml_written_at_build_time(site):
     """No script renders the math (tests/test_docs_browser.py sees it typeset)."""
     html = (site / "model.html").read_text(encoding="utf-8")
@@ -393,4 +400,15 @@ def test_wide_display_formulas_are_cut_where_a_line_may_break():
     assert len(hooks.formula_pieces(long)) > 30
     for piece in hooks.formula_pieces(long):
         assert piece.count("{") == piece.count("}")
-        hooks.tex_to_mathml(piece, display=True)  # every piece is a formula of its own
+
+
+@pytest.mark.needs_extra
+def test_every_piece_of_a_cut_formula_is_a_formula_of_its_own():
+    """Each piece that ``formula_pieces`` cuts converts to MathML alone (latex2mathml, the
+    ``[docs]`` extra)."""
+    require("latex2mathml", "docs")
+    hooks = _hooks()
+    long = r"Q = k \max\left(0, " + " + ".join(f"x_{{{k}}}" for k in range(40)) + r"\right)"
+    pieces = hooks.formula_pieces(long)
+    for piece in pieces:
+        assert "<math" in hooks.tex_to_mathml(piece, display=True)

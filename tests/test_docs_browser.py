@@ -3,13 +3,14 @@ Chromium: equations are typeset (MathML elements that the browser lays out as ma
 left in the visible text), every navigation link opens a page (an HTML file, never a
 directory listing) and search returns results that open pages.
 
-The site is built here with ``mkdocs build --strict`` into a temporary folder. Skipped on a
-machine without the docs extra or Chromium, unless ``CI=true`` (then they are required).
+The site is built here with ``mkdocs build --strict`` into a temporary folder. Without the
+docs extra they skip with its install line (``needs_extra``: .ci/run's second stage installs
+it, and there a skip fails); without Chromium they skip on a developer's machine and fail
+under ``CI=true``.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import subprocess
 import sys
@@ -19,8 +20,9 @@ from urllib.parse import unquote, urlparse
 
 import pytest
 
-from tests.browser import in_ci, require_chromium, start_chromium
+from tests.browser import require_chromium, start_chromium
 from tests.conftest import ROOT
+from tests.extras import require_all
 
 MATH_PAGES = ["model.html", "physics.html", "models/vakharia2015.html"]
 TEX_MARKS = ("\\(", "\\)", "\\[", "\\]", "$$", "\\frac", "\\omega")
@@ -28,10 +30,7 @@ TEX_MARKS = ("\\(", "\\)", "\\[", "\\]", "$$", "\\frac", "\\omega")
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
-    if importlib.util.find_spec("mkdocs") is None or importlib.util.find_spec("material") is None:
-        if in_ci():
-            pytest.fail("the docs extra is missing (python3 -m pip install -e '.[docs]')")
-        pytest.skip("the docs extra is not installed: python3 -m pip install -e '.[docs]'")
+    require_all(("mkdocs", "material"), "docs")
     require_chromium()
     out = tmp_path_factory.mktemp("site")
     res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir",
@@ -60,6 +59,7 @@ def _local_file(url: str) -> Path:
     return Path(unquote(parsed.path))
 
 
+@pytest.mark.needs_extra
 @pytest.mark.parametrize("page", MATH_PAGES)
 def test_equations_are_typeset_as_mathml(site, browser, page):
     _open(browser, site / page)
@@ -83,6 +83,7 @@ def test_equations_are_typeset_as_mathml(site, browser, page):
         assert mark not in found["text"], f"{page}: TeX {mark!r} left visible"
 
 
+@pytest.mark.needs_extra
 def test_every_navigation_link_opens_a_page(site, browser):
     _open(browser, site / "index.html")
     links = browser.execute_script(
@@ -98,6 +99,7 @@ def test_every_navigation_link_opens_a_page(site, browser):
         assert browser.execute_script("return !!document.querySelector('article h1')"), page
 
 
+@pytest.mark.needs_extra
 def test_search_finds_pages_from_disk(site, browser):
     _open(browser, site / "stability.html")
     browser.execute_script("document.querySelector('label[for=__search]').click()")
@@ -143,6 +145,7 @@ OVERFLOWING = """
       .map(e => e.textContent.slice(0, 60));"""
 
 
+@pytest.mark.needs_extra
 def test_no_equation_scrolls_and_wide_ones_wrap(site, browser):
     """At a desktop width no equation on any page is wider than its column (no scroll
     arrows: material's overflow:auto is replaced); on a phone-sized window a wide formula

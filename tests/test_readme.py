@@ -13,11 +13,24 @@ def _bash_blocks() -> list[str]:
     return re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
 
 
-def test_ci_runs_the_readme_test_command():
-    test_command = _bash_blocks()[1].strip()
+def test_ci_runs_the_readmes_two_commands_first_in_a_fresh_environment():
+    """.ci/run's first stage is the README's two commands, verbatim and in order, in a
+    virtual environment made just before them with nothing installed in between; the
+    extras come after, in an environment of their own."""
+    main_command, test_command = (b.strip() for b in _bash_blocks()[:2])
     assert "pytest" in test_command
-    ci = (ROOT / ".ci" / "run").read_text()
-    assert test_command in ci.splitlines()
+    lines = [line.strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()
+             if line.strip() and not line.strip().startswith(("#", "echo"))]
+    first = lines.index(main_command)
+    assert lines[first + 1] == test_command
+    before = lines[:first]
+    venv = max(i for i, line in enumerate(before) if line.startswith("python3 -m venv"))
+    assert not any("pip install" in line for line in before[venv:])
+    after = lines[first + 2:]
+    extras_venv = next(i for i, line in enumerate(after) if line.startswith("python3 -m venv"))
+    assert any("pip install" in line and "docs" in line for line in after[extras_venv:])
+    assert any("-m needs_extra" in line and "BEARINGDYN_REQUIRE_EXTRAS=1" in line
+               for line in after[extras_venv:])
 
 
 def test_readme_main_command_installs_and_runs():

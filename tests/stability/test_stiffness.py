@@ -13,6 +13,7 @@ from scipy.optimize import fsolve
 
 from analysis.model import load_model
 from analysis.stability.statics import cage_pitch, coefficients, equilibrium
+from tests.extras import require
 
 K_HERTZ = 7.055e9  # N/m^1.5, vakharia2015's contact_stiffness
 LOAD = 6.0  # N, its radial_load
@@ -135,8 +136,9 @@ def test_cli_json_and_bad_input(cli, tmp_path):
     assert res.returncode == 2 and "one-body planar" in res.stderr
 
 
+@pytest.mark.needs_extra
 def test_ross_rotor_from_the_written_coefficients(cli, tmp_path):
-    rs = pytest.importorskip("ross")
+    rs = require("ross", "ross")
     res = cli("stiffness", "vakharia2015", "--n-balls", "9", "--angles", "6", "--ross",
               "bearing.json", "--speeds", "1000:8000:3", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
