@@ -133,9 +133,33 @@ def compile_library(source: str, target: Path, command: list[str]) -> None:
                 raise CompileError(f"C compiler '{command[0]}' failed (exit "
                                    f"{res.returncode}):\n{tail}")
             os.replace(src, target.with_suffix(".c"))
+            digest = Path(tmp) / checksum_path(target).name
+            digest.write_text(file_sha256(so) + "\n")
             os.replace(so, target)
+            os.replace(digest, checksum_path(target))
     except (OSError, subprocess.TimeoutExpired) as exc:
         raise CompileError(f"could not build {target.name} in {target.parent}: {exc}") from None
+
+
+def checksum_path(library: Path) -> Path:
+    """``<library>.sha256``: the SHA-256 of the library as it was built, written beside it."""
+    return library.with_name(library.name + ".sha256")
+
+
+def file_sha256(path: Path) -> str:
+    with open(path, "rb") as handle:
+        return hashlib.file_digest(handle, "sha256").hexdigest()
+
+
+def intact(library: Path) -> bool:
+    """Whether the cached ``library`` is the file that was built: its checksum file is there
+    and equals the SHA-256 of its bytes. Checked before a library is ever loaded, since
+    loading a damaged one (truncated, emptied, overwritten) can kill the process (SIGBUS)
+    before any self-test runs; a library that is not intact is built again."""
+    try:
+        return checksum_path(library).read_text().strip() == file_sha256(library)
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 @dataclass
@@ -234,11 +258,11 @@ def _compiled_library(model: Model, structure: Structure, funcs: Any,
     p = model.parameter_vector(model.defaults)
     if hasattr(funcs, "test_parameters"):
         p = funcs.test_parameters(p)
-    if path.exists():
+    if intact(path):
         lib = _checked_load(path, functions, p)
         if lib is not None:
             return lib
-        # unreadable or wrong (a crash while writing it, a bad copy): build it again
+        # wrong though intact (its functions differ from the VM's): build it again
     compile_library(source, path, command)
     _REGISTRY.compilations += 1
     lib = _checked_load(path, functions, p)
@@ -402,7 +426,7 @@ def compiled_functions(fns: Sequence[ca.Function],
         except RuntimeError:
             return None
 
-    result = load() if path.exists() else None
+    result = load() if intact(path) else None
     if result is None:
         try:
             compile_library(source, path, command)

@@ -4,7 +4,8 @@ The text of ``source.model_source(…, target="cpu")`` is compiled by the compil
 ``analysis.integrate.compiled`` (``compiler_command``: gcc ``-O3`` without fast-math,
 ``-ffp-contract=off``) plus ``-fopenmp``, into the same cache (``compiled.cached_path``: named
 by the SHA-256 of the source and the command), built by one process at a time (an exclusive
-``flock`` on ``<library>.lock``; the others wait and load it) and renamed into place. Each
+``flock`` on ``<library>.lock``; the others wait and load it) and renamed into place, with
+its SHA-256 beside it (``compiled.intact``: a damaged file is built again, never loaded). Each
 library is self-tested against CasADi when loaded (``members.self_test``): the state
 variant bit for bit against the CasADi step it is written from, the tangent variant to
 1e-12 against its stage RK4 in CasADi.
@@ -32,6 +33,7 @@ from analysis.integrate.compiled import (
     cached_path,
     compile_library,
     compiler_command,
+    intact,
     library_stem,
 )
 
@@ -98,9 +100,9 @@ def build(source: str, stem: str, symbol: str) -> CpuLibrary:
     # worker processes may share the cores, and a call's end waits for its longest member
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
-        if not path.exists():
+        if not intact(path):  # missing, or damaged: never loaded (it could kill us: SIGBUS)
             with compiling(path):  # a second process waits, then loads the first's build
-                if not path.exists():
+                if not intact(path):
                     compile_library(source, path, command)
         fn = getattr(ctypes.CDLL(str(path)), symbol)
     except (OSError, AttributeError) as exc:
