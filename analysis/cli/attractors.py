@@ -3,7 +3,6 @@ fractions in a box, and their global continuation in a parameter)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -21,6 +20,7 @@ from analysis.cli.common import (
     SpeedOption,
     WorkersOption,
     app,
+    echo_json,
     executor_of,
     figure_output,
     netcdf_output,
@@ -92,7 +92,7 @@ def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> 
     from analysis.stability.attractors import study_json
 
     if as_json:
-        typer.echo(json.dumps(study_json(ds), indent=2))
+        echo_json(study_json(ds), indent=2)
     else:
         _echo_table(ds, output)
     if plot:

@@ -3,7 +3,6 @@ regimes and spectrum lines (approximate Bayesian computation, ``analysis.inferen
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -17,6 +16,7 @@ from analysis.cli.common import (
     SchedulerOption,
     WorkersOption,
     app,
+    echo_json,
     executor_of,
     figure_output,
     netcdf_output,
@@ -91,7 +91,7 @@ def calibrate(
     finally:
         ex.close()
     if as_json:
-        typer.echo(json.dumps(to_json(cal, str(output)), indent=1))
+        echo_json(to_json(cal, str(output)), indent=1)
     else:
         ci = cal.credible_interval(0.9)
         typer.echo(f"wrote {output}: best {cal.best_matched()} of "

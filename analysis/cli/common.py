@@ -60,6 +60,8 @@ def reports_errors(command):
             _fail(exc, f"error: {exc}", 2)
         except KeyboardInterrupt as exc:
             _fail(exc, "interrupted (nothing half-written was left)", 130)
+        except BrokenPipeError:  # the reader of stdout went away (`| head`): end quietly
+            closed_pipe()
         except OSError as exc:
             where = f" '{exc.filename}'" if exc.filename else ""
             _fail(exc, f"error: cannot use{where}: {exc.strerror or exc}", 1)
@@ -71,6 +73,41 @@ def reports_errors(command):
                        "for the traceback)", 1)
 
     return wrapper
+
+
+NULL_NOTE = ("null stands for a number that could not be computed (NaN) or is infinite: "
+             "strict JSON has neither")
+"""The note that ``echo_json`` adds where it wrote ``null`` for a non-finite number."""
+
+
+def _finite(value, replaced: list[bool]):
+    """``value`` with every NaN or infinite number (Python or numpy, at any depth) as None."""
+    from analysis.provenance import plain
+
+    if isinstance(value, dict):
+        return {key: _finite(item, replaced) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(item, replaced) for item in value]
+    converted = plain(value)
+    if isinstance(converted, list):
+        return _finite(converted, replaced)
+    if (isinstance(converted, float) and converted != converted) or converted in (
+            float("inf"), float("-inf")):
+        replaced[0] = True
+        return None
+    return converted
+
+
+def echo_json(data: dict, indent: int | None = 2) -> None:
+    """Print ``data`` as strict JSON: NaN and infinities become ``null``, and then a
+    top-level ``"notes"`` entry says so (``NULL_NOTE``)."""
+    import json
+
+    replaced = [False]
+    data = _finite(data, replaced)
+    if replaced[0]:
+        data = {**data, "notes": [*data.get("notes", []), NULL_NOTE]}
+    typer.echo(json.dumps(data, indent=indent, allow_nan=False))
 
 
 def _fail(exc: BaseException, line: str, code: int) -> None:
@@ -471,6 +508,8 @@ def main(args: list[str] | None = None) -> None:
     except (typer.Abort, KeyboardInterrupt):
         typer.echo("interrupted", err=True)
         _leave(130)
+    except BrokenPipeError:
+        closed_pipe()
     except SpecError as exc:  # a spec judged while the arguments were read (_judge_spec)
         typer.echo(f"error: {exc}", err=True)
         sys.exit(2)
@@ -482,7 +521,23 @@ def main(args: list[str] | None = None) -> None:
         typer.echo(f"internal error: {type(exc).__name__}: {exc} (run with --debug for the "
                    "traceback)", err=True)
         sys.exit(1)
+    try:
+        sys.stdout.flush()  # a reader that went away shows here, not in Python's exit
+    except BrokenPipeError:
+        closed_pipe()
     _leave(_said(code if isinstance(code, int) else 0))
+
+
+def closed_pipe() -> None:
+    """The reader of standard output closed it (``bearingdyn … --json | head -1``): end
+    quietly with exit code 0, as the work was done; what was left unprinted goes nowhere
+    (stdout pointed at the null device, so Python's final flush raises nothing)."""
+    import os
+    import sys
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os._exit(0)
 
 
 def _said(code: int) -> int:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
@@ -22,6 +21,7 @@ from analysis.cli.common import (
     SetOption,
     SettleOption,
     app,
+    echo_json,
     figure_output,
     given_options,
     judge_spec,
@@ -111,11 +111,11 @@ def _write_branches(branches: list, output: Path, plot: Path | None, as_json: bo
         from analysis.provenance import provenance
         from analysis.stability.continuation import branch_summary
 
-        typer.echo(json.dumps({
+        echo_json({
             "branches": [{"file": str(path), **branch_summary(br),
                           "provenance": provenance(path)}
                          for br, path in zip(branches, paths, strict=True)],
-            "plot": str(plot) if plot else None}, indent=2))
+            "plot": str(plot) if plot else None}, indent=2)
 
 
 def _first_branch(model, param, start, stop, from_branch, point, n_balls, sets, period,

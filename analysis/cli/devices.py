@@ -3,13 +3,12 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict
 from typing import Annotated
 
 import typer
 
-from analysis.cli.common import JsonOption, app, reports_errors
+from analysis.cli.common import JsonOption, app, echo_json, reports_errors
 
 DEVICE_HELP = ("Where the member kernels run: cpu (every core, the C/OpenMP build), gpu (the "
                "CUDA build; needs `pip install bearingdyn[gpu]` and an NVIDIA GPU) or auto "
@@ -58,7 +57,7 @@ def devices(as_json: JsonOption = False):
     visible GPU (name, memory, CuPy and CUDA versions), and the rule of --device auto."""
     info = devices_json()
     if as_json:
-        typer.echo(json.dumps(info, indent=2))
+        echo_json(info, indent=2)
         return
     for d in info["devices"]:
         if d["kind"] == "cpu":

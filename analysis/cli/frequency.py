@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Annotated
@@ -26,6 +25,7 @@ from analysis.cli.common import (
     ToOption,
     app,
     continued_systems,
+    echo_json,
     figure_output,
     given_options,
     netcdf_output,
@@ -117,7 +117,7 @@ def _finish(data, output: Path, as_json: bool, say, figure, extra: dict | None =
 
         out = {"points": points_json(data), "file": str(output),
                "provenance": provenance(output)}
-        typer.echo(json.dumps(out | (extra or {}), indent=2))
+        echo_json(out | (extra or {}), indent=2)
 
 
 def points_json(data) -> list[dict]:

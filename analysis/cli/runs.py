@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Annotated
@@ -16,6 +15,7 @@ from analysis.cli.common import (
     SetOption,
     SpeedOption,
     app,
+    echo_json,
     figure_output,
     frequency_words,
     netcdf_output,
@@ -41,13 +41,18 @@ def simulate(
     dt: DtOption = None,
     method: Annotated[str, typer.Option(help="rk4 (fixed step) or cvodes.")] = "rk4",
     save_every: Annotated[int, typer.Option(help="Keep every n-th step.")] = 1,
+    sample_rate: Annotated[float | None, typer.Option(
+        "--sample-rate", help="Save at this rate, Hz (a record's, e.g. 12000): sets the step "
+                              "(at most --dt or the spec's) and --save-every so that their "
+                              "product is 1/rate.")] = None,
     no_compile: Annotated[bool, typer.Option(
         "--no-compile", help="Run RK4 in the CasADi VM instead of compiled C.")] = False,
 ):
     """Integrate a model and write its motion (every state variable over t) to netCDF.
 
     RK4 runs stream to the file block by block (any length in constant memory; --save-every
-    decimates on write); CVODES runs are written when done."""
+    decimates on write); CVODES runs are written when done. --sample-rate HZ picks dt <= the
+    largest step and save_every with dt * save_every = 1/HZ exactly (a record's rate)."""
     import h5netcdf
 
     from analysis.integrate.simulate import simulate as run
@@ -58,6 +63,8 @@ def simulate(
     from analysis.provenance import state_names
 
     params, profile = run_speed(speed_rpm, sets)
+    if sample_rate is not None:
+        dt, save_every = rate_steps(model, sample_rate, dt, save_every)
     start = time.perf_counter()
     options = dict(duration=duration, transient=transient, dt=dt, save_every=save_every,
                    compiled=not no_compile, speed_profile=profile, **params)
@@ -75,6 +82,8 @@ def simulate(
                    f"t = {t[0]:g}…{t[1]:g} s ({times.shape[0]} samples), {method} dt = "
                    f"{attrs['dt']:g} s, wall {wall:.2f} s; variables "
                    f"{', '.join(state_names(attrs))}")
+    if sample_rate is not None:
+        typer.echo(f"saved at {sample_rate:g} Hz: every {save_every} steps of {dt:.7g} s")
     if profile is not None:
         typer.echo(kept_speeds(attrs, t))
     if profile is None:  # a bearing that carries no load (issue 32)
@@ -82,6 +91,22 @@ def simulate(
 
         if (note := static_load_note(model, balls, **params)) is not None:
             typer.echo(note)
+
+
+def rate_steps(model: str, rate_hz: float, dt: float | None,
+               save_every: int) -> tuple[float, int]:
+    """``(dt, save_every)`` of ``--sample-rate``: a step at most ``--dt`` (default the spec's)."""
+    from analysis.integrate.plan import steps_for_rate
+    from analysis.model import load_model
+
+    if save_every != 1:
+        raise InputError("--sample-rate: sets --save-every itself; give one of them, got "
+                         f"--save-every {save_every}")
+    largest = load_model(model).simulation_defaults["dt"] if dt is None else dt
+    try:
+        return steps_for_rate(rate_hz, largest)
+    except InputError as err:
+        raise InputError(f"--{err}".replace("--sample_rate", "--sample-rate")) from None
 
 
 def kept_speeds(attrs, t: tuple[float, float]) -> str:
@@ -183,8 +208,8 @@ def _say_peaks(ds, variables, peaks, faults: bool, as_json: bool) -> None:
               "vc": vc_frequencies(ds.attrs), "cage": cage_frequencies(ds.attrs)}
     if faults:
         report["faults"] = fault_frequencies(ds.attrs)
-    typer.echo(json.dumps({**report, "peaks": [p.as_dict() for p in peaks],
-                           "provenance": provenance(ds)}, indent=2))
+    echo_json({**report, "peaks": [p.as_dict() for p in peaks],
+               "provenance": provenance(ds)}, indent=2)
 
 
 def _typed(name: str) -> bool:
@@ -246,14 +271,14 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({
+        echo_json({
             "shaft_hz": ds.attrs.get("shaft_hz"), "faults": faults,
             "provenance": provenance(ds),
             "envelopes": [{"var": name, "band_hz": [chosen.low_hz, chosen.high_hz],
                            "band_chosen": chosen.chosen, "kurtosis": chosen.kurtosis,
                            "edge_s": chosen.edge_s, "resonances_hz": list(chosen.resonances_hz),
                            "note": chosen.note, "peaks": [p.as_dict() for p in peaks]}
-                          for name, peaks, chosen in results]}, indent=2))
+                          for name, peaks, chosen in results]}, indent=2)
     else:
         from analysis.reports.fault_plots import fault_words
 
@@ -323,8 +348,8 @@ def poincare(
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({**{v: pts[v].values.tolist() for v in ("t", *names)},
-                               "provenance": provenance(ds)}))
+        echo_json({**{v: pts[v].values.tolist() for v in ("t", *names)},
+                   "provenance": provenance(ds)}, indent=None)
     else:
         ranges = ", ".join(f"{v} in [{float(pts[v].min()):.4e}, {float(pts[v].max()):.4e}] "
                            f"{pts[v].attrs.get('units', '')}".rstrip()

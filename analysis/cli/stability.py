@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -20,6 +19,7 @@ from analysis.cli.common import (
     SettleOption,
     SpeedOption,
     app,
+    echo_json,
     figure_output,
     given_options,
     orbit_structure,
@@ -76,7 +76,7 @@ def lyapunov(
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({**data, "provenance": provenance(res)}, indent=2))
+        echo_json({**data, "provenance": provenance(res)}, indent=2)
     else:
         _echo_lyapunov(res, data)
     warning = unresolved_warning(data["exponents"][0], data["ci95"][0], data["duration"])
@@ -155,8 +155,7 @@ def floquet(
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({**orbit.as_dict(), "provenance": provenance(orbit.system)},
-                              indent=2))
+        echo_json({**orbit.as_dict(), "provenance": provenance(orbit.system)}, indent=2)
         return
     typer.echo(f"{orbit.model}, {orbit_structure(orbit)}, period {orbit.period} = "
                f"{orbit.period_s:.6g} s ({orbit.n_steps} RK4 steps): {orbit.message}")
@@ -190,8 +189,7 @@ def classify(
     if as_json:
         from analysis.provenance import provenance
 
-        typer.echo(json.dumps({**result.as_dict(), "provenance": provenance(run_file)},
-                              indent=2))
+        echo_json({**result.as_dict(), "provenance": provenance(run_file)}, indent=2)
     else:
         typer.echo(f"{result.label}: {result.detail} ({result.n_points} points, "
                    f"{result.section} section)")

@@ -17,6 +17,7 @@ from analysis.cli.common import (
     SetOption,
     SpeedOption,
     app,
+    echo_json,
     figure_output,
     json_output,
     parameter_values,
@@ -129,7 +130,7 @@ def stiffness(
     contact = balls_in_contact(system, ds.position.isel(cage_angle=0).values)
     data["balls_in_contact"] = {name: touching for name, (touching, _) in contact.items()}
     if as_json:
-        typer.echo(json.dumps(data, indent=2))
+        echo_json(data, indent=2)
     else:
         _echo(data)
     if (note := unloaded_note(contact)) is not None:  # the no-load line (issue 32)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from analysis.cli.common import app, figure_output, reports_errors, write_figure
+from analysis.cli.common import app, echo_json, figure_output, reports_errors, write_figure
 
 
 @app.command()
@@ -73,7 +72,7 @@ def _json(ds, wf, tracks: dict, spectrum, peaks) -> None:
         report["orders"] = {"order_bin": spectrum.attrs["order_bin"],
                             "samples_per_rev": spectrum.attrs["samples_per_rev"],
                             "peaks": [p.as_dict() for p in peaks]}
-    typer.echo(json.dumps({**report, "provenance": provenance(ds)}, indent=2))
+    echo_json({**report, "provenance": provenance(ds)}, indent=2)
 
 
 def _print(wf, tracks: dict, spectrum, peaks) -> None:
