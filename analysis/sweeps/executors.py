@@ -44,9 +44,13 @@ class SerialExecutor:
 def die_with_parent(parent: int) -> None:
     """Worker initializer: end this process when its parent ends, however it ends (SIGTERM,
     SIGKILL, a crash). Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; elsewhere a thread that
-    watches the parent's pid."""
+    watches the parent's pid. The worker ignores SIGINT: a Ctrl-C in the terminal reaches the
+    whole process group, and the parent alone reports it (a worker idle in the pool's queue
+    printed its own 20-line traceback); the workers then end with the parent."""
     import signal
     import sys
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     if sys.platform.startswith("linux"):
         import ctypes

@@ -200,6 +200,38 @@ def test_workers_end_with_their_parent_and_the_sweep_resumes(tmp_path, how, exec
         assert chart.nature.size == 60 and "failed" not in " ".join(chart.nature.values.ravel())
 
 
+def test_a_pool_worker_ignores_sigint():
+    """The worker initializer makes SIGINT harmless in a worker: an idle worker that got a
+    terminal's Ctrl-C printed a KeyboardInterrupt traceback of its own."""
+    code = ("import os, signal, time\n"
+            "from analysis.sweeps.executors import die_with_parent\n"
+            "die_with_parent(os.getppid())\n"
+            "os.kill(os.getpid(), signal.SIGINT)\n"
+            "time.sleep(0.2)\n"
+            "print('still here')\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60)
+    assert res.returncode == 0 and res.stdout == "still here\n", res.stderr
+
+
+def test_ctrl_c_in_the_terminal_is_reported_once_by_the_parent(tmp_path):
+    """A terminal's Ctrl-C reaches the whole process group, the pool's workers too: they
+    ignore it (``die_with_parent``), the parent says ``interrupted`` once, and no worker
+    prints a traceback; the workers end with the parent."""
+    proc = _popen((*CHART, "--workers", "2", "--executor", "processes"), tmp_path,
+                  start_new_session=True)
+    assert _wait_for(lambda: len(_descendants(proc.pid)) >= 2, 90), "no workers started"
+    workers = _descendants(proc.pid)
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=30)
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.count("interrupted") == 1, err
+    assert _wait_for(lambda: not any(_alive(w) for w in workers), 10)
+
+
 # ---------------------------------------------------------------- writes
 
 def _limit_file_size(limit: int):
