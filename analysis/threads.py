@@ -1,4 +1,5 @@
-"""Threads of the libraries bearingdyn calls: how many BLAS threads a dense solve may use.
+"""Threads: how many cores the member kernels may use (``BEARINGDYN_THREADS``), and how
+many BLAS threads a dense solve may use.
 
 On a loaded machine OpenBLAS's threads spin against other processes: a 644 × 644
 eigenproblem took 11 s on two threads against 0.4 s on one (measured on 2 shared cores).
@@ -8,7 +9,42 @@ The dense solves and eigenvalue problems of harmonic balance, tori and circles r
 
 from __future__ import annotations
 
+import os
 from contextlib import AbstractContextManager, nullcontext
+
+THREADS_VARIABLE = "BEARINGDYN_THREADS"
+"""Environment variable: CPU cores the member kernels use (default: every core available)."""
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on: the affinity mask's size
+    (``os.sched_getaffinity``), else ``os.cpu_count()``."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def thread_count() -> int:
+    """CPU cores this process may use: ``BEARINGDYN_THREADS`` when set, else every core it
+    may run on. A value that is not a whole number in [1, available cores] is an
+    ``InputError`` naming the variable (it was silently ignored, and 100000 was reported as
+    100000 cores). The command line checks it before any command starts."""
+    from analysis.errors import InputError
+
+    given = os.environ.get(THREADS_VARIABLE, "").strip()
+    available = available_cores()
+    if not given:
+        return available
+    try:
+        count = int(given)
+    except ValueError:
+        count = None
+    if count is None or not 1 <= count <= available:
+        raise InputError(f"{THREADS_VARIABLE}: must be a whole number in [1, {available}] "
+                         f"(the cores this process may use), got {given!r}; unset it to "
+                         f"use every core")
+    return count
 
 BLAS_THREADS = 1
 """BLAS threads of the dense solves and eigenvalue problems (``blas_threads``)."""

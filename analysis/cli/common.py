@@ -496,6 +496,14 @@ def main(args: list[str] | None = None) -> None:
     signal.signal(signal.SIGTERM, _terminated)
     signal.signal(signal.SIGINT, _terminated)
     _state["said"] = False
+    from analysis.errors import InputError
+    from analysis.threads import thread_count
+
+    try:
+        thread_count()  # the environment judged before any command starts
+    except InputError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        sys.exit(2)
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:

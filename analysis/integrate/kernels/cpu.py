@@ -36,21 +36,16 @@ from analysis.integrate.compiled import (
     intact,
     library_stem,
 )
+from analysis.threads import thread_count
 
 OPENMP_FLAG = "-fopenmp"
 """The compiler flag of OpenMP (gcc and clang)."""
 
 
 def cores() -> int:
-    """CPU cores this process may use: ``BEARINGDYN_THREADS`` when set (> 0), else the
-    affinity mask's size (``os.sched_getaffinity``), else ``os.cpu_count()``."""
-    given = os.environ.get("BEARINGDYN_THREADS", "").strip()
-    if given.isdigit() and int(given) > 0:
-        return int(given)
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
+    """CPU cores this process may use: ``analysis.threads.thread_count`` (the variable
+    ``BEARINGDYN_THREADS``, checked, else every core of the affinity mask)."""
+    return thread_count()
 
 
 @contextmanager
