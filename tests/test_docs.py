@@ -219,7 +219,10 @@ def _check_command(tokens: list[str], where: str) -> str | None:
     name, args = tokens[0], tokens[1:]
     if name not in COMMANDS:
         return f"{where}: `bearingdyn {name}` is not a command ({', '.join(COMMANDS)})"
-    known = _option_names(COMMANDS[name])
+    cmd = COMMANDS[name]
+    while hasattr(cmd, "commands") and args and args[0] in cmd.commands:  # a group: record info
+        cmd, args = cmd.commands[args[0]], args[1:]
+    known = _option_names(cmd)
     for arg in args:
         for alt in arg.strip("[]").split("|"):
             alt = alt.strip("[]").split("=", 1)[0]
@@ -258,6 +261,8 @@ def test_command_checker_catches_wrong_commands_and_options():
     assert _check_command(["continue", "m", "--from", "-3", "--to", "5"], "t") is None
     assert "not a command" in _check_command(["simulat", "m"], "t")
     assert "no option --n-ball" in _check_command(["simulate", "m", "--n-ball", "6"], "t")
+    assert _check_command(["record", "info", "r.mat", "--fs", "12000"], "t") is None
+    assert "no option --fz" in _check_command(["record", "info", "r.mat", "--fz", "1"], "t")
 
 
 def test_guide_pages_name_existing_commands_and_show_their_options():

@@ -30,6 +30,7 @@ def _register() -> Any:
     from analysis.cli import frequency  # noqa: F401  (harmonic balance: hb)
     from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
     from analysis.cli import calibrate  # noqa: F401  (inference: calibrate)
+    from analysis.cli import records  # noqa: F401  (measured records: record info)
     # isort: on
     return app
 

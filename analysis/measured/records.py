@@ -393,5 +393,35 @@ def needs_speed(record: xr.Dataset, what: str) -> float:
     return speed
 
 
+def record_summary(record: xr.Dataset) -> dict[str, Any]:
+    """What ``bearingdyn record info`` shows, in plain JSON types: the file, rate and its
+    source, samples and duration (s), the speed (rpm, its source; None without one), each
+    channel (name, units, original name, rms, min, max in its units) and the provenance."""
+    from analysis.provenance import plain
+
+    n = record.sizes["t"]
+    rate = float(record.attrs["sample_rate_hz"])
+    speed = record_speed_hz(record)
+    out = {"source_file": str(record.attrs.get("source_file")), "sample_rate_hz": rate,
+           "sample_rate_source": str(record.attrs.get("sample_rate_source", "")),
+           "samples": int(n), "duration_s": n / rate, "speed": speed_words(record),
+           "speed_rpm": None if speed is None else 60.0 * speed,
+           "speed_source": record.attrs.get("speed_source"), "channels": []}
+    for name in channels(record):
+        values = np.asarray(record[name].values, dtype=float)
+        attrs = record[name].attrs
+        out["channels"].append({
+            "name": name, "units": str(attrs.get("units", "1")),
+            "original_name": str(attrs.get("original_name", name)),
+            "long_name": str(attrs.get("long_name", name)),
+            "rms": float(np.sqrt(np.mean((values - values.mean()) ** 2))),
+            "min": float(values.min()), "max": float(values.max())})
+    out.update({"sha256": record.attrs.get("sha256"), "reader": record.attrs.get("reader"),
+                "original_names": json.loads(str(record.attrs.get("original_names", "[]"))),
+                "provenance": {str(k): plain(v) for k, v in record.attrs.items()}})
+    return out
+
+
 __all__ = ["SPEED", "channels", "is_record", "needs_speed", "pick_channel", "read_record",
-           "record_speed_hz", "speed_words", "tacho_pulses", "tacho_speed", "to_si"]
+           "record_speed_hz", "record_summary", "speed_words", "tacho_pulses", "tacho_speed",
+           "to_si"]

@@ -20,12 +20,19 @@ FULL_SCALE = {"int16": 2.0**15, "int32": 2.0**31, "uint8": 2.0**7, "int64": 2.0*
 
 def read(path: Path) -> Raw:
     """The channels of a WAV file in [-1, 1) times ``--scale`` (see the module)."""
+    import warnings
+
     import scipy.io.wavfile
 
     try:
-        rate, data = scipy.io.wavfile.read(path, mmap=False)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always", scipy.io.wavfile.WavFileWarning)
+            rate, data = scipy.io.wavfile.read(path, mmap=False)
     except (ValueError, OSError, EOFError) as exc:
         raise unreadable(path, "WAV", exc) from None
+    cut = [w for w in said if "prematurely" in str(w.message)]
+    if cut:  # scipy returns what a truncated file holds: refused, not half a record
+        raise unreadable(path, "WAV", ValueError(f"truncated: {cut[0].message}"))
     kind = str(data.dtype)
     values = data.astype(np.float64)
     if kind == "uint8":
