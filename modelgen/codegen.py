@@ -37,7 +37,7 @@ from modelgen.locations import cached_model_root, is_shipped, manifest_problem
 from modelgen.spec import Spec, load_spec, n_balls_range, spec_hash
 from modelgen.symbols import Context
 from modelgen.terms.base import ROLE_NAMES
-from modelgen.tree import write_atomic, write_root
+from modelgen.tree import write_atomic, write_root, write_text
 from modelgen.unrolled import helper_sources
 
 RUNTIME_TEMPLATE = "runtime.py.tmpl"
@@ -294,9 +294,9 @@ def _preview_module(module: str, text: str):
     with tempfile.TemporaryDirectory() as tmp:
         pkg = Path(tmp) / "generated_preview"
         (pkg / module).mkdir(parents=True)
-        (pkg / "__init__.py").write_text("")
-        (pkg / "_runtime.py").write_text(runtime_source())
-        (pkg / module / "__init__.py").write_text(text)
+        for path, body in ((pkg / "__init__.py", ""), (pkg / "_runtime.py", runtime_source()),
+                           (pkg / module / "__init__.py", text)):
+            write_text(path, body)  # an OSError (a full disk, a file-size limit) names it
         name = f"_bearingdyn_preview_{module}"
         spec = importlib.util.spec_from_file_location(
             name, pkg / "__init__.py", submodule_search_locations=[str(pkg)])

@@ -268,11 +268,11 @@ def attractors(
         "--param", help="NAME:LO:HI:N: continue the attractors over N values of a runtime "
                         "parameter (its own unit, rpm for speed_rpm).")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random initial states.")] = 0,
-    match_threshold: Annotated[float, typer.Option(
+    match_threshold: Annotated[float | None, typer.Option(
         "--match-threshold", help="With --param: largest distance between the section "
                                   "points of two attractors at consecutive values, in orbit "
                                   "sizes, that still makes them one id; larger matches are "
-                                  "warned about.")] = 0.25,
+                                  "warned about (default 0.25).")] = None,
     branch: Annotated[list[Path] | None, typer.Option(
         "--branch", help="Continuation branch file(s) (`bearingdyn continue`) drawn on the "
                          "--param figure.")] = None,
@@ -304,7 +304,7 @@ def attractors(
     executor), matched across values. Resumable: re-run the same command to continue."""
     from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Box, Range
-    from analysis.stability.attractors.continuation import check_threshold
+    from analysis.stability.attractors.continuation import MATCH_DISTANCE, check_threshold
     from analysis.sweeps.attractor_blocks import (
         check_branch_of,
         check_continuation,
@@ -319,7 +319,11 @@ def attractors(
     along = Range.parse(param, "--param", with_num=True) if param is not None else None
     if along is not None:
         check_value_count("--param", along.num)  # before its values are made
-        check_threshold(match_threshold)
+        match_threshold = check_threshold(MATCH_DISTANCE if match_threshold is None
+                                          else match_threshold)
+    elif match_threshold is not None:
+        raise _input_error("--match-threshold: matches attractors between consecutive "
+                           "--param values; give --param NAME:LO:HI:N, or leave it out")
     branches = [_branch(path) for path in branch or []]
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")

@@ -346,6 +346,7 @@ def prepare(
                       settings or RunSettings())
     options.check()
     tgt = target if isinstance(target, Target) else load_target(target, mdl)
+    check_fixed(pri, tgt)
     cost = estimate(mdl, tgt, options)
     if cost["core_seconds"] > MAX_CORE_HOURS * 3600:
         raise InputError(f"--samples: {samples} sets × {rounds} rounds × {len(tgt.rows)} "
@@ -356,7 +357,34 @@ def prepare(
                for c in box(pri, np.array(np.meshgrid(*[[0.0, 1.0]] * len(pri)))
                             .reshape(len(pri), -1).T)]
     check_steps(mdl, tgt, corners, options.settings)
+    check_row_kernels(mdl, tgt, options.device)
     return Problem(mdl, tgt, pri, options)
+
+
+def check_fixed(priors: Sequence[Prior], target: Target) -> None:
+    """A prior on a parameter that the target fixes (its conditions or a row's values, e.g.
+    ``speed_rpm``) is an ``InputError``: the row's value would silently override it."""
+    for prior in priors:
+        fixing = [row.name() for row in target.rows if prior.name in dict(row.parameters)]
+        if fixing:
+            raise InputError(f"--prior {prior.name}: the target fixes {prior.name} "
+                             f"({', '.join(fixing[:3])}{', …' if len(fixing) > 3 else ''}); "
+                             "calibrate a parameter the target leaves free")
+
+
+def check_row_kernels(model: Model, target: Target, device: str) -> None:
+    """Before the estimate: the member kernels (tangent variant) of every row's balls are
+    built, or loaded and self-tested, on the device that may run them (``auto``: the cores,
+    and the GPU too where one can be used), so that a kernel or a cache that cannot be
+    built or written is one ``InputError`` (``members.check_kernels``) before any work."""
+    from analysis.integrate.kernels.devices import gpu_problem
+    from analysis.integrate.kernels.members import check_kernels
+
+    systems = [row_system(model, row) for row in target.rows]
+    places = {"auto": ["cpu"] + (["gpu"] if gpu_problem() is None else [])}.get(device,
+                                                                            [device])
+    for place in places:
+        check_kernels(systems, place, tangent=True)
 
 
 @dataclass(frozen=True)

@@ -244,6 +244,12 @@ def check_steps(model: Model, target: Target, corners: Sequence[dict[str, float]
     naming the corner."""
     for row in target.rows:
         base = row_system(model, row)
+        h, _ = settings.steps(base)
+        try:  # at the target's own values first: then a refusal is not the prior's
+            RunPlan.step(base, h, warn=lambda message: None)
+        except InputError as exc:
+            field = "--dt" if settings.dt is not None else f"model '{model.name}'"
+            raise InputError(f"{field}: at {row.name()}: {exc}") from None
         for corner in corners:
             system = base.replace(**corner)
             h, _ = settings.steps(system)

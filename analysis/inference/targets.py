@@ -177,7 +177,30 @@ def _check_coordinate(name: str, where: str, model: Model) -> str:
     return name
 
 
+def _check_text(value: Any, where: str) -> str:
+    """A name or label shown in figures and tables: one line of text without ``$`` (which
+    the figures would read as the start of a formula, failing after the work was done)."""
+    if not isinstance(value, str) or "$" in value or "\n" in value or len(value) > 120:
+        raise InputError(f"{where}: must be one line of text (at most 120 characters, no "
+                         f"'$'), got {value!r}")
+    return value
+
+
+def _words(value: Any, where: str, what: str) -> tuple[str, ...]:
+    """A word or a list of words (``class = "chaotic"``, ``present = {x = ["X", "VC"]}``)."""
+    if isinstance(value, str):
+        return (value,)
+    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+        return tuple(value)
+    raise InputError(f"{where}: must be {what} or a list of them, got {value!r}")
+
+
 def _check_balls(value: Any, where: str, model: Model) -> int | tuple[tuple[str, int], ...]:
+    if not isinstance(value, Mapping) and (isinstance(value, bool)
+                                           or not isinstance(value, int)):
+        named = ", ".join(f"{b} = 8" for b in model.bearing_names) or "…"
+        raise InputError(f"{where}: must be a whole number of balls, or a table by bearing "
+                         f"({{{named}}}), got {value!r}")
     if isinstance(value, Mapping):
         for bearing in value:
             if bearing not in model.bearing_names:
@@ -220,8 +243,15 @@ def parse_target(data: Mapping[str, Any], model: Model, name: str = "",
     if not isinstance(conditions, Mapping):
         raise InputError(f"{where} conditions: must be a table of parameter values")
     shared = _check_parameters(conditions, f"{where} conditions", model)
+    if "name" in data:
+        _check_text(data["name"], f"{where} name")
+    for key in ("description", "source"):
+        if not isinstance(data.get(key, ""), str):
+            raise InputError(f"{where} {key}: must be text, got {data[key]!r}")
     rows_in = data.get("rows", [])
-    if not isinstance(rows_in, list) or not rows_in:
+    if not isinstance(rows_in, list):
+        raise InputError(f"{where} rows: must be a list of [[rows]] tables, got {rows_in!r}")
+    if not rows_in:
         raise InputError(f"{where} rows: must hold at least one [[rows]] entry, got none "
                          "(an empty target)")
     lines = line_names(model)
@@ -235,9 +265,10 @@ def parse_target(data: Mapping[str, Any], model: Model, name: str = "",
         balls = _check_balls(row.get("n_balls", model.default_n_balls), f"{at}.n_balls", model)
         params = _check_parameters({k: v for k, v in row.items() if k not in _ROW_KEYS},
                                    at, model)
-        wanted = row.get("class", ())
-        wanted = (wanted,) if isinstance(wanted, str) else tuple(wanted)
+        wanted = _words(row["class"], f"{at}.class", "a class") if "class" in row else ()
         classes = tuple(_check_class(w, f"{at}.class") for w in wanted)
+        if "label" in row:
+            _check_text(row["label"], f"{at}.label")
         major = row.get("major", {})
         present = row.get("present", {})
         if not isinstance(major, Mapping) or not isinstance(present, Mapping):
@@ -248,7 +279,7 @@ def parse_target(data: Mapping[str, Any], model: Model, name: str = "",
         present_t = []
         for c, names in present.items():
             _check_coordinate(c, f"{at}.present", model)
-            names = [names] if isinstance(names, str) else list(names)
+            names = _words(names, f"{at}.present.{c}", "a line name")
             present_t.append((c, tuple(_check_line(v, f"{at}.present.{c}", lines)
                                        for v in names)))
         if not classes and not major_t and not any(v for _, v in present_t):
@@ -266,17 +297,35 @@ def target_path(name: str | Path) -> Path:
         return Path(str(resources.files("analysis.inference") / "targets"
                         / BUILT_IN[str(name)]))
     path = Path(name)
-    if path.suffix != ".toml" or not path.is_file():
-        raise InputError(f"--target: must be a built-in target ({', '.join(BUILT_IN)}) or "
-                         f"a .toml file, got {str(name)!r}")
+    allowed = f"must be a built-in target ({', '.join(BUILT_IN)}) or a .toml file"
+    if not path.exists():
+        raise InputError(f"--target: {allowed}; there is no file {str(name)!r}")
+    if path.is_dir():
+        raise InputError(f"--target: {allowed}; {str(name)!r} is a folder")
+    if not path.is_file():  # a FIFO, a device (/dev/zero): never read
+        raise InputError(f"--target: {allowed}; {str(name)!r} is not a regular file")
+    if path.suffix != ".toml":
+        raise InputError(f"--target: {allowed}, got {str(name)!r}")
+    if path.stat().st_size > MAX_TARGET_BYTES:
+        raise InputError(f"--target: {str(name)!r} holds {path.stat().st_size} bytes; a "
+                         f"target file has at most {MAX_TARGET_BYTES}")
     return path
 
 
+MAX_TARGET_BYTES = 1 << 20
+"""Largest target file read (1 MiB: a target is a short table)."""
+
+
 def load_target(name: str | Path, model: Model) -> Target:
-    """Read and check a target (``target_path``) against ``model``."""
+    """Read and check a target (``target_path``) against ``model``. A UTF-8 byte-order mark
+    (left by some editors) is skipped."""
     path = target_path(name)
     try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(f"--target: cannot read {path} as TOML ({exc})") from None
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError:
+        raise InputError(f"--target: {path} is not UTF-8 text") from None
+    except OSError as exc:
+        raise InputError(f"--target: cannot read {path} ({exc.strerror or exc})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"--target: {path} is not valid TOML ({exc})") from None
     return parse_target(data, model, path.stem, str(path))

@@ -61,9 +61,9 @@ def check_memory(n_state: int, n_saved: int, save_every: int) -> None:
     need = 2 * 8 * (n_state + 1) * (n_saved + 1)
     if need > MEMORY_BUDGET:
         raise InputError(f"save_every: the run would keep {n_saved + 1:.3g} samples "
-                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: raise "
-                         f"save_every to at least {math.ceil(save_every * need / MEMORY_BUDGET)} "
-                         "or shorten the run")
+                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: "
+                         f"keep one sample every {math.ceil(save_every * need / MEMORY_BUDGET)} "
+                         "steps or more (--save-every), or shorten the run")
 
 
 def first_kept(threshold: float, step: float) -> int:

@@ -205,15 +205,15 @@ def check_fits(device: str, members: int, schedule: Schedule, n: int,
     if kept > HOST_BUDGET:
         raise InputError(f"members: {members} members with {schedule.max_sections} sections "
                          f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
-                         f"{HOST_BUDGET / 2**30:g} GiB: run fewer members per call (blocks), or "
-                         "keep_sections=False")
+                         f"{HOST_BUDGET / 2**30:g} GiB: give fewer initial states or grid points, "
+                         "or record fewer sections per member")
     if device == "gpu":
         from analysis.integrate.kernels.cuda import free_memory
 
         free, _ = free_memory()
         if per > GPU_BLOCK_SHARE * free:
             raise InputError(f"members: one member needs {per} bytes on the GPU, "
-                             f"{free} bytes free; fewer sections or keep_sections=False")
+                             f"{free} bytes free: record fewer sections per member")
 
 
 def _block_size(device: str, members: int, per: int, block: int | None) -> int:
