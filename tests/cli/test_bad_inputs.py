@@ -1473,6 +1473,128 @@ CLI_CASES += _cases("half-written and damaged generated code", ("simulate", "gen
      _damaged_out(lambda gen: (gen / "_runtime.py").unlink())),
 ])
 
+FOURTH = "fourth round: targets, options and the environment judged first"
+ONE_ROW = """name = "one-row"
+[conditions]
+speed_rpm = 5000.0
+[[rows]]
+n_balls = 8
+class = "quasi-periodic"
+"""
+CALIBRATE = ("calibrate", "vakharia2015", "--prior", "damping:10:3162:log", "--samples", "4",
+             "--rounds", "1", "--revolutions", "40", "--transient-revolutions", "5", "-o",
+             "cal.nc")
+CAL_FIXED = (*CALIBRATE, "--target", "one.toml")
+
+
+def _target(text: str, name: str = "t.toml") -> Callable[[Path], None]:
+    """Setup: a target file ``name`` holding ``text``, and the valid ``one.toml`` beside."""
+    def setup(folder: Path) -> None:
+        (folder / "one.toml").write_text(ONE_ROW)
+        (folder / name).write_text(text)
+    return setup
+
+
+def _target_variant(old: str, new: str) -> Callable[[Path], None]:
+    assert old in ONE_ROW
+    return _target(ONE_ROW.replace(old, new))
+
+
+def _fifo_target(folder: Path) -> None:
+    (folder / "one.toml").write_text(ONE_ROW)
+    os.mkfifo(folder / "t.toml")
+
+
+def _folder_target(folder: Path) -> None:
+    (folder / "one.toml").write_text(ONE_ROW)
+    (folder / "t.toml").mkdir()
+
+
+def _cache_is_a_file(folder: Path) -> None:
+    (folder / "one.toml").write_text(ONE_ROW)
+    (folder / "cache").write_text("a file where the cache folder should be")
+
+
+ATTRACTORS = ("attractors", "balanced-rotor", "--n-balls", "8", "--set", "radial_load=50",
+              "--samples", "4", "--box", "x:-20e-6:30e-6", "--box", "y:-20e-6:20e-6", "-o",
+              "att.nc")
+CLI_CASES += [
+    CliCase("target-class-number", FOURTH, "a target row's class given as a number (was an "
+            "internal error)", (*CALIBRATE, "--target", "t.toml"),
+            ("target rows[0].class: must be a class or a list of them, got 5",),
+            setup=_target_variant('class = "quasi-periodic"', "class = 5"), fixed=CAL_FIXED),
+    CliCase("target-present-number", FOURTH, "a target's present lines given as a number "
+            "(was an internal error)", (*CALIBRATE, "--target", "t.toml"),
+            ("target rows[0].present.x: must be a line name or a list of them, got 5",),
+            setup=_target_variant('class = "quasi-periodic"',
+                                  'class = "quasi-periodic"\npresent = {x = 5}')),
+    CliCase("target-balls-list", FOURTH, "a target row's n_balls given as a list (was an "
+            "internal error)", (*CALIBRATE, "--target", "t.toml"),
+            ("target rows[0].n_balls: must be a whole number of balls, or a table by bearing",),
+            setup=_target_variant("n_balls = 8", "n_balls = [8]")),
+    CliCase("target-rows-text", FOURTH, "a target's rows given as text (was called an empty "
+            "target)", (*CALIBRATE, "--target", "t.toml"),
+            ("target rows: must be a list of [[rows]] tables, got 'abc'",),
+            setup=_target('name = "t"\nrows = "abc"\n')),
+    CliCase("target-missing", FOURTH, "a target file that does not exist (was not named)",
+            (*CALIBRATE, "--target", "nothere.toml"),
+            ("--target: must be a built-in target", "there is no file 'nothere.toml'"),
+            setup=_target(ONE_ROW, "one.toml"), fixed=CAL_FIXED),
+    CliCase("target-folder", FOURTH, "a target that is a folder",
+            (*CALIBRATE, "--target", "t.toml"), ("'t.toml' is a folder",),
+            setup=_folder_target),
+    CliCase("target-fifo", FOURTH, "a target that is a FIFO (never read: it would wait)",
+            (*CALIBRATE, "--target", "t.toml"), ("'t.toml' is not a regular file",),
+            setup=_fifo_target),
+    CliCase("target-device", FOURTH, "/dev/zero as the target (never read)",
+            (*CALIBRATE, "--target", "/dev/zero"), ("'/dev/zero' is not a regular file",)),
+    CliCase("target-dollar-name", FOURTH, "a target name with $…$ (broke the figure after "
+            "the work was done and the file written)",
+            (*CALIBRATE, "--target", "t.toml", "--plot", "cal.png"),
+            ("target name: must be one line of text (at most 120 characters, no '$'), got "
+             "'$N_b$ table'",),
+            setup=_target_variant('name = "one-row"', 'name = "$N_b$ table"'),
+            fixed=(*CAL_FIXED, "--plot", "cal.png")),
+    CliCase("prior-fixed-by-target", FOURTH, "a --prior on a parameter the target fixes "
+            "(speed_rpm: silently overridden by the rows)",
+            ("calibrate", "vakharia2015", "--prior", "speed_rpm:3000:6000", "--samples", "4",
+             "--rounds", "1", "-o", "cal.nc", "--target", "one.toml"),
+            ("--prior speed_rpm: the target fixes speed_rpm (N_b = 8); calibrate a parameter "
+             "the target leaves free",), setup=_target(ONE_ROW, "one.toml"), fixed=CAL_FIXED),
+    CliCase("calibrate-dt-too-large", FOURTH, "calibrate --dt 1 (was blamed on --prior)",
+            (*CAL_FIXED, "--dt", "1"), ("--dt: at N_b = 8: dt: must be in",),
+            setup=_target(ONE_ROW, "one.toml"), fixed=CAL_FIXED),
+    CliCase("calibrate-cache-is-a-file", FOURTH, "calibrate with a cache path that is a file "
+            "(was an internal error after the estimate)", CAL_FIXED,
+            ("--device cpu: the member kernel of model 'vakharia2015' with N_b 8 cannot be "
+             "built", "Not a directory"), setup=_cache_is_a_file,
+            env=(("BEARINGDYN_CACHE", "cache"),)),
+    CliCase("calibrate-no-compiler", FOURTH, "calibrate without a C compiler (was an "
+            "internal error after the estimate)", CAL_FIXED,
+            ("--device cpu: the member kernel of model 'vakharia2015' with N_b 8 cannot be "
+             "built: C compiler '/nonexistent/bin/cc' not found",),
+            setup=_target(ONE_ROW, "one.toml"), env=NO_CC),
+    CliCase("threads-not-a-number", FOURTH, "BEARINGDYN_THREADS=abc (was ignored)",
+            ("devices",), ("BEARINGDYN_THREADS: must be a whole number in [1, ",
+                           "got 'abc'; unset it to use every core"),
+            env=(("BEARINGDYN_THREADS", "abc"),)),
+    CliCase("threads-zero", FOURTH, "BEARINGDYN_THREADS=0 (was ignored)", ("devices",),
+            ("BEARINGDYN_THREADS: must be a whole number in [1, ", "got '0'"),
+            env=(("BEARINGDYN_THREADS", "0"),)),
+    CliCase("threads-negative", FOURTH, "BEARINGDYN_THREADS=-4 (was ignored)", ("devices",),
+            ("BEARINGDYN_THREADS: must be a whole number in [1, ", "got '-4'"),
+            env=(("BEARINGDYN_THREADS", "-4"),)),
+    CliCase("threads-too-many", FOURTH, "BEARINGDYN_THREADS=100000 (was reported as 100000 "
+            "cores)", ("devices",), ("BEARINGDYN_THREADS: must be a whole number in [1, ",
+                                     "got '100000'"),
+            env=(("BEARINGDYN_THREADS", "100000"),)),
+    CliCase("match-threshold-without-param", FOURTH, "--match-threshold without --param (was "
+            "ignored)", (*ATTRACTORS, "--match-threshold", "0.3"),
+            ("--match-threshold: matches attractors between consecutive --param values; give "
+             "--param NAME:LO:HI:N, or leave it out",), fixed=ATTRACTORS),
+]
+
+
 
 @dataclass
 class Outcome:
@@ -1624,7 +1746,7 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           "jobs", "checked before any write", "accepted without a word (now judged)",
           "messages that name the right thing", "judged, not failed inside",
           "half-written and damaged generated code", RUN_UPS, "envelopes and noise", THIRD,
-          "numerical failures"]
+          FOURTH, "numerical failures"]
 
 
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:
