@@ -89,7 +89,18 @@ def hb(
         data = PERIODIC["hb"].measured(system, request, end, cost_lines(quiet))
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
-            {k: data.attrs[k] for k in ("error_harmonics", "error_aliasing", "error_at")})
+            json_attrs(data, HB_JSON))
+
+
+HB_JSON = ("error_harmonics", "error_harmonics_at", "error_aliasing", "error_bound",
+           "error_at", "error_notes")
+"""The HB attrs ``hb --json`` carries beside the points (NaN as null, ``null_note`` why)."""
+
+
+def json_attrs(data, keys) -> dict:
+    from analysis.frequency.accuracy import json_attrs as attrs
+
+    return attrs(data, keys)
 
 
 def cost_lines(quiet: bool):
@@ -296,8 +307,35 @@ def torus(
         also[run] = circle_run(data, duration, dt)
     _finish(data, output, as_json, lambda: _print_torus(data, output, run),
             plot and (plot, lambda: torus_figure(data, duration, dt)),
-            {k: data.attrs[k] for k in ("stop_report", "error_harmonics", "error_aliasing",
-                                        "error_at") if k in data.attrs} or None, also)
+            _torus_extra(data), also)
+
+
+TORUS_JSON = ("stop_report", "error_harmonics", "error_harmonics_at", "error_aliasing",
+              "error_at", "error_notes", "amplitude_error", "circle_change", "between_error",
+              "run_step_error")
+"""The torus attrs its --json carries beside the points (NaN as null, with its reason in
+``error_notes`` where one was stored)."""
+
+
+def _torus_extra(data) -> dict | None:
+    return json_attrs(data, TORUS_JSON) or None
+
+
+def _lambda_words(data) -> str:
+    """'lambda1 λ ± w 1/s', or why it is not there (never 'nan')."""
+    lam, ci = float(data.lambda1.values[0]), float(data.lambda1_ci95.values[0])
+    if not math.isfinite(lam):
+        return "lambda1 not computed (--lyapunov-duration 0, or its run left the torus)"
+    return f"lambda1 {lam:.4g} ± {_number(ci, '.2g')} 1/s"
+
+
+def _number(value, digits: str = ".1e") -> str:
+    """``value`` formatted, or 'not computed' for a missing or NaN one (never 'nan')."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return "not computed"
+    return format(number, digits) if math.isfinite(number) else "not computed"
 
 
 def _check_run(system, run: Path | None, duration: float, dt: float | None) -> None:
@@ -335,7 +373,6 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
     from analysis.frequency.accuracy import error_words
 
     param = data.attrs.get("param", "")
-    lam = data.lambda1.values
     head = (f"wrote {output}: torus {data.attrs['frequencies']}, H = "
             f"{data.attrs['harmonics']}, ")
     if data.attrs.get("solver") == "shooting" and param:
@@ -352,21 +389,24 @@ def _print_torus(data, output: Path, run: Path | None) -> None:
                    f"{float(data.residual.values[0]):.2e}, circle tail "
                    f"{float(data.border.values[0]):.1e}, change at N = "
                    f"{data.attrs['circle_change_points']}: "
-                   f"{float(data.attrs['circle_change']):.1e}; lambda1 {float(lam[0]):.4g} ± "
-                   f"{float(data.lambda1_ci95.values[0]):.2g} 1/s; amplitude {amp}")
+                   f"{_number(data.attrs['circle_change'])}; {_lambda_words(data)}; "
+                   f"amplitude {amp}")
+        typer.echo(f"amplitude: (max - min)/2 over revolutions integrated from "
+                   f"{4 * int(data.attrs['points'])} cage phases of the circle, every RK4 "
+                   f"step; its change from half as many phases "
+                   f"{_number(data.attrs.get('amplitude_error'))}")
         typer.echo(f"between the sections: --run integrates each revolution from its "
                    f"circle point (at half the RK4 step it moves "
-                   f"{float(data.attrs.get('run_step_error', math.nan)):.1e} of the "
+                   f"{_number(data.attrs.get('run_step_error'))} of the "
                    f"amplitude; at the sections it is the circle, change above); the stored "
-                   f"2-D series is {float(data.attrs['between_error']):.1e} from that run")
+                   f"2-D series is {_number(data.attrs.get('between_error'))} from that run")
     elif not param:
         amp = ", ".join(f"{s} {float(a):.6g} {u}" for s, a, u in zip(
             data.state.values, data.amplitude.values[0], data.state_units.values,
             strict=True))
         typer.echo(head + f"residual {float(data.residual.values[0]):.2e} (finer grid "
-                   f"{float(data.residual_fine.values[0]):.2e}), lambda1 "
-                   f"{float(lam[0]):.4g} ± {float(data.lambda1_ci95.values[0]):.2g} 1/s; "
-                   f"amplitude {amp}")
+                   f"{_number(data.residual_fine.values[0], '.2e')}), "
+                   f"{_lambda_words(data)}; amplitude {amp}")
         typer.echo(error_words(data))
         typer.echo(HB_CAUTION)
     else:
@@ -409,7 +449,7 @@ def torus_figure(data, duration: float, dt: float | None = None):
     shooting = data.attrs.get("solver") == "shooting"
     label = (f"invariant circle u(0, θ2), N = {data.attrs['points']} (tail "
              f"{float(data.border.values[-1]):.1e}, change at 2N "
-             f"{float(data.attrs.get('circle_change', math.nan)):.1e})" if shooting else
+             f"{_number(data.attrs.get('circle_change'))})" if shooting else
              f"torus section u(0, θ2), H = {data.attrs['harmonics']} (2-D HB: 20-38 % off "
              f"on contact)\n{error_words(data)}")
     ax.plot(sec[a].values * fa, sec[b].values * fb, ".", ms=3, color="C1",

@@ -23,7 +23,7 @@ DUFFING = ["duffing", "--period", "shaft", "--set", "linear_stiffness=1", "--set
 
 ERROR_LINE = re.compile(r"error estimate(?: at [^:]+)?: change at H = (?P<doubled>\S+) "
                         r"(?P<error_harmonics>\S+) of the amplitude, aliasing \(2x samples\) "
-                        r"(?P<error_aliasing>\S+)")
+                        r"(?P<error_aliasing>[^\s;]+)")
 """The error line of an HB response or torus, as printed and as drawn."""
 
 
