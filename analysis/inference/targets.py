@@ -162,10 +162,16 @@ def _check_class(word: Any, where: str) -> str:
 
 
 def _check_line(name: Any, where: str, lines: frozenset[str]) -> str:
+    """A line name of this model (``lines``); the refusal shows names of this model's own
+    lines (``VC[left]`` on a two-bearing model, never a bare ``VC`` it does not have)."""
     if not isinstance(name, str) or name not in lines:
-        shown = "X, 2X, VC, VC-X, VC+X, 2VC-X, …"
-        raise InputError(f"{where}: must be a line name m X + n VC (|m| <= {MAX_SHAFT_ORDER}, "
-                         f"0 <= n <= {MAX_VC_ORDER}: {shown}), got {name!r}")
+        ordered = sorted(lines, key=lambda line: (len(line), line))
+        examples = [line for line in ordered if "VC" in line][:4]
+        shown = ", ".join(["X", "2X", *examples, "…"])
+        vc = "VC[<bearing>]" if any("[" in line for line in lines) else "VC"
+        raise InputError(f"{where}: must be a line name m X + n {vc} (|m| <= "
+                         f"{MAX_SHAFT_ORDER}, 0 <= n <= {MAX_VC_ORDER}: {shown}), got "
+                         f"{name!r}")
     return name
 
 

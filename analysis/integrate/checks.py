@@ -309,3 +309,49 @@ def check_start(system: System, state=None, field: str = "initial_state") -> Non
             raise InputError(f"{field}: the centre displacement {what} = {shift:.3g} m is "
                              f"beyond {name} of {bound:.3g} m ({reason}); give one within "
                              f"{bound:.3g} m")
+
+
+DEFLECTION_RATIO = 10.0
+"""A static ball deflection this many times the radial clearance draws a warning
+(``check_deflection``): a contact stiffness in the wrong unit, most often."""
+
+
+def static_deflection(system: System, bearing: str) -> float | None:
+    """The most loaded ball's static deflection (m) under the radial load, by Stribeck's
+    rule Q_max = 5 F_r / (N_b cos α) and Hertz's δ = (Q_max / k)^(2/3) (T. A. Harris,
+    *Rolling Bearing Analysis*, Sec. 7.2: zero clearance, a first estimate); None where the
+    model has no radial load or no contact stiffness for the bearing."""
+    values = dict(system.parameters)
+
+    def get(name: str) -> float | None:
+        value = values.get(f"{name}_{bearing}", values.get(name))
+        return None if value is None else float(value)
+
+    load, k = get("radial_load"), get("contact_stiffness")
+    if not load or not k or k <= 0:
+        return None
+    n_balls = dict(zip(system.model.bearing_names, system.structure, strict=True))[bearing]
+    q_max = 5.0 * abs(load) / (n_balls * math.cos(get("contact_angle") or 0.0))
+    return (q_max / k) ** (2.0 / 3.0)
+
+
+def check_deflection(system: System, warn=None) -> None:
+    """Warn (``warn(message)``, default a Python warning) when a bearing's static ball
+    deflection is more than ``DEFLECTION_RATIO`` times its radial clearance: a contact
+    stiffness typed in N/mm^1.5 (10^4.5 too small) put 0.6 mm of deflection in a 10 µm
+    clearance without a word. Nothing is refused: a soft contact may be meant."""
+    values = dict(system.parameters)
+    for bearing in system.model.bearing_names:
+        clearance = values.get(f"radial_clearance_{bearing}", values.get("radial_clearance"))
+        delta = static_deflection(system, bearing)
+        if delta is None or not clearance or delta <= DEFLECTION_RATIO * clearance:
+            continue
+        k = values.get(f"contact_stiffness_{bearing}", values.get("contact_stiffness"))
+        where = "" if len(system.structure) == 1 else f" of bearing '{bearing}'"
+        message = (f"contact_stiffness{where}: {k:.4g} N/m^1.5 gives a static ball "
+                   f"deflection of about {delta:.3g} m under the radial load, "
+                   f"{delta / clearance:.3g} times the radial clearance ({clearance:.3g} m); "
+                   f"check its unit (N/m^1.5: 1 N/mm^1.5 = 3.162e4 N/m^1.5)")
+        import warnings
+
+        (warn or (lambda m: warnings.warn(m, RuntimeWarning, stacklevel=3)))(message)

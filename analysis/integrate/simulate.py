@@ -22,6 +22,7 @@ from analysis.integrate.checks import (  # noqa: F401  (blow_up_limit's old home
     BALL_FRACTION,
     BLOW_UP_FACTOR,
     blow_up_limit,
+    check_deflection,
     check_start,
 )
 from analysis.integrate.compiled import library, run_rk4
@@ -148,6 +149,7 @@ def _prepare(system, n_balls, initial_state, parameters, duration, transient, dt
                         profile=profile)
     system, profile = plan.system, plan.profile
     check_start(system)  # the initial state within the model's bounds (StartLimits)
+    check_deflection(system)  # a contact stiffness in the wrong unit: a warning
     attrs = completed_attrs(system, **plan.settings(), initial_state=True,
                             tolerances=(rtol, atol) if method == "cvodes" else None,
                             speed_profile=None if profile is None

@@ -1588,6 +1588,14 @@ CLI_CASES += [
             "cores)", ("devices",), ("BEARINGDYN_THREADS: must be a whole number in [1, ",
                                      "got '100000'"),
             env=(("BEARINGDYN_THREADS", "100000"),)),
+    CliCase("target-vc-two-bearings", FOURTH, "a bare VC in a target of a two-bearing model "
+            "(the refusal listed VC as valid and never said VC[<bearing>])",
+            ("calibrate", "two-bearing-rotor", "--target", "t.toml", "--prior",
+             "damping:10:1000", "--samples", "4", "--rounds", "1", "-o", "cal.nc"),
+            ("target rows[0].major.x: must be a line name m X + n VC[<bearing>]",
+             "VC[left], 2VC[left]", "got 'VC'"),
+            setup=_target('name = "vc"\n[[rows]]\nn_balls = {left = 8, right = 8}\n'
+                          'major = { x = "VC" }\n')),
     CliCase("match-threshold-without-param", FOURTH, "--match-threshold without --param (was "
             "ignored)", (*ATTRACTORS, "--match-threshold", "0.3"),
             ("--match-threshold: matches attractors between consecutive --param values; give "
