@@ -24,6 +24,16 @@ from analysis.cli.common import (
     run_speed,
     write_figure,
 )
+from analysis.cli.records import (
+    BearingOption,
+    ChannelsOption,
+    FsOption,
+    RpmOption,
+    TachoOption,
+    record_figure,
+    record_options,
+    run_or_record,
+)
 from analysis.errors import InputError
 
 
@@ -147,7 +157,9 @@ NoiseSeedOption = Annotated[int, typer.Option(
 @app.command()
 @reports_errors
 def spectrum(
-    run_file: Annotated[Path, typer.Argument(help="netCDF file from `bearingdyn simulate`.")],
+    run_file: Annotated[Path, typer.Argument(
+        help="netCDF file from `bearingdyn simulate`, or a measured record (--channel).",
+        metavar="RUN|RECORD")],
     as_json: Annotated[bool, typer.Option("--json", help="Print the peaks as JSON.")] = False,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.",
                                                 callback=figure_output)] = None,
@@ -160,17 +172,24 @@ def spectrum(
     faults: FaultsOption = False,
     noise: NoiseOption = None,
     noise_seed: NoiseSeedOption = 0,
+    channel: ChannelsOption = None,
+    bearing: BearingOption = None,
+    rpm: RpmOption = None,
+    tacho: TachoOption = None,
+    fs: FsOption = None,
 ):
     """Labelled spectral peaks (X, VC, VC−X, …; VC[left], VC[right] for several bearings)
     of a run's displacements or of any state variables; with --envelope the envelope
     spectrum, named by the defect frequencies; with --noise SNR_DB after adding seeded
-    white noise."""
-    from analysis.provenance import displacement_names, load_dataset
+    white noise. A measured record's channels (--channel) are named by --bearing's defect
+    frequencies at the record's speed (--rpm, --tacho)."""
+    from analysis.provenance import displacement_names
     from analysis.signal.spectrum import peak_table
 
     passband = _spectrum_options(band, envelope, noise, noise_seed)
-    ds = load_dataset(run_file)
-    variables = tuple(var) if var else displacement_names(ds)
+    ds, chosen = run_or_record(run_file, record_options(channel, fs, rpm, tacho, bearing), var,
+                               command="spectrum", needs_bearing=envelope or faults)
+    variables = tuple(var) if var else chosen or displacement_names(ds)
     for name in variables:
         if name not in ds.data_vars:
             raise InputError(f"--var: no state variable {name!r} in this run; variables: "
@@ -376,7 +395,9 @@ def _check_axes(names: list[str], x: str | None, y: str | None) -> None:
 @app.command()
 @reports_errors
 def plot(
-    result: Annotated[Path, typer.Argument(help="Any bearingdyn netCDF result.")],
+    result: Annotated[Path, typer.Argument(
+        help="Any bearingdyn netCDF result, or a measured record (--orbit or --full-spectrum "
+             "of --channel X --channel Y).", metavar="RESULT|RECORD")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Figure file (PNG, PDF, SVG).",
                                          callback=figure_output)],
     var: Annotated[list[str] | None, typer.Option(
@@ -396,10 +417,16 @@ def plot(
                        "swept parameter.")] = False,
     polar: Annotated[bool, typer.Option(
         "--polar", help="A sweep's polar plot of the 1X amplitude and phase lag.")] = False,
+    channel: ChannelsOption = None,
+    rpm: RpmOption = None,
+    tacho: TachoOption = None,
+    fs: FsOption = None,
 ):
     """Draw the natural figure of a result file (run, branch, diagram or chart), or a run's
-    orbits or full spectrum, or a sweep's Bode or polar plot."""
+    orbits or full spectrum, or a sweep's Bode or polar plot; a measured record's orbit or
+    full spectrum of two channels (--channel X --channel Y: proximity probes)."""
     from analysis.io import open_result
+    from analysis.measured.runs import is_record_file
     from analysis.reports.plots import any_figure
 
     chosen = [name for name, on in (("--orbit", orbit), ("--full-spectrum", full_spectrum),
@@ -407,6 +434,10 @@ def plot(
     if len(chosen) > 1:
         raise InputError(f"{chosen[1]}: give one of --orbit, --full-spectrum, --bode, "
                          f"--polar, got {' and '.join(chosen)}")
+    options = record_options(channel, fs, rpm, tacho, None)
+    if options.given() or is_record_file(result):
+        write_figure(record_figure(chosen[0] if chosen else None, result, options), output)
+        return
     if not chosen:
         write_figure(any_figure(open_result(result), var, result), output)
         return

@@ -8,6 +8,15 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import app, echo_json, figure_output, reports_errors, write_figure
+from analysis.cli.records import (
+    BearingOption,
+    ChannelOption,
+    FsOption,
+    RpmOption,
+    TachoOption,
+    record_options,
+    run_or_record,
+)
 
 
 @app.command()
@@ -15,7 +24,8 @@ from analysis.cli.common import app, echo_json, figure_output, reports_errors, w
 def waterfall(
     run_file: Annotated[Path, typer.Argument(
         help="netCDF file of a run whose speed changes (`bearingdyn simulate --speed-rpm "
-             "A:B` or a speed table).")],
+             "A:B` or a speed table), or a measured run-up (--channel, with --tacho or --rpm "
+             "TABLE.csv).", metavar="RUN|RECORD")],
     output: Annotated[Path | None, typer.Option("-o", "--output", help="Figure file.",
                                                 callback=figure_output)] = None,
     as_json: Annotated[bool, typer.Option(
@@ -32,17 +42,25 @@ def waterfall(
     samples_per_rev: Annotated[int | None, typer.Option(
         "--samples-per-rev", help="Angle samples per revolution of --orders (default: as "
                                   "many as the record has at its top speed).")] = None,
+    channel: ChannelOption = None,
+    tacho: TachoOption = None,
+    rpm: RpmOption = None,
+    bearing: BearingOption = None,
+    fs: FsOption = None,
 ):
     """Waterfall of a run-up or coast-down: short-time amplitude spectra against speed with
     the X, 2X, VC, VC±X, 2VC… and defect-order lines (FTF, BPFI, BSF) drawn and named;
     --orders adds the order spectrum. Without -o or --json, prints each line's largest
-    amplitude and the speed where it occurs."""
-    from analysis.provenance import load_dataset
+    amplitude and the speed where it occurs. A measured record's channel (--channel) runs
+    at the speed of its tacho (--tacho) or a speed table (--rpm TABLE.csv); --bearing
+    draws its defect orders."""
     from analysis.signal.orders import order_peaks, order_spectrum
     from analysis.signal.waterfall import line_tracks
     from analysis.signal.waterfall import waterfall as compute
 
-    ds = load_dataset(run_file)
+    ds, chosen = run_or_record(run_file, record_options(channel, fs, rpm, tacho, bearing),
+                               var, command="waterfall", changing_speed=True)
+    var = var or (chosen[0] if chosen else None)
     if orders:  # the angle grid's size judged before any spectrum is computed
         from analysis.signal.orders import check_samples_per_rev
 

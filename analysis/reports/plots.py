@@ -73,7 +73,7 @@ def _axis_label(ds: xr.Dataset, var: str) -> str:
 def run_title(ds: xr.Dataset) -> str:
     """A figure's title for a run: model, balls, speed and its forcing frequencies (a run
     whose speed follows a profile: the profile, 'ramp 1000 → 10000 rpm')."""
-    parts = [str(ds.attrs.get("model", "?"))]
+    parts = [str(ds.attrs.get("model") or _record_name(ds.attrs))]
     structure = balls_text(ds.attrs, "$N_b$", "")
     if structure:
         parts.append(structure)
@@ -93,6 +93,15 @@ def run_title(ds: xr.Dataset) -> str:
     if not freqs and forcing is not None and float(ds.attrs[forcing]) > 0:
         freqs.append(f"F = 1/{forcing} = {1 / float(ds.attrs[forcing]):.4g} Hz")
     return ", ".join(parts) + (f" ({', '.join(freqs)})" if freqs else "")
+
+
+def _record_name(attrs) -> str:
+    """A measured record's title: its file's name, channel(s) and bearing ('?' else)."""
+    if attrs.get("kind") != "record":
+        return "?"
+    name = str(attrs.get("source_file", "record")).replace("\\", "/").rsplit("/", 1)[-1]
+    bearing = f", bearing {attrs['bearing']}" if "bearing" in attrs else ""
+    return f"{name} ({', '.join(str(attrs.get('state_names', '')).split())}{bearing})"
 
 
 AMBIGUOUS_MARK = "*"

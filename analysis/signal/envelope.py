@@ -153,6 +153,10 @@ def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], 
     faults = fault_frequencies(attrs)
     if not faults:
         return inside, ""
+    if attrs.get("kind") == "record":  # measured: no model, so no model resonance to check
+        return inside, ("a measured record: the band is the measured signal's (largest "
+                        "spectral kurtosis, or --band), with no model resonance to check it "
+                        "against; a BPFO line here is the outer race's, there is no VC")
     bpfo = next(iter(faults.values()))["BPFO"]
     if inside:
         where = ", ".join(f"{f:.0f}" for f in inside)

@@ -68,7 +68,8 @@ def order_lines(attrs: Mapping[str, Any], max_order: float = 12.0, max_shaft_ord
     harmonics m·X (m ≤ ``max_shaft_order``), each VC harmonic n·VC (n ≤
     ``max_vc_order``) and its sidebands n·VC ± X (names as in spectra: X, 2X, 3X, VC,
     VC-X, VC+X, 2VC, 2VC-X, VC[left]…), then with ``faults`` each bearing's FTF, BPFI and
-    BSF (BPFO is VC for a stationary outer race: named VC), by increasing order."""
+    BSF (BPFO is VC for a stationary outer race: named VC; BPFO itself where there is no VC,
+    a measured record's bearing), by increasing order."""
     shaft = shaft_order_base(attrs)
     vcs = vc_frequencies(attrs)
     lines: dict[str, OrderLine] = {}
@@ -88,7 +89,7 @@ def order_lines(attrs: Mapping[str, Any], max_order: float = 12.0, max_shaft_ord
         for bearing, table in fault_frequencies(dict(attrs)).items():
             for key in FAULT_NAMES:
                 f = table.get(key, 0.0)
-                if key == "BPFO" or not f > 0 or f / shaft > max_order:
+                if (key == "BPFO" and vcs) or not f > 0 or f / shaft > max_order:
                     continue
                 name = f"{key}[{bearing}]" if bearing else key
                 lines.setdefault(name, OrderLine(name, f / shaft, "fault"))

@@ -431,7 +431,10 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     highest order the record resolves (below the Nyquist frequency, or below the band's
     width for an envelope, attr ``band_hz``), only the families of the run's defects
     (:func:`run_defects`; VC and its X combinations without a defect), and only for a line
-    ``SIGNIFICANCE_DB`` above its noise floor (:func:`noise_floor`). Every other name
+    ``SIGNIFICANCE_DB`` above its noise floor (:func:`noise_floor`); the envelope of a
+    dataset whose attrs hold ``label_tolerance_rel`` (a measured record's: its defect lines
+    sit off their nominal frequencies by the bearing's slip) names within that fraction of
+    the frequency where it is wider than 1.5 bins. Every other name
     within the tolerance is kept in ``also`` (an ambiguous label: ``Peak.ambiguous``).
     ``spectrum``: ``amplitude_spectrum(ds, var)`` when the caller has it already (it is not
     computed again).
@@ -482,9 +485,12 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
         reach = float(high) - float(low) if high else 0.5 / time_step(ds)
         top_order = max(4, int(reach / min(min(t.values()) for t in faults.values())))
         threshold = 10 ** (SIGNIFICANCE_DB / 20)
+    # a measured record's envelope lines sit off their nominal frequencies by the slip
+    slip = float(ds.attrs.get("label_tolerance_rel", 0.0)) if "band_hz" in ds.attrs else 0.0
     peaks = []
     for i in order:
-        f, tol = float(frequency[i]), _LABEL_TOLERANCE_BINS * df
+        f = float(frequency[i])
+        tol = max(_LABEL_TOLERANCE_BINS * df, slip * f)
         if vocabulary == "fault":
             floor = noise_floor(amplitude, int(k[i]))
             names = (fault_names(f, base_hz, faults, tol, max_harmonic=top_order,
