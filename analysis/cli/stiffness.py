@@ -91,7 +91,8 @@ def stiffness(
     speed_rpm: SpeedOption = None,
     sets: SetOption = None,
     angles: Annotated[int, typer.Option(
-        help="Cage angles over one ball pitch (evenly spaced from 0).")] = 36,
+        help="Cage angles per ball pitch (evenly spaced from 0; with two bearings, per "
+             "pitch of the one with more balls).")] = 36,
     as_json: JsonOption = False,
     ross: Annotated[Path | None, typer.Option(
         "--ross", help="Write cage-averaged coefficients over --speeds as the keywords of "

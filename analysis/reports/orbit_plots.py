@@ -43,8 +43,11 @@ def plot_orbit(ax, orbit: Orbit, speed_rpm: np.ndarray | None = None):
     else:
         ax.plot(orbit.x * factor, orbit.y * factor, lw=0.6, color="C0", label="orbit")
     if orbit.mark_x.size:
-        ax.plot(orbit.mark_x * factor, orbit.mark_y * factor, "o", ms=3, color="k",
-                label=f"once per revolution ({orbit.mark_x.size} marks)")
+        step = mark_step(orbit.mark_x.size, run_up=coloured is not None)
+        xs, ys = orbit.mark_x[::step] * factor, orbit.mark_y[::step] * factor
+        every = f": every {step}th of {orbit.mark_x.size}" if step > 1 else ""
+        ax.plot(xs, ys, "o", ms=3 if step == 1 else 2, color="k",
+                label=f"once per revolution ({xs.size} marks{every})")
         ax.plot(orbit.mark_x[0] * factor, orbit.mark_y[0] * factor, "o", ms=6, mfc="none",
                 color="C3", label="first mark")
     if orbit.clearance:
@@ -61,6 +64,20 @@ def plot_orbit(ax, orbit: Orbit, speed_rpm: np.ndarray | None = None):
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
               frameon=False)  # below the axes: never over the orbit
     return coloured
+
+
+MAX_RUN_UP_MARKS = 40
+"""Once-per-revolution marks drawn at most on a run-up's orbit: every revolution of a
+run-up was drawn (367 marks buried its orbit), so every k-th is, and the legend says so."""
+
+
+def mark_step(count: int, run_up: bool) -> int:
+    """Every how many of ``count`` once-per-revolution marks one is drawn: all at constant
+    speed (they pile onto the section's points), every k-th on a run-up so that at most
+    ``MAX_RUN_UP_MARKS`` are drawn."""
+    if not run_up or count <= MAX_RUN_UP_MARKS:
+        return 1
+    return math.ceil(count / MAX_RUN_UP_MARKS)
 
 
 SPEED_CMAP = "viridis"
@@ -86,7 +103,7 @@ def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> 
     found = orbits(ds, x, y)
     columns = min(len(found), 3)
     rows = math.ceil(len(found) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(4.6 * columns, 4.4 * rows + 0.5),
+    fig, axes = plt.subplots(rows, columns, figsize=(max(6.4, 4.6 * columns), 4.4 * rows + 1.0),
                              layout="constrained", squeeze=False)
     speeds = run_speeds(ds)
     for ax, orbit in zip(axes.ravel(), found, strict=False):

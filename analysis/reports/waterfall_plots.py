@@ -25,6 +25,25 @@ def _f_max(wf: xr.Dataset) -> float:
     return min(top, float(wf["frequency"].values[-1]))
 
 
+LABEL_GAP_PT = 9.0
+"""Least distance (points) between two rotated line labels at the waterfall's top: a 7 pt
+label is about 8 pt wide, so the labels of close lines (BSF and VC at top speed) were
+printed over each other."""
+
+
+def label_shifts(positions: list[float], gap: float, width: float) -> list[float]:
+    """Offsets (points) that move labels at sorted ``positions`` (points along an axis of
+    ``width``) apart to at least ``gap`` each, as little as possible: pushed right in
+    order, then pulled back left from the axis end where they ran past it."""
+    placed: list[float] = []
+    for x in positions:
+        placed.append(max(x, placed[-1] + gap) if placed else x)
+    for i in range(len(placed) - 1, -1, -1):
+        limit = width if i == len(placed) - 1 else placed[i + 1] - gap
+        placed[i] = min(placed[i], limit)
+    return [p - x for p, x in zip(placed, positions, strict=True)]
+
+
 def plot_waterfall(ax, wf: xr.Dataset) -> None:
     """The waterfall on ``ax``: amplitude in dB (colour) over frequency (Hz) and speed
     (rpm; time (s) when the speed goes up and down, the speed on the ticks), each named
@@ -47,19 +66,26 @@ def plot_waterfall(ax, wf: xr.Dataset) -> None:
     cbar.set_label(f"amplitude, dB re {ref * scale:.3g} {unit}")
     fastest = int(np.argmax(wf["speed_rpm"].values))  # labels where the lines spread most
     labels = ax.get_xaxis_transform()  # x in Hz, y in axes fractions
+    tops = []
     for name, kind, line in zip(wf["line"].values, wf["line_kind"].values,
                                 wf["line_hz"].values, strict=True):
         if np.min(line) > f_max:
             continue
         colour = _FAULT_COLOUR if kind == "fault" else _SHAFT_COLOUR
         ax.plot(line, speed, ls="--", lw=0.7, color=colour, alpha=0.8)
-        if line[fastest] > f_max:
-            continue
-        ax.annotate(display_label(str(name)), (line[fastest], 1.0), xycoords=labels,
-                    xytext=(0, 3), textcoords="offset points", rotation=90, fontsize=7,
+        if line[fastest] <= f_max:
+            tops.append((float(line[fastest]), display_label(str(name)), colour))
+    tops.sort(key=lambda top: top[0])
+    width = ax.get_position().width * ax.figure.get_figwidth() * 72.0  # points
+    shifts = label_shifts([x / f_max * width for x, _, _ in tops], LABEL_GAP_PT, width)
+    for (x, text, colour), shift in zip(tops, shifts, strict=True):
+        ax.annotate(text, (x, 1.0), xycoords=labels, xytext=(shift, 3),
+                    textcoords="offset points", rotation=90, fontsize=7,
                     color=colour, ha="center", va="bottom", annotation_clip=False,
                     bbox={"boxstyle": "round,pad=0.1", "fc": "black", "alpha": 0.4,
-                          "lw": 0})
+                          "lw": 0},
+                    arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.5}
+                    if abs(shift) > 0.5 else None)
     ax.set_xlim(0, f_max)
     ax.set_xlabel("frequency (Hz)")
     if monotonic:

@@ -121,6 +121,16 @@ def cage_pitch(structure: Sequence[int]) -> float:
     return 2 * math.pi / (math.gcd(*counts) if counts else 1)
 
 
+def ball_pitches(structure: Sequence[int]) -> int:
+    """Ball pitches of the bearing with most balls within one cage pitch
+    (``cage_pitch``): max(N_b)/gcd(N_b…); 1 for one bearing. The coefficients vary within
+    each of them, so ``coefficients`` samples each with ``n_angles`` angles (two bearings
+    of 7 and 11 balls: 11 pitches in 2π, where 36 angles over 2π gave 3.3 per pitch, a
+    sawtooth)."""
+    counts = [n for n in structure if n > 0]
+    return max(counts) // math.gcd(*counts) if counts else 1
+
+
 def _solve(fun: ca.Function, q0: np.ndarray, psi: float, p: np.ndarray,
            coordinates: list[str]) -> Equilibrium:
     n = len(q0)
@@ -184,7 +194,8 @@ def equilibrium(target: System | Model | str, n_balls: BallCounts = None,
 def coefficients(target: System | Model | str, n_balls: BallCounts = None,
                  n_angles: int = CAGE_ANGLES, **parameters: float) -> xr.Dataset:
     """Equilibrium, stiffness and damping over one cage pitch (``n_angles`` evenly spaced
-    cage angles from 0) and their cage-angle means.
+    cage angles per ball pitch of the bearing with most balls, ``ball_pitches``: over the
+    cage pitch from 0) and their cage-angle means.
 
     Returns a Dataset with coordinates ``cage_angle`` (rad), ``row`` and ``column`` (the
     model's position coordinates) and variables ``position`` (cage_angle, row; m or rad),
@@ -197,7 +208,8 @@ def coefficients(target: System | Model | str, n_balls: BallCounts = None,
     system = as_system(target, n_balls, **parameters)
     fun, coordinates = _force_function(system)
     pitch = cage_pitch(system.structure)
-    angles = pitch * np.arange(n_angles) / n_angles
+    total = n_angles * ball_pitches(system.structure)
+    angles = pitch * np.arange(total) / total
     start = np.zeros(len(coordinates))  # every angle from the unloaded position: the same
     results = [_solve(fun, start, float(psi), system.p, coordinates) for psi in angles]
     return _dataset(system, results, angles, pitch)
