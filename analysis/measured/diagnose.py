@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import BearingdynError, InputError
 from analysis.measured import evidence as ev
 from analysis.measured import prewhiten as pw
 from analysis.measured.bearings import BSF_CONVENTION, Bearing, lookup
@@ -282,11 +282,18 @@ def squared_envelope_spectrum(spectrum: kg.Spectrum, band: BandChoice
 
 def verdict_of(families: dict[str, ev.Family]) -> tuple[str, float, str]:
     """(verdict, confidence, reason) from the families' evidence (module docstring). FTF
-    lines beside a clear ball family are the cage's modulation of the ball defect: the cage
-    is named only when the ball family is not clear."""
+    lines beside ball lines are the cage's modulation of a ball defect: the cage is named
+    only when no ball harmonic stands over the noise (``evidence.above_noise``)."""
     clear = sorted((f for f in families.values() if f.clear), key=lambda f: -f.score)
-    if any(f.name == "ball" for f in clear):
+    ball = families.get("ball")
+    audible = [] if ball is None else ev.above_noise(ball)
+    if any(f.name == "cage" for f in clear) and audible:
         clear = [f for f in clear if f.name != "cage"]
+        if not clear:
+            return "none", 0.5, ("no clear fault: FTF lines beside ball lines over the "
+                                 f"noise ({', '.join(ln.name for ln in audible)}): the "
+                                 "cage's modulation of a ball defect whose lines are not "
+                                 "clear, or a cage fault; not named")
     if not clear:
         best = max(families.values(), key=lambda f: (len(f.harmonics_above), f.score),
                    default=None)
@@ -436,13 +443,31 @@ def diagnose_file(path: str | Path, *, channel: str | None, bearing: str,
     return diagnose(record, channel=channel, bearing=bearing, prewhiten=prewhiten)
 
 
+def folder_jobs(folder: str | Path, *, channel: str | None, bearing: str,
+                rpm: float | None = None, tacho: str | None = None, fs: float | None = None,
+                prewhiten: str = pw.DEFAULT) -> list[Job]:
+    """A :class:`Job` for every file in ``folder`` (not its subfolders) whose suffix a
+    reader knows (``analysis.measured.readers.READERS``), by name; InputError for a folder
+    without one, an impossible bearing or an unknown method (judged before any file is
+    read)."""
+    from analysis.measured.readers import READERS
+
+    lookup(bearing)
+    pw.check_method(prewhiten)
+    path = Path(folder)
+    files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in READERS)
+    if not files:
+        raise InputError(f"record: folder '{path}' holds no record ({', '.join(READERS)})")
+    return [Job(str(p), channel, bearing, rpm, tacho, fs, prewhiten) for p in files]
+
+
 def run_job(job: Job) -> dict:
     """A folder's task: the diagnosis as a dict (``as_dict``), or ``{"error": line}``."""
     try:
         result = diagnose_file(job.path, channel=job.channel, bearing=job.bearing,
                                rpm=job.rpm, tacho=job.tacho, fs=job.fs,
                                prewhiten=job.prewhiten)
-    except InputError as err:
+    except BearingdynError as err:
         return {"path": job.path, "error": str(err)}
     return {"path": job.path, **result.as_dict()}
 

@@ -106,6 +106,20 @@ def line_false_alarm(level_db: float, window_bins: int) -> float:
     return float(-np.expm1(window_bins * np.log1p(-(2.0 ** -k2))))
 
 
+def noise_median_db(window_bins: int) -> float:
+    """The level (dB over the median floor) that the largest of ``window_bins`` Rayleigh
+    bins of noise passes with probability 1/2: k² = −log2(1 − 2^(−1/W))."""
+    k2 = -math.log2(-math.expm1(-math.log(2.0) / max(window_bins, 1)))
+    return 10.0 * math.log10(k2)
+
+
+def above_noise(family: Family) -> list[Line]:
+    """The family's harmonics that stand over the median largest noise bin of their window
+    (``noise_median_db``): lines more likely there than not, clear or not."""
+    return [ln for ln in family.lines if ln.role == "harmonic" and ln.level_db is not None
+            and ln.level_db >= noise_median_db(int(2 * round(ln.window_hz / family.df) + 1))]
+
+
 @dataclass(frozen=True)
 class Line:
     """One line searched: its name, theory and what was found (Hz, dB, multiples of the

@@ -131,7 +131,7 @@ def _positive(value: Any, option: str, unit: str) -> float:
     except (TypeError, ValueError):
         number = math.nan
     if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{option}: must be a finite number > 0 {unit}, got {value!r}")
+        raise InputError(f"{option}: must be a finite number > 0 {unit}, got {value}")
     return number
 
 
@@ -202,7 +202,8 @@ def _speed_given(rpm: float | str) -> Any:
             from analysis.integrate.speed_profile import read_table
 
             return read_table(rpm)
-        return _positive(number, "--rpm", "rpm")
+        return _positive(number, "--rpm", "rpm") if math.isfinite(number) and number > 0 \
+            else _positive(rpm, "--rpm", "rpm")
     return _positive(rpm, "--rpm", "rpm")
 
 

@@ -398,3 +398,150 @@ def test_record_info_refusals_are_one_line_exit_2(tmp_path):
         assert res.exit_code == 2, res.output
         assert res.output.startswith(text) and res.output.count("\n") == 1, res.output
     assert sorted(tmp_path.iterdir()) == before
+
+
+# ------------------------------------------------------------------------- in the commands
+
+BPFO_6205 = 3.5848  # the CWRU data centre's BPFO of the 6205-2RS, x shaft speed
+RPM = 1800.0
+
+
+def impacts(tmp_path, slip: float = 0.003, fs: float = 12000.0, seconds: float = 2.0):
+    """An outer-race fault as an accelerometer sees it: impacts at BPFO (slipping by
+    ``slip``) each ringing a 3 kHz resonance (damping ratio 0.05), in seeded white noise;
+    written to CSV with its time column. Returns (path, the impact rate in Hz)."""
+    rate = BPFO_6205 * RPM / 60 * (1 - slip)
+    t = np.arange(int(fs * seconds)) / fs
+    ring = np.exp(-0.05 * 2 * np.pi * 3000 * t[:120]) * np.sin(2 * np.pi * 3000 * t[:120])
+    pulses = np.zeros(t.size)
+    pulses[np.round(np.arange(0.01, seconds - 0.02, 1 / rate) * fs).astype(int)] = 1.0
+    acc = np.convolve(pulses, ring)[:t.size] + 0.05 * np.random.default_rng(3).standard_normal(
+        t.size)
+    path = tmp_path / "outer.csv"
+    np.savetxt(path, np.column_stack([t, acc]), delimiter=",", header="t,acc [g]",
+               comments="", fmt="%.10g")
+    return path, rate
+
+
+def test_spectrum_envelope_of_a_record_names_bpfo(tmp_path):
+    path, rate = impacts(tmp_path)
+    res = _invoke("spectrum", path, "--envelope", "--bearing", "6205-cwru", "--rpm", RPM,
+                  "--json", "--max-peaks", "4")
+    assert res.exit_code == 0, res.output
+    report = json.loads(res.stdout)
+    envelope = report["envelopes"][0]
+    top = envelope["peaks"][0]
+    assert top["label"] == "BPFO" and abs(top["frequency_hz"] - rate) < 0.5
+    assert report["faults"][""]["BPFO"] == pytest.approx(BPFO_6205 * RPM / 60, rel=1e-4)
+    assert envelope["note"].startswith("a measured record: the band is the measured signal's")
+    assert envelope["band_hz"][0] < 3000 < envelope["band_hz"][1]  # the ringing resonance
+    assert report["provenance"]["kind"] == "record"
+
+
+def test_spectrum_of_a_record_refusals(tmp_path):
+    import xarray as xr
+
+    from analysis.io import save_dataset
+
+    path, _ = impacts(tmp_path, seconds=0.5)
+    run = tmp_path / "run.nc"
+    save_dataset(xr.Dataset({"x": ("t", np.zeros(8))}, coords={"t": np.arange(8.0)},
+                            attrs={"model": "vakharia2015"}), run)
+    before = sorted(tmp_path.iterdir())
+    for args, text in (
+            ((path, "--envelope", "--bearing", "6205-cwru"),
+             "error: spectrum: the defect frequencies of 6205-cwru need the shaft speed, and "
+             f"'{path}' has none; give --rpm or --tacho"),
+            ((path, "--faults", "--rpm", RPM), "error: --bearing: spectrum names a measured "
+                                               "record's lines by a bearing's defect"),
+            ((path, "--var", "x"), f"error: --var: '{path}' is a measured record: choose its "
+                                   "channels with --channel"),
+            ((path, "--channel", "probe", "-o", tmp_path / "f.png"),
+             f"error: --channel: no channel 'probe' in '{path}'; channels: acc"),
+            ((path, "--rpm", 0), "error: --rpm: must be a finite number > 0 rpm, got 0"),
+            ((run, "--channel", "DE"), f"error: --channel: only for a measured record; '{run}' "
+                                       "is a simulated run")):
+        res = _invoke("spectrum", *args)
+        assert res.exit_code == 2, res.output
+        assert res.output.startswith(text) and res.output.count("\n") == 1, res.output
+    assert sorted(tmp_path.iterdir()) == before
+
+
+def test_spectrum_of_a_saved_record_names_x(tmp_path):
+    """A record saved as netCDF and read back by `spectrum`: a 1X tone is named X."""
+    from analysis.io import save_dataset
+
+    t = np.arange(4000) / FS
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, np.sin(2 * np.pi * 25 * t)]), delimiter=",",
+               header="t,acc [m/s2]", comments="")
+    save_dataset(read_record(path, rpm=1500), tmp_path / "rec.nc")
+    res = _invoke("spectrum", tmp_path / "rec.nc", "--json", "--max-peaks", "1")
+    assert res.exit_code == 0, res.output
+    peak = json.loads(res.stdout)["peaks"][0]
+    assert peak["label"] == "X" and peak["amplitude"] == pytest.approx(1.0, rel=1e-3)
+
+
+def _runup(tmp_path, fs=4000.0, seconds=6.0):
+    """A run-up 600 -> 1800 rpm (the shaft angle is the exact integral of the speed): an
+    accelerometer with a 1X line of 1 g and a line of 0.5 g at order 3.2, a once-per-revolution
+    tacho, and two proximity probes x = 20 cos, y = 10 sin of the shaft angle (µm)."""
+    t = np.arange(int(fs * seconds)) / fs
+    turns = (600 * t + 100 * t ** 2) / 60
+    acc = np.sin(2 * np.pi * turns) + 0.5 * np.sin(2 * np.pi * 3.2 * turns)
+    tacho = (np.mod(turns, 1.0) < 0.05) * 5.0
+    path = tmp_path / "runup.csv"
+    np.savetxt(path, np.column_stack([t, acc, tacho, 20 * np.cos(2 * np.pi * turns),
+                                      10 * np.sin(2 * np.pi * turns)]), delimiter=",",
+               header="t,acc [g],tacho [V],px [um],py [um]", comments="", fmt="%.10g")
+    return path
+
+
+def test_waterfall_of_a_run_up_record_with_a_tacho(tmp_path):
+    path = _runup(tmp_path)
+    res = _invoke("waterfall", path, "--channel", "acc", "--tacho", "tacho", "--orders",
+                  "--json", "--bearing", "6205-cwru")
+    assert res.exit_code == 0, res.output
+    report = json.loads(res.stdout)
+    peaks = {round(p["order"], 2): p for p in report["orders"]["peaks"]}
+    assert peaks[1.0]["amplitude"] == pytest.approx(1.0, rel=0.02)
+    assert peaks[3.2]["amplitude"] == pytest.approx(0.5, rel=0.02)
+    names = {line["name"] for line in report["lines"]}
+    assert {"X", "2X", "FTF", "BPFO", "BPFI", "BSF"} <= names
+    speeds = report["lines"][0]["speed_rpm"]
+    assert 600 < speeds[0] < 800 and 1600 < speeds[-1] < 1800
+    res = _invoke("waterfall", path, "--channel", "acc", "--rpm", 1200)
+    assert res.exit_code == 2 and "needs a speed that changes along the record" in res.output
+
+
+def test_orbit_and_full_spectrum_of_two_probes(tmp_path):
+    """x = 20 cos θ, y = 10 sin θ (µm) is 15 µm of forward whirl and 5 µm backward."""
+    t = np.arange(8000) / FS
+    theta = 2 * np.pi * 25 * t
+    path = tmp_path / "probes.csv"
+    np.savetxt(path, np.column_stack([t, 20 * np.cos(theta), 10 * np.sin(theta)]),
+               delimiter=",", header="t,px [um],py [um]", comments="")
+    res = _invoke("plot", path, "--full-spectrum", "--channel", "px", "--channel", "py",
+                  "--rpm", 1500, "-o", tmp_path / "full.png")
+    assert res.exit_code == 0, res.output
+    lines = [line.split() for line in res.stdout.splitlines()[1:3]]
+    assert lines[0][:2] == ["forward", "25.00"] and float(lines[0][2]) == pytest.approx(15e-6,
+                                                                                       rel=1e-3)
+    assert lines[1][:2] == ["backward", "-25.00"] and float(lines[1][2]) == pytest.approx(
+        5e-6, rel=1e-3)
+    res = _invoke("plot", path, "--orbit", "--channel", "px", "--channel", "py", "-o",
+                  tmp_path / "orbit.png")
+    assert res.exit_code == 0 and (tmp_path / "orbit.png").stat().st_size > 10_000
+    res = _invoke("plot", path, "--orbit", "--channel", "px", "-o", tmp_path / "o2.png")
+    assert res.exit_code == 2 and "takes two channels (--channel X --channel Y), got 1" in \
+        res.output and not (tmp_path / "o2.png").exists()
+
+
+@needs_cwru
+def test_cwru_inner_race_envelope_names_bpfi():
+    res = _invoke("spectrum", IR, "--channel", "DE", "--envelope", "--bearing", "6205-cwru",
+                  "--json", "--max-peaks", "3")
+    assert res.exit_code == 0, res.output
+    top = json.loads(res.stdout)["envelopes"][0]["peaks"][0]
+    assert top["label"] == "BPFI"
+    assert top["frequency_hz"] == pytest.approx(5.4152 * 1797 / 60, rel=0.005)
