@@ -31,6 +31,7 @@ def _register() -> Any:
     from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
     from analysis.cli import calibrate  # noqa: F401  (inference: calibrate)
     from analysis.cli import records  # noqa: F401  (measured records: record info)
+    from analysis.cli import compare  # noqa: F401  (model against measurement)
     from analysis.cli import diagnose  # noqa: F401  (measured records: bearing diagnosis)
     # isort: on
     return app
