@@ -28,7 +28,6 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.measured.records import (
     SPEED,
-    channels,
     pick_channel,
     read_record,
     record_speed_hz,
