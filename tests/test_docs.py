@@ -82,7 +82,8 @@ def test_site_has_a_guide_page_with_options_for_every_command(site):
         assert page.exists(), f"no guide page for `bearingdyn {name}`"
         html = page.read_text(encoding="utf-8")
         assert "bearingdyn:options" not in html
-        for param in cmd.params:
+        nested = [cmd, *getattr(cmd, "commands", {}).values()]  # a group: record info
+        for param in (p for c in nested for p in c.params):
             for opt in param.opts:
                 if opt.startswith("-"):
                     assert opt in html, f"guide/{name}: option {opt} not shown"
