@@ -1,6 +1,6 @@
-"""`bearingdyn record`: measured records (``analysis.measured.records``): `record info`, and
-the options every command that reads a record shares (``--channel``, ``--fs``, ``--rpm``,
-``--tacho``, ``--bearing``)."""
+"""`bearingdyn record`: measured records (``analysis.measured.records``): `record info`,
+`record save`, and the options every command that reads a record shares (``--channel``,
+``--fs``, ``--rpm``, ``--tacho``, ``--bearing``)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ from typing import Annotated
 
 import typer
 
-from analysis.cli.common import app, reports_errors
+from analysis.cli.common import app, netcdf_output, reports_errors
 from analysis.errors import InputError
 
 record_app = typer.Typer(no_args_is_help=True, rich_markup_mode=None, add_completion=False,
                          help="Measured records (CSV/TSV, WAV, MAT, UFF 58, TDMS, netCDF): "
-                              "what a file holds (record info).")
+                              "what a file holds (record info), and the file as a netCDF "
+                              "record (record save).")
 app.add_typer(record_app, name="record")
 
 RECORD_HELP = ("A measured record (.csv/.tsv/.txt, .wav, .mat, .uff/.unv, .tdms, .nc; "
@@ -70,6 +71,37 @@ def info(
         typer.echo(f"  {c['name']:<{width}}  {c['units']:<6} {c['original_name']:<16} "
                    f"rms {c['rms']:.4g}, range {c['min']:.4g} … {c['max']:.4g}")
     typer.echo(f"reader {summary['reader']}, sha256 {summary['sha256']}")
+
+
+@record_app.command("save")
+@reports_errors
+def save(
+    record: Annotated[Path, typer.Argument(help=RECORD_HELP.split(" or a netCDF")[0] + ".",
+                                           metavar="RECORD")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.",
+                                         callback=netcdf_output)],
+    channel: Annotated[list[str] | None, typer.Option(
+        "--channel", metavar="CHANNEL", help="Keep only these channels (name or pattern), "
+                                             "repeatable (default: all).")] = None,
+    fs: FsOption = None,
+    rpm: RpmOption = None,
+    tacho: TachoOption = None,
+    scale: ScaleOption = None,
+    units: UnitsOption = None,
+):
+    """Write a record as bearingdyn's netCDF record (rate, units, scale and speed given once,
+    provenance kept): every command, and the API's read_record, reads it back as it is."""
+    from analysis.io import save_dataset
+    from analysis.measured.records import SPEED, pick_channel, read_record
+
+    data = read_record(record, fs=fs, rpm=rpm, tacho=tacho, scale=scale, units=units)
+    if channel:
+        keep = [pick_channel(data, c) for c in channel]
+        keep += [data.attrs["tacho_channel"]] if "tacho_channel" in data.attrs else []
+        data = data[list(dict.fromkeys(keep)) + ([SPEED] if SPEED in data else [])]
+    save_dataset(data, output)
+    typer.echo(f"wrote {output}: {', '.join(n for n in data.data_vars if n != SPEED)} at "
+               f"{data.attrs['sample_rate_hz']:g} Hz, {data.sizes['t']} samples")
 
 
 ChannelsOption = Annotated[list[str] | None, typer.Option(

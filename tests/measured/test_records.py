@@ -545,3 +545,21 @@ def test_cwru_inner_race_envelope_names_bpfi():
     top = json.loads(res.stdout)["envelopes"][0]["peaks"][0]
     assert top["label"] == "BPFI"
     assert top["frequency_hz"] == pytest.approx(5.4152 * 1797 / 60, rel=0.005)
+
+
+def test_record_save_keeps_scale_units_speed_and_provenance(tmp_path):
+    from scipy.io import wavfile
+
+    pcm = (signals(2) / 4 * 32767).astype(np.int16)
+    wavfile.write(tmp_path / "acc.wav", int(FS), pcm)
+    out = tmp_path / "acc.nc"
+    res = _invoke("record", "save", tmp_path / "acc.wav", "--channel", "ch2", "--scale", 100,
+                  "--units", "g", "--rpm", 1800, "-o", out)
+    assert res.exit_code == 0, res.output
+    back = read_record(out)
+    assert channels(back) == ["ch2"] and back["ch2"].attrs["units"] == "g"
+    np.testing.assert_array_equal(back["ch2"].values, pcm[:, 1] / 32768.0 * 100)
+    assert back.attrs["speed_rpm"] == 1800.0 and back.attrs["reader"] == "scipy.io.wavfile.read"
+    res = _invoke("record", "save", tmp_path / "acc.wav", "--channel", "ch9", "-o",
+                  tmp_path / "no.nc")
+    assert res.exit_code == 2 and not (tmp_path / "no.nc").exists()
