@@ -142,7 +142,7 @@ def record_options(channel: list[str] | str | None, fs: float | None, rpm: str |
 
 def run_or_record(path: Path, options: RecordOptions, var: list[str] | str | None, *,
                   command: str, needs_bearing: bool = False, si: bool = False,
-                  changing_speed: bool = False):
+                  changing_speed: bool | None = False):
     """``(dataset, channels)`` of a command's file: a simulated run as before
     (``load_dataset``; channels ``()``: the run's ``--var``), refused with a record option;
     or a measured record (``analysis.measured.runs.record_run``) with its channels chosen
@@ -181,7 +181,8 @@ def record_figure(option: str | None, path: Path, options: RecordOptions):
     if len(options.channel) != 2:
         raise InputError(f"--channel: {option} of a measured record takes two channels "
                          f"(--channel X --channel Y), got {len(options.channel)}")
-    ds, (x, y) = run_or_record(path, options, None, command=f"plot {option}", si=True)
+    ds, (x, y) = run_or_record(path, options, None, command=f"plot {option}", si=True,
+                               changing_speed=None if option == "--orbit" else False)
     if option == "--orbit":
         from analysis.reports.orbit_plots import orbit_figure
 

@@ -351,19 +351,32 @@ def tacho_pulses(values: np.ndarray, fs: float) -> np.ndarray:
     return (k - 1 + fraction) / fs
 
 
+IRREGULAR = 0.25
+"""Largest median change of a tacho's interval from one revolution to the next: more is not
+a shaft (noise crossing the trigger levels at random)."""
+
+
 def tacho_speed(record: xr.Dataset, channel: str) -> xr.Dataset:
     """The record with the speed of its once-per-revolution tacho ``channel``: 60/(time
     between pulses) rpm, at the middle of each interval and linear in between (held before
     the second and after the last pulse). ``InputError`` for a tacho with fewer than two
-    pulses."""
+    pulses, or pulses whose intervals jump by more than :data:`IRREGULAR` from one to the
+    next (in the median: not a shaft)."""
     fs = float(record.attrs["sample_rate_hz"])
     pulses = tacho_pulses(record[channel].values, fs)
     if pulses.size < 2:
         raise InputError(f"--tacho: channel {channel} has {pulses.size} pulse(s) (rising "
                          "edges through 70 % of its range); a once-per-revolution tacho needs "
                          "at least two")
+    intervals = np.diff(pulses)
+    if intervals.size > 2:  # a shaft's speed changes little from one turn to the next
+        jumps = float(np.median(np.abs(np.diff(intervals)) / intervals[:-1]))
+        if jumps > IRREGULAR:
+            raise InputError(f"--tacho: channel {channel}'s {pulses.size} pulses are not "
+                             f"regular (successive intervals differ by {jumps:.0%} in the "
+                             "median); is it a once-per-revolution tacho?")
     middle = 0.5 * (pulses[1:] + pulses[:-1])
-    rpm = 60.0 / np.diff(pulses)
+    rpm = 60.0 / intervals
     record[SPEED] = ("t", np.interp(record["t"].values, middle, rpm), {"units": "rpm"})
     mean = 60.0 * (pulses.size - 1) / float(pulses[-1] - pulses[0])
     record.attrs.update(speed_rpm=mean, speed_source=f"tacho: {channel}",

@@ -45,14 +45,17 @@ FAULT_ATTRS = {"FTF": "ftf_hz", "BPFO": "bpfo_hz", "BPFI": "bpfi_hz", "BSF": "bs
 
 
 def record_run(record: xr.Dataset, chosen: Sequence[str] | str | None = None, *,
-               bearing: Any = None, si: bool = False, changing_speed: bool = False,
+               bearing: Any = None, si: bool = False, changing_speed: bool | None = False,
                what: str = "this analysis") -> xr.Dataset:
     """The run-like dataset of ``record``'s channels ``chosen`` (names or patterns,
     :func:`~analysis.measured.records.pick_channel`; None: the only channel), see the
     module. ``bearing``: a ``Bearing`` or its name (``analysis.measured.bearings.lookup``)
     whose defect frequencies the spectra name; it needs the record's speed (``InputError``
     saying ``give --rpm or --tacho``, naming ``what``). ``changing_speed``: the speed over
-    ``t`` as a speed profile (``InputError`` for a record at one speed)."""
+    ``t`` as a speed profile (``InputError`` for a record at one speed); None: where the
+    record has a speed over ``t``; False: one speed, the mean (``InputError`` where the
+    speed over ``t`` spans more than :data:`STEADY` of it: its lines would smear; a
+    waterfall follows it)."""
     patterns = [chosen] if chosen is None or isinstance(chosen, str) else list(chosen)
     names = list(dict.fromkeys(pick_channel(record, p) for p in patterns or [None]))
     data = {}
@@ -65,8 +68,12 @@ def record_run(record: xr.Dataset, chosen: Sequence[str] | str | None = None, *,
     speed = record_speed_hz(record)
     attrs.update(state_names=" ".join(names), shaft_hz=0.0 if speed is None else speed)
     ds = xr.Dataset(data, coords={"t": record["t"]}, attrs=attrs)
+    if changing_speed is None:
+        changing_speed = SPEED in record.data_vars
     if changing_speed:
         _profile(ds, record, what)
+    elif SPEED in record.data_vars:
+        _steady(record, what)
     if bearing is not None:
         _bearing(ds, bearing, speed, what)
     return ds
@@ -85,6 +92,20 @@ def _bearing(ds: xr.Dataset, bearing: Any, speed: float | None, what: str) -> No
     ds.attrs.update({FAULT_ATTRS[k]: float(table[k]) for k in FAULT_ATTRS})
     ds.attrs.update(bearing=found.name, bearing_source=found.source,
                     label_tolerance_rel=SLIP)
+
+
+STEADY = 0.05
+"""Largest spread (max − min)/mean of a record's speed over ``t`` that an analysis at one
+speed (a spectrum) takes as one speed, the mean."""
+
+
+def _steady(record: xr.Dataset, what: str) -> None:
+    speeds = record[SPEED].values
+    spread = float(np.ptp(speeds) / np.mean(speeds))
+    if spread > STEADY:
+        raise InputError(f"{what}: the record's speed changes ({speed_words(record)}: "
+                         f"{spread:.0%} of its mean, more than {STEADY:.0%}), so its lines "
+                         "smear; use bearingdyn waterfall (--orders) for a run-up")
 
 
 MAX_ROWS = 257

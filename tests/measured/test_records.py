@@ -563,3 +563,32 @@ def test_record_save_keeps_scale_units_speed_and_provenance(tmp_path):
     res = _invoke("record", "save", tmp_path / "acc.wav", "--channel", "ch9", "-o",
                   tmp_path / "no.nc")
     assert res.exit_code == 2 and not (tmp_path / "no.nc").exists()
+
+
+def test_a_noise_channel_is_not_a_tacho(tmp_path):
+    path = tmp_path / "rec.csv"
+    noise = np.random.default_rng(0).standard_normal((N, 2))
+    np.savetxt(path, noise, delimiter=",", header="acc,tacho", comments="")
+    with pytest.raises(InputError, match=r"^--tacho: channel tacho's \d+ pulses are not "
+                                         r"regular .*is it a once-per-revolution tacho\?$"):
+        read_record(path, fs=FS, tacho="tacho")
+
+
+def test_a_run_up_record_in_a_spectrum_and_its_orbit_marks(tmp_path):
+    """A spectrum of a run-up is refused (its lines smear); its orbit's once-per-revolution
+    marks follow the tacho's speed: every mark near the shaft angle 0 (x = 20 µm, y = 0)."""
+    from analysis.measured.runs import record_run
+    from analysis.signal.orbit import revolution_marks
+
+    path = _runup(tmp_path)
+    res = _invoke("spectrum", path, "--channel", "acc", "--tacho", "tacho")
+    assert res.exit_code == 2 and "the record's speed changes (" in res.output and \
+        "use bearingdyn waterfall (--orders)" in res.output, res.output
+    ds = record_run(read_record(path, tacho="tacho"), ["px", "py"], si=True,
+                    changing_speed=None)
+    marks = revolution_marks(ds)
+    assert marks.sizes["k"] > 50
+    angle = np.arctan2(marks["py"].values / 10e-6, marks["px"].values / 20e-6)
+    # the speed profile (257 rows between the tacho's pulses) drifts by < 0.04 % of the
+    # 120 turns; marks at the mean speed would lie all round the orbit
+    assert np.max(np.abs(angle)) < 0.3
