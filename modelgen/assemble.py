@@ -279,7 +279,12 @@ def ball_load(terms: list, ctx: Context, skip: type | None = None) -> sp.Expr:
 def assemble(spec: Spec, display: bool = False) -> Equations:
     """Build the symbolic equations of ``spec``. ``display`` keeps ω and ω_cage as symbols."""
     ctx = make_context(list(spec.parameters), display=display, state_names=spec.state_names())
-    eq = Equations(spec=spec, ctx=ctx)
+    if spec.shaft is not None:  # a finite-element rotor, reduced (modelgen/fe/nonlinear.py)
+        from modelgen.fe.nonlinear import FlexibleEquations
+
+        eq: Equations = FlexibleEquations(spec=spec, ctx=ctx)
+    else:
+        eq = Equations(spec=spec, ctx=ctx)
     contacts = spec.contacts()
     for bearing in eq.bearings:
         scoped = ctx.scoped(bearing.name)
@@ -292,6 +297,10 @@ def assemble(spec: Spec, display: bool = False) -> Equations:
 
 def latex_equations(spec: Spec) -> list[str]:
     """LaTeX lines of the equations of motion of ``spec``, for the model card."""
+    if spec.shaft is not None:
+        from modelgen.fe.nonlinear import latex_lines
+
+        return latex_lines(spec)
     eq = assemble(spec, display=True)
     names = eq.ctx.latex_names()
     names.update({eq.ctx.omega: r"\omega"})

@@ -249,6 +249,10 @@ def module_source(spec: Spec, eq: Equations, prov: Provenance) -> str:
         f"RANGES = {{\n    # name: (low, high, low inclusive); high is inclusive\n{ranges}}}",
         f"ROLES = {{\n    # role: the parameters that play it (Model.role)\n{roles}}}",
     ]
+    if spec.shaft is not None:  # a finite-element rotor: its reduction and node maps
+        from modelgen.fe.nonlinear import flexible_constants
+
+        constants += flexible_constants(spec)
     header = "\n".join(prov.lines())
     return (f'"""{spec.model.title}\n\n{header}\n"""\n\n' + "".join(imports) + "\n"
             + "\n".join(constants) + "\n\n\n" + "\n\n".join(functions))
@@ -336,7 +340,15 @@ def model_card(spec: Spec, prov: Provenance) -> str:
                                                       strict=True))
     bodies = "; ".join(f"`{b.name}` ({b.motion}, {', '.join(b.coordinates)})"
                        for b in spec.body_list())
+    if spec.shaft is not None:  # the nodes of a finite-element shaft
+        bodies = (f"the shaft's nodes `node0` … `node{spec.shaft.node_count - 1}` (body terms "
+                  "act at them; see Shaft and reduction)")
     default_balls = ", ".join(f"{b.name} = {b.n_balls}" for b in bearings) or "none"
+    shaft = ""
+    if spec.shaft is not None:  # a finite-element rotor: the shaft and what was kept
+        from modelgen.fe.nonlinear import flexible_card
+
+        shaft = flexible_card(spec)
     return f"""# {spec.model.name}: {spec.model.title}
 
 {header}
@@ -350,7 +362,7 @@ Reference: {spec.model.reference}
 Bodies: {bodies}. State: {state}; $x$ along the radial load. {balls}
 
 {equations}
-
+{shaft}
 ## Terms
 
 {terms}

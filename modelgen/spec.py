@@ -29,6 +29,8 @@ from pydantic import (
 
 from modelgen.errors import SpecError
 from modelgen.expressions import CONSTANTS, FUNCTIONS, ExpressionError
+from modelgen.fe.schema import Disk, LinearBearing, Material, Shaft, ShaftElement
+from modelgen.fe.schema import Unbalance as ShaftUnbalance
 from modelgen.lazy import sympy as sp
 from modelgen.locations import (
     MODELS_ENV,
@@ -181,6 +183,33 @@ class Bearing(_Strict):
     n_balls: int = Field(ge=N_BALLS_RANGE[0], le=N_BALLS_RANGE[1])
     """Default number of rolling elements (structural: any number in range is built at run
     time without SymPy)."""
+    node: int | None = Field(None, ge=0)
+    """The shaft node that carries the inner race, in a spec with ``[shaft]`` (there
+    ``inner = "shaft"``): the node's x, y are the inner race's centre."""
+
+
+SHAFT = "shaft"
+"""The inner body of a ball bearing on a finite-element shaft (``node`` says where)."""
+
+
+class Reduction(_Strict):
+    """``[reduction]`` of a spec with ``[shaft]``: how the finite-element rotor is reduced to
+    the coordinates of its generated model (``modelgen/fe/reduction.py``)."""
+
+    method: Literal["craig_bampton", "modal", "none"] = "craig_bampton"
+    """``craig_bampton``: the ball-bearing nodes' translations kept physical plus ``modes``
+    fixed-interface modes per bending plane; ``modal``: the ``modes`` lowest modes of the
+    shaft on its linear bearings (a shaft without ball bearings); ``none``: every DOF."""
+    modes: int = Field(4, ge=0, le=400)
+    """Modes kept per bending plane (x–z and y–z): fixed-interface modes (Craig–Bampton) or
+    the shaft's modes (modal); at most the DOFs of a plane besides its interface."""
+    node: int | None = Field(None, ge=0)
+    """The node whose displacements are the first states ``x``, ``y`` (the model's one body,
+    ``node<K>``: its orbit, and what the blow-up checks watch; default: the first ball
+    bearing's node, else the first disk's, else node 0)."""
+    max_speed_rpm: float = Field(10000.0, gt=0, le=1e6)
+    """The highest speed of interest, rpm: the reduction's error is stated over speeds up
+    to it, for every mode below twice its frequency."""
 
 
 class SimulationDefaults(_Strict):
@@ -243,7 +272,15 @@ class Spec(_Strict):
     """The rigid bodies and their coordinates (left out: one planar body ``rotor`` with mass
     ``rotor_mass``)."""
     bearings: list[Bearing] | None = None
-    """The ball bearings between bodies, or between a body and ``ground``."""
+    """The ball bearings between bodies, or between a body and ``ground`` (on a
+    ``[shaft]``: ``inner = "shaft"`` and the ``node`` that carries the inner race)."""
+    shaft: Shaft | None = None
+    """A finite-element rotor (``modelgen/fe/schema.py``): its elements, materials, disks,
+    unbalances and linear bearings; ball bearings sit at its nodes, and body terms
+    (``radial_load``, …) name a node as their body (``body = "node3"``; default: the node of
+    the states x, y). Its model's state is the reduced coordinates (``[reduction]``)."""
+    reduction: Reduction | None = None
+    """How a ``[shaft]`` is reduced (default: Craig–Bampton, 4 modes per plane)."""
     simulation: SimulationDefaults = SimulationDefaults()
     """Default times and initial state of a run (``--duration``, ``--dt`` … override them)."""
     parameters: dict[str, Parameter]
@@ -263,7 +300,9 @@ class Spec(_Strict):
                         *_initial_problems(self)]
             if not attached:  # and these, every term on a known body or bearing
                 problems += [*_structure_problems(self), *_term_problems(self),
-                             *_contact_problems(self), *_holding_problems(self)]
+                             *_contact_problems(self)]
+                if self.shaft is None:  # a shaft is held by its bearings (_layout_problems)
+                    problems += _holding_problems(self)
         if self.simulation.transient >= self.simulation.duration:
             problems.append("simulation.transient: must be shorter than simulation.duration "
                             f"({self.simulation.duration:g} s)")
@@ -275,7 +314,10 @@ class Spec(_Strict):
         return {n: p.value for n, p in self.parameters.items()}
 
     def body_list(self) -> list[Body]:
-        """The bodies (one planar ``rotor`` when the spec names none)."""
+        """The bodies (one planar ``rotor`` when the spec names none; on a ``[shaft]``, its
+        nodes ``node0``, ``node1``, …: where body terms act)."""
+        if self.shaft is not None:
+            return [Body(name=f"node{k}") for k in range(self.shaft.node_count)]
         return list(self.bodies) if self.bodies is not None else [Body(name="rotor")]
 
     def bearing_list(self) -> list[Bearing]:
@@ -286,15 +328,46 @@ class Spec(_Strict):
             return [Bearing(name="bearing", inner="rotor", n_balls=self.structure.n_balls)]
         return []
 
+    def reduction_options(self) -> Reduction:
+        """The ``[reduction]`` of a spec with ``[shaft]`` (its defaults when not given)."""
+        return self.reduction if self.reduction is not None else Reduction()
+
+    def shaft_node(self) -> int:
+        """The node whose x, y are the first states of a ``[shaft]`` model."""
+        shaft, chosen = self.shaft, self.reduction_options().node
+        if chosen is not None or shaft is None:
+            return chosen or 0
+        first = [b.node for b in self.bearing_list() if b.node is not None]
+        return next(iter(first + [d.node for d in shaft.disks]), 0)
+
+    def interface_nodes(self) -> tuple[int, ...]:
+        """The shaft nodes that carry ball bearings, ascending."""
+        return tuple(sorted({b.node for b in self.bearing_list() if b.node is not None}))
+
+    def shaft_coordinates(self) -> tuple[str, ...]:
+        """The reduced coordinates of a ``[shaft]`` model (m): ``x, y`` of the chosen node
+        (``shaft_node``), then ``x_q<j>, y_q<j>`` (``modelgen/fe/reduction.py``)."""
+        assert self.shaft is not None
+        options = self.reduction_options()
+        per_plane = {"none": 2 * self.shaft.node_count, "modal": options.modes,
+                     "craig_bampton": len(self.interface_nodes()) + options.modes}
+        return shaft_coordinates(per_plane[options.method])
+
     def state_names(self) -> tuple[str, ...]:
         """Positions of every body, then their velocities (``<coordinate>_<body>`` when the
-        model has several bodies)."""
+        model has several bodies; a ``[shaft]``'s reduced coordinates)."""
+        if self.shaft is not None:
+            positions = self.shaft_coordinates()
+            return (*positions, *(f"v{n}" for n in positions))
         bodies = self.body_list()
         suffix = (lambda b: "") if len(bodies) == 1 else (lambda b: f"_{b.name}")
         positions = [f"{c}{suffix(b)}" for b in bodies for c in b.coordinates]
         return (*positions, *(f"v{n}" for n in positions))
 
     def state_units(self) -> tuple[str, ...]:
+        if self.shaft is not None:
+            n = len(self.shaft_coordinates())
+            return (*("m",) * n, *("m/s",) * n)
         units = [COORDINATE_UNITS[c] for b in self.body_list() for c in b.coordinates]
         return (*(u[0] for u in units), *(u[1] for u in units))
 
@@ -319,6 +392,8 @@ class Spec(_Strict):
             pool = self.body_list() if owner == "body" else self.bearing_list()
             if named is None and len(pool) == 1:
                 named = pool[0].name
+            elif named is None and owner == "body" and self.shaft is not None:
+                named = f"node{self.shaft_node()}"  # the model's body: the node of x, y
             if named is not None:
                 found[owner] = named
         return found
@@ -357,6 +432,13 @@ class Spec(_Strict):
                         par.note or "user-declared parameter")
 
 
+def shaft_coordinates(per_plane: int) -> tuple[str, ...]:
+    """Names of a reduced shaft's coordinates, two per kept shape (x–z and y–z plane): the
+    chosen node's ``x, y`` (the model's one body, as a rigid rotor's), then ``x_q<j>, y_q<j>``
+    (generalised coordinates of the body ``q<j>``)."""
+    return tuple(f"{axis}_q{j}" if j else axis for j in range(per_plane) for axis in ("x", "y"))
+
+
 def _scoped_quantity(name: str, owners: list[str]) -> str | None:
     """The built-in quantity of ``name = <quantity>_<owner>``, or None."""
     for owner in owners:
@@ -368,7 +450,15 @@ def _scoped_quantity(name: str, owners: list[str]) -> str | None:
 
 def _layout_problems(spec: Spec) -> list[str]:
     """Names unique, bearings between known bodies, one way of giving the balls."""
+    if spec.shaft is not None:
+        return _shaft_layout_problems(spec)
     problems: list[str] = []
+    if spec.reduction is not None:
+        problems.append("reduction: only in a spec with [shaft] (a finite-element rotor)")
+    for i, bearing in enumerate(spec.bearing_list()):
+        if bearing.node is not None:
+            problems.append(f"bearings[{i}].node: only in a spec with [shaft] (a bearing on a "
+                            "rigid body sits at its station)")
     if spec.structure is not None and (spec.bodies is not None or spec.bearings is not None):
         problems.append("structure: only in a spec without [[bodies]] and [[bearings]]; give "
                         "each bearing its n_balls in [[bearings]]")
@@ -398,6 +488,68 @@ def _layout_problems(spec: Spec) -> list[str]:
         if body.inertia is not None and body.motion != "planar_tilt":
             problems.append(f"bodies[{i}].inertia: only a 'planar_tilt' body has an inertia")
     return problems
+
+
+def _shaft_layout_problems(spec: Spec) -> list[str]:
+    """A ``[shaft]`` spec: no rigid bodies; every bearing on a node of the shaft, to ground;
+    the reduction keeps what the shaft has."""
+    assert spec.shaft is not None
+    problems: list[str] = []
+    count = spec.shaft.node_count
+    nodes = f"the shaft's nodes are 0 to {count - 1}"
+    if spec.bodies is not None:
+        problems.append("bodies: a spec with [shaft] has no rigid bodies (body terms name a "
+                        "node: body = \"node3\")")
+    if spec.structure is not None:
+        problems.append("structure: a spec with [shaft] gives its ball bearings in "
+                        "[[bearings]] with inner = \"shaft\" and node = …")
+    names = spec.owner_names()
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        problems.append(f"bearings: the name '{name}' is used {names.count(name)} times; "
+                        "each bearing needs its own name (not a node's)")
+    for i, bearing in enumerate(spec.bearing_list()):
+        if bearing.inner != SHAFT:
+            problems.append(f"bearings[{i}].inner: must be '{SHAFT}' in a spec with [shaft], "
+                            f"got '{bearing.inner}'")
+        if bearing.outer != GROUND:
+            problems.append(f"bearings[{i}].outer: must be '{GROUND}' in a spec with [shaft], "
+                            f"got '{bearing.outer}'")
+        if bearing.node is None:
+            problems.append(f"bearings[{i}].node: missing; the shaft node that carries the "
+                            f"bearing ({nodes})")
+        elif bearing.node >= count:
+            problems.append(f"bearings[{i}].node: no node {bearing.node}; {nodes}")
+    options = spec.reduction_options()
+    if options.node is not None and options.node >= count:
+        problems.append(f"reduction.node: no node {options.node}; {nodes}")
+    interface = spec.interface_nodes()
+    if options.method == "modal" and interface:
+        problems.append("reduction.method: 'modal' is for a shaft on linear bearings only; "
+                        "with ball bearings use 'craig_bampton' (their nodes kept physical)")
+    high = 2 * count - (len(interface) if options.method == "craig_bampton" else 0)
+    if options.method != "none" and options.modes > high:
+        problems.append(f"reduction.modes: must be in [{int(options.method == 'modal')}, "
+                        f"{high}] (the DOFs of a bending plane"
+                        f"{' besides the ball-bearing nodes' if interface else ''}), got "
+                        f"{options.modes}")
+    elif options.method == "modal" and options.modes < 1:
+        problems.append(f"reduction.modes: must be in [1, {high}] for modal truncation, got 0")
+    if not problems:
+        problems.extend(_shaft_held_problems(spec))
+    return problems
+
+
+def _shaft_held_problems(spec: Spec) -> list[str]:
+    """The shaft cannot move freely with its ball-bearing nodes held (else it drifts)."""
+    if spec.reduction_options().method != "craig_bampton":
+        return []
+    from modelgen.fe.assembly import assemble as assemble_shaft
+    from modelgen.fe.reduction import held_stiffness_problem
+
+    rotor = assemble_shaft(spec.shaft)
+    stiffness = rotor.K + rotor.bearing_matrices(0.0)[0]
+    problem = held_stiffness_problem(stiffness, spec.interface_nodes())
+    return [problem] if problem else []
 
 
 def _parameter_problems(spec: Spec) -> list[str]:
@@ -578,7 +730,9 @@ def _term_problems(spec: Spec) -> list[str]:
         if isinstance(term, ExpressionTerm):
             problems.extend(_expression_problems(i, term, spec, ctx))
     needed: dict[tuple[str, str], str] = {}
-    for body in spec.body_list():
+    if spec.shaft is not None:
+        needed[("speed_rpm", "")] = "the shaft (gyroscopic terms, unbalances)"
+    for body in spec.body_list() if spec.shaft is None else []:
         for name in dict.fromkeys(body.inertias()):
             needed.setdefault((name, ""), f"body '{body.name}'")
         for name in (body.support.stiffness, body.support.damping) if body.support else ():
@@ -764,7 +918,7 @@ def _bearing_geometry_problems(spec: Spec, index: int, bearing: Bearing) -> list
 def _all_field_names() -> set[str]:
     names: set[str] = set(QUANTITIES) | {"kind", "variant", "cage"}
     for cls in (Spec, ModelInfo, Structure, SimulationDefaults, Parameter, Body, Bearing,
-                Support, *TERM_CLASSES):
+                Support, Reduction, Shaft, *SHAFT_SECTIONS.values(), *TERM_CLASSES):
         names |= set(cls.model_fields)
     return names
 
@@ -805,6 +959,9 @@ def _format_error(err: dict[str, Any]) -> str:
         return f"{loc}: missing required field"
     if kind == "value_error":
         text = msg.removeprefix("Value error, ")
+        if loc.startswith("shaft"):  # the shaft's own checks name their fields
+            return "\n".join(line if line.startswith(("shaft.", "shaft:")) else f"{loc}: {line}"
+                             for line in text.splitlines())
         return f"{loc}: {text}" if loc else text
     within = _allowed(parts)
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
@@ -851,7 +1008,9 @@ def _allowed(loc: tuple) -> str:
     if len(loc) == 3 and loc[0] == "parameters" and loc[2] == "value" and loc[1] in QUANTITIES:
         return f" in {QUANTITIES[loc[1]].range_text()}"
     section = {"simulation": SimulationDefaults, "structure": Structure,
-               "bearings": Bearing, "bodies": Body}.get(str(loc[0]))
+               "bearings": Bearing, "bodies": Body, "reduction": Reduction}.get(str(loc[0]))
+    if loc[0] == "shaft" and len(loc) >= 3:  # shaft.<group>[i].<field>
+        section = SHAFT_SECTIONS.get(str(loc[1]))
     if len(loc) >= 4 and _is_union_tag(loc, 2):  # terms.<i>.<kind>.<field>: the term's own
         section = TERMS[loc[2]]
     info = section.model_fields.get(str(loc[-1])) if section else None
@@ -867,6 +1026,11 @@ def _allowed(loc: tuple) -> str:
     if (low, high) == ("-inf", "inf"):
         return f" ({unit})" if unit else ""
     return f" in {left}{low}, {high}{right}" + (f" {unit}" if unit else "")
+
+
+SHAFT_SECTIONS = {"materials": Material, "elements": ShaftElement, "disks": Disk,
+                  "unbalances": ShaftUnbalance, "bearings": LinearBearing}
+"""The classes of a ``[shaft]``'s lists (``modelgen/fe/schema.py``), for the allowed ranges."""
 
 
 def _is_union_tag(loc: tuple, index: int) -> bool:

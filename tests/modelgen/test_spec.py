@@ -10,7 +10,8 @@ import tomli_w
 from modelgen.spec import load_spec, parse_spec, shipped_spec_names
 
 SHIPPED = ["6205-ball-defect", "6205-inner-defect", "6205-outer-defect", "balanced-rotor",
-           "duffing", "mathieu", "nu205-roller", "rotor-housing", "two-bearing-rotor",
+           "duffing", "mathieu", "nu205-roller", "rotor-housing", "three-disk-rotor",
+           "two-bearing-rotor",
            "vakharia2015", "vakharia2015-calibrated", "vakharia2015-consistent",
            "vakharia2015-two-contact"]
 
