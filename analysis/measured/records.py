@@ -223,6 +223,8 @@ def _rate(raw: Raw, fs: float | None, path: Path) -> tuple[float, str]:
                              f"(increasing, each step within {UNIFORM:.0%} of the mean); a "
                              "record is sampled at one rate")
         raw.fs = 1.0 / step
+        if t[0] != 0:
+            raw.attrs["time_offset_s"] = float(t[0])  # the record's t starts at 0
     stated = raw.fs is not None and not raw.fs_source.startswith("file name")
     if stated:
         rate = _positive(raw.fs, f"record: '{path}': its sampling rate", "Hz")

@@ -66,6 +66,18 @@ def test_csv_with_a_time_column_and_units(tmp_path):
     assert unit == "m"
 
 
+def test_a_time_column_in_ms_that_starts_late(tmp_path):
+    data = signals(1)[:, 0]
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([1000 * (2.5 + np.arange(N) / FS), data]), delimiter=",",
+               header="time (ms),acc [m/s^2]", comments="", fmt="%.12g")
+    rec = read_record(path)
+    assert rec.attrs["sample_rate_hz"] == pytest.approx(FS, rel=1e-9)
+    assert rec.attrs["time_offset_s"] == pytest.approx(2.5) and rec["t"].values[0] == 0.0
+    np.testing.assert_array_equal(rec["acc"].values, np.array([float(f"{v:.12g}")
+                                                               for v in data]))
+
+
 def test_tsv_without_header_needs_fs(tmp_path):
     data = signals(3)
     path = tmp_path / "rec.tsv"

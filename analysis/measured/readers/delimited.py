@@ -3,10 +3,10 @@ for the numbers).
 
 A header line is optional: cells that are not numbers name the columns, with units in
 brackets or parentheses (``DE [g]``, ``probe_x (um)``). A column named ``t``, ``time``,
-``t_s`` or ``time (s)`` holds the times (s, uniform) and gives the rate; without one the
-rate is ``--fs``. Columns without a header are named ``c1``, ``c2``, …; ``#`` starts a
-comment. The delimiter: a tab for ``.tsv``, else the one of ``, ; tab space`` that the
-header (or the first row) uses."""
+``t_s`` or ``time (s)`` (or ``time (ms)``, ``time (us)``) holds the times (uniform) and
+gives the rate; without one the rate is ``--fs``. Columns without a header are named
+``c1``, ``c2``, …; ``#`` starts a comment. The delimiter: a tab for ``.tsv``, else the one
+of ``, ; tab space`` that the header (or the first row) uses."""
 
 from __future__ import annotations
 
@@ -20,6 +20,8 @@ from analysis.errors import InputError
 from analysis.measured.readers import Channel, Raw, identifier, unit_of, unreadable
 
 TIME_NAMES = ("t", "time", "t_s", "time_s", "times")
+TIME_UNITS = {None: 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
+"""Units of a time column -> seconds."""
 _UNIT_IN_NAME = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*)\s*[\])]\s*$")
 
 
@@ -82,8 +84,8 @@ def read(path: Path) -> Raw:
                          f"hold {table.shape[1]}")
     channels, times = [], None
     for (name, units), column in zip(names, table.T, strict=True):
-        if name.lower() in TIME_NAMES and times is None and units in (None, "s"):
-            times = column
+        if name.lower() in TIME_NAMES and times is None and units in TIME_UNITS:
+            times = column * TIME_UNITS[units]
             continue
         channels.append(Channel(identifier(name), column, None if units is None else
                                 unit_of(units, f"record: '{path.name}' column {name!r}"),
