@@ -372,15 +372,19 @@ def _line(name: str, role: str, theory: float, centre: float, half: float,
 def explained_frequencies(family: Family, table: dict[str, float], shaft_hz: float,
                           top_hz: float) -> list[float]:
     """The frequencies (Hz) a clear family accounts for: its harmonics h·F' (h up to the
-    top of the spectrum), for the inner race with ±m·X sidebands and for the ball with
-    ±m·FTF (m ≤ ``SIDEBAND_ORDERS``); the ball also accounts for FTF and its harmonics
-    (the cage's modulation of a ball defect shows at FTF itself)."""
+    top of the spectrum; the cage only its ``HARMONICS``), for the inner race with ±m·X
+    sidebands and for the ball with ±m·FTF (m ≤ ``SIDEBAND_ORDERS``); the ball also
+    accounts for FTF and its harmonics (the cage's modulation of a ball defect shows at
+    FTF itself)."""
     if family.fundamental_hz is None:
         return []
     f0 = family.fundamental_hz
     spacing = _modulation(family.name, table, shaft_hz)
     out = []
-    for h in range(1, int(top_hz / f0) + 1):
+    # the cage claims only the harmonics it was searched for: BPFO = z·FTF exactly, so its
+    # higher harmonics would hide an outer race's lines
+    last = HARMONICS["cage"] if family.name == "cage" else int(top_hz / f0)
+    for h in range(1, last + 1):
         out.append(h * f0)
         for m in range(1, SIDEBAND_ORDERS + 1 if spacing else 1):
             out += [h * f0 - m * spacing, h * f0 + m * spacing]

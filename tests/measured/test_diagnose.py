@@ -233,6 +233,17 @@ def test_threshold_is_the_stated_false_alarm_rate():
     assert 4 * 49 * 3 * 5 * 2.0 ** (-2 * k2) == pytest.approx(ev.FAMILY_FALSE_ALARM, rel=1e-9)
 
 
+def test_a_clear_cage_does_not_explain_away_bpfo():
+    """BPFO = z·FTF exactly: the lines a clear cage family claims stop at its searched
+    harmonics, so they never hide BPFO (9·FTF of the 6205) or its harmonics."""
+    table = lookup("6205-cwru").frequencies(SHAFT)
+    cage = ev.Family("cage", "FTF", 10.0, (), 0.1, "FTF", table["FTF"])
+    claimed = ev.explained_frequencies(cage, table, SHAFT, 6000.0)
+    assert claimed == pytest.approx([table["FTF"] * m for m in (1, 2, 3)])
+    ball = ev.Family("ball", "BSF", 10.0, (), 0.1, "BSF", table["BSF"])
+    assert table["FTF"] in ev.explained_frequencies(ball, table, SHAFT, 6000.0)
+
+
 def test_a_file_speed_off_by_two_percent_is_said_and_corrected():
     d = diagnose_signal(impacts("outer", 0.0, seed=1), FS, SHAFT * 1.02, lookup("6205-cwru"))
     assert d.speed.refined and d.speed.hz == pytest.approx(SHAFT, rel=5e-4)
