@@ -33,6 +33,7 @@ def _register() -> Any:
     from analysis.cli import records  # noqa: F401  (measured records: record info)
     from analysis.cli import compare  # noqa: F401  (model against measurement)
     from analysis.cli import diagnose  # noqa: F401  (measured records: bearing diagnosis)
+    from analysis.cli import linear, import_ross  # noqa: F401  (campbell, unbalance, import-ross)
     # isort: on
     return app
 

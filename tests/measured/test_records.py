@@ -132,6 +132,21 @@ def test_mat_v5_and_v4(tmp_path, version):
     assert record_speed_hz(rec) == pytest.approx(1750 / 60)
 
 
+def test_a_cwru_file_with_a_second_records_variables(tmp_path):
+    """A few CWRU files hold another record's variables beside their own: the record the
+    file name ends with keeps DE, FE and its speed."""
+    from scipy.io import savemat
+
+    data = signals(2)
+    savemat(tmp_path / "Normal_1_099.mat", {
+        "X098_DE_time": data[:, :1], "X099_DE_time": data[:, 1:], "X098RPM": [[1772.0]],
+        "X099RPM": [[1774.0]]})
+    rec = read_record(tmp_path / "Normal_1_099.mat", fs=FS)
+    assert sorted(channels(rec)) == ["DE", "X098_DE_time"]
+    np.testing.assert_array_equal(rec[pick_channel(rec, "DE")].values, data[:, 1])
+    assert rec.attrs["speed_rpm"] == 1774.0 and rec.attrs["speed_source"] == "file: X099RPM"
+
+
 def test_mat_v73_in_matlabs_hdf5_layout(tmp_path):
     """A v7.3 MAT-file as MATLAB writes it: a 512-byte header (version 0x0200) before the
     HDF5 data, each array stored transposed (a column of N is a 1 x N dataset)."""

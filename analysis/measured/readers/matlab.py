@@ -4,8 +4,10 @@
 Each numeric vector is a channel. The CWRU bearing data's variables are understood
 (https://engineering.case.edu/bearingdatacenter): ``X105_DE_time``, ``X105_FE_time`` and
 ``X105_BA_time`` are the drive-end, fan-end and base accelerometers in g (channels ``DE``,
-``FE``, ``BA``; the full name where two records of one file would share a short one), and
-``X105RPM`` the motor speed noted during the test. A scalar ``fs``, ``Fs``,
+``FE``, ``BA``), and ``X105RPM`` the motor speed noted during the test. A few CWRU files
+hold a second record's variables too (``X098_DE_time`` beside ``X099_DE_time``): the record
+the file name ends with (``…_099.mat``) keeps the short names and its speed, the other its
+full names. A scalar ``fs``, ``Fs``,
 ``sample_rate`` or ``sampling_rate`` gives the rate in Hz; without one the rate is
 ``--fs``, or the one the file name states at its start (``12k_…``: 12 000 Hz, as the CWRU
 files are named)."""
@@ -72,29 +74,47 @@ def _load_hdf5(path: Path) -> dict[str, Any]:
     return out
 
 
-def _short_names(names: list[str]) -> dict[str, str]:
-    """Each channel variable's channel name: DE/FE/BA for CWRU names unless two share one."""
+def record_number(path: Path) -> int | None:
+    """The CWRU record number a file name ends with (``…_0_105.mat``: 105), or None."""
+    found = re.search(r"_(\d+)$", path.stem)
+    return int(found.group(1)) if found else None
+
+
+def _ours(name: str, number: int | None) -> bool:
+    """Whether a CWRU variable (``X105_DE_time``, ``X105RPM``) is of record ``number``."""
+    found = re.match(r"^X(\d+)", name)
+    return found is not None and number is not None and int(found.group(1)) == number
+
+
+def _short_names(names: list[str], number: int | None) -> dict[str, str]:
+    """Each channel variable's channel name: DE/FE/BA for CWRU names unless two share one;
+    then the file's own record (``number``, from its name) keeps the short name and the
+    other (a few CWRU files hold a second record's variables too) its full name."""
     short = {}
     for name in names:
         found = CWRU_CHANNEL.match(name)
         short[name] = found.group(2) if found else identifier(name)
-    counts: dict[str, int] = {}
-    for value in short.values():
-        counts[value] = counts.get(value, 0) + 1
-    return {name: (s if counts[s] == 1 else identifier(name)) for name, s in short.items()}
+    out = {}
+    for name, value in short.items():
+        sharing = [n for n, v in short.items() if v == value]
+        own = [n for n in sharing if _ours(n, number)]
+        keep = len(sharing) == 1 or own == [name]
+        out[name] = value if keep else identifier(name)
+    return out
 
 
 def read(path: Path) -> Raw:
     """The vector variables of a MAT-file as channels, its speed and rate where it notes
     them (see the module)."""
     variables, reader = _load(path)
+    number = record_number(path)
     speed, speed_name, rate, vectors = None, "", None, {}
     for name, value in variables.items():
         array = np.asarray(value)
         if array.dtype.kind not in "biuf" or array.size == 0:
             continue
         if array.size == 1:
-            if CWRU_SPEED.match(name) and speed is None:
+            if CWRU_SPEED.match(name) and (speed is None or _ours(name, number)):
                 speed, speed_name = float(array.ravel()[0]), name
             elif name in RATE_NAMES:
                 rate = float(array.ravel()[0])
@@ -104,7 +124,7 @@ def read(path: Path) -> Raw:
     if not vectors:
         raise InputError(f"record: '{path}' holds no numeric vector (no channel); "
                          f"variables: {', '.join(variables) or 'none'}")
-    short = _short_names(list(vectors))
+    short = _short_names(list(vectors), number)
     channels = []
     for name, values in vectors.items():
         found = CWRU_CHANNEL.match(name)
