@@ -619,3 +619,24 @@ def test_a_run_up_record_in_a_spectrum_and_its_orbit_marks(tmp_path):
     # the speed profile (257 rows between the tacho's pulses) drifts by < 0.04 % of the
     # 120 turns; marks at the mean speed would lie all round the orbit
     assert np.max(np.abs(angle)) < 0.3
+
+
+def test_tdms_with_a_time_channel_and_uff_with_uneven_abscissa(tmp_path):
+    import pyuff
+    from nptdms import ChannelObject, TdmsWriter
+
+    data = signals(1)[:, 0]
+    t = np.arange(N) / FS
+    with TdmsWriter(str(tmp_path / "rec.tdms")) as writer:
+        writer.write_segment([ChannelObject("g", "Time", t), ChannelObject("g", "acc", data)])
+    rec = read_record(tmp_path / "rec.tdms")
+    assert channels(rec) == ["acc"] and rec.attrs["sample_rate_hz"] == pytest.approx(FS)
+    np.testing.assert_array_equal(rec["acc"].values, data)
+    uff = pyuff.prepare_58(binary=1, func_type=1, rsp_node=1, rsp_dir=1, ref_node=0,
+                           ref_dir=0, data=data, x=t, id1="acc", abscissa_spacing=0,
+                           orddenom_spec_data_type=0, ordinate_axis_units_lab="g")
+    pyuff.UFF(str(tmp_path / "rec.uff")).write_sets([uff], mode="add")
+    rec = read_record(tmp_path / "rec.uff")
+    assert rec.attrs["sample_rate_hz"] == pytest.approx(FS, rel=1e-9)
+    assert rec.attrs["sample_rate_source"] == "file: abscissa values"
+    np.testing.assert_array_equal(rec["acc"].values, data)

@@ -1,7 +1,8 @@
 """TDMS records (National Instruments; ``npTDMS``): each numeric channel is a channel,
 named by its channel name (``group_channel`` where two groups share one), its rate
-1/``wf_increment`` and its units the ``unit_string`` property where it is one of
-``analysis.measured.readers.UNITS``. Install: ``python3 -m pip install -e '.[measured]'``."""
+1/``wf_increment`` (or a channel ``time``/``t`` of times in s) and its units the
+``unit_string`` property where it is one of ``analysis.measured.readers.UNITS``. Install:
+``python3 -m pip install -e '.[measured]'``."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from analysis.measured.readers import (
     missing_library,
     unreadable,
 )
+from analysis.measured.readers.delimited import TIME_NAMES
 
 
 def _channels(path: Path) -> list:
@@ -47,6 +49,10 @@ def read(path: Path) -> Raw:
              if np.asarray(v).dtype.kind in "biuf" and np.asarray(v).size > 1]
     if not found:
         raise InputError(f"record: '{path}' holds no numeric channel")
+    times = next((np.asarray(v, dtype=float) for _, c, p, v in found
+                  if c.lower() in TIME_NAMES and not p.get("wf_increment")), None)
+    if times is not None:  # a time channel instead of waveform properties
+        found = [f for f in found if f[1].lower() not in TIME_NAMES]
     names = [c for _, c, _, _ in found]
     unique = len(set(names)) == len(names)
     channels, rates = [], set()
@@ -58,6 +64,8 @@ def read(path: Path) -> Raw:
                                 _units(props.get("unit_string")),
                                 str(props.get("NI_ChannelName", f"{group}/{name}")),
                                 f"{group}/{name}"))
+    if times is not None and rates == {None}:
+        return Raw(channels, "nptdms.TdmsFile.read", t=times, fs_source="file: time channel")
     if len(rates) != 1:
         raise InputError(f"record: '{path}': its channels have different sampling rates "
                          f"({', '.join(str(r) for r in rates)} Hz); a record has one")

@@ -58,11 +58,15 @@ def read(path: Path) -> Raw:
         node = f"n{int(s.get('rsp_node', 0))}_{DIRECTIONS.get(int(s.get('rsp_dir', 0)), 's')}"
         name = label if by_id else node
         values = as_column(np.real(s["data"]), name, path)
-        rates.add(round(1.0 / float(s["abscissa_inc"]), 9) if s.get("abscissa_inc") else None)
+        even = s.get("abscissa_spacing", 1) and s.get("abscissa_inc")
+        rates.add(round(1.0 / float(s["abscissa_inc"]), 9) if even else None)
         channels.append(Channel(identifier(name), values,
                                 _units(s.get("ordinate_axis_units_lab", "")),
                                 f"{label} (node {s.get('rsp_node')}, direction "
                                 f"{s.get('rsp_dir')})", name))
+    if rates == {None} and all("x" in s for s in sets):  # uneven abscissa: the times
+        return Raw(channels, "pyuff.UFF.read_sets", t=np.asarray(sets[0]["x"], dtype=float),
+                   fs_source="file: abscissa values")
     if len(rates) != 1 or None in rates:
         raise InputError(f"record: '{path}': its time responses have different or no sampling "
                          f"rates ({', '.join(str(r) for r in rates)} Hz); a record has one")
