@@ -360,10 +360,10 @@ a shaft (noise crossing the trigger levels at random)."""
 
 def tacho_speed(record: xr.Dataset, channel: str) -> xr.Dataset:
     """The record with the speed of its once-per-revolution tacho ``channel``: 60/(time
-    between pulses) rpm, at the middle of each interval and linear in between (held before
-    the second and after the last pulse). ``InputError`` for a tacho with fewer than two
-    pulses, or pulses whose intervals jump by more than :data:`IRREGULAR` from one to the
-    next (in the median: not a shaft)."""
+    between pulses) rpm, at the middle of each interval and linear in between (continued
+    along the first and last intervals' trend beyond them). ``InputError`` for a tacho with
+    fewer than two pulses, or pulses whose intervals jump by more than :data:`IRREGULAR`
+    from one to the next (in the median: not a shaft)."""
     fs = float(record.attrs["sample_rate_hz"])
     pulses = tacho_pulses(record[channel].values, fs)
     if pulses.size < 2:
@@ -379,11 +379,25 @@ def tacho_speed(record: xr.Dataset, channel: str) -> xr.Dataset:
                              "median); is it a once-per-revolution tacho?")
     middle = 0.5 * (pulses[1:] + pulses[:-1])
     rpm = 60.0 / intervals
-    record[SPEED] = ("t", np.interp(record["t"].values, middle, rpm), {"units": "rpm"})
+    record[SPEED] = ("t", _extended(record["t"].values, middle, rpm), {"units": "rpm"})
     mean = 60.0 * (pulses.size - 1) / float(pulses[-1] - pulses[0])
     record.attrs.update(speed_rpm=mean, speed_source=f"tacho: {channel}",
                         tacho_channel=channel, tacho_pulses=int(pulses.size))
     return record
+
+
+def _extended(t: np.ndarray, middle: np.ndarray, rpm: np.ndarray) -> np.ndarray:
+    """The speed (rpm) at times ``t``: linear between the intervals' middles, and beyond the
+    first and last middle along the line through the nearest (up to) 5 intervals' speeds,
+    held at no less than half the edge speed (a run-up's speed before the second pulse)."""
+    out = np.interp(t, middle, rpm)
+    if middle.size < 3:
+        return out
+    for side, edge in ((t < middle[0], slice(0, 5)), (t > middle[-1], slice(-5, None))):
+        slope, offset = np.polyfit(middle[edge], rpm[edge], 1)
+        floor = 0.5 * float(rpm[edge][0 if edge.start == 0 else -1])
+        out[side] = np.maximum(slope * t[side] + offset, floor)
+    return out
 
 
 def speed_words(record: xr.Dataset) -> str:
