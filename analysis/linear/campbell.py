@@ -27,8 +27,8 @@ from analysis.errors import InputError
 from analysis.threads import blas_threads
 from modelgen.fe.assembly import RotorMatrices
 
-__all__ = ["WHIRLS", "Campbell", "CriticalSpeed", "campbell", "check_speeds", "critical_speeds",
-           "damped_modes", "whirl_of"]
+__all__ = ["WHIRLS", "Campbell", "CriticalSpeed", "campbell", "check_critical", "check_speeds",
+           "critical_speeds", "damped_modes", "whirl_of"]
 
 WHIRLS = ("forward", "backward", "mixed")
 """The whirl names of a mode."""
@@ -143,6 +143,22 @@ def campbell(rotor: RotorMatrices, speed_rpm: Sequence[float], n_modes: int = 6,
             whirl[:count, j] = [whirl_of(vec[:, i]) for i in range(count)]
         critical = critical_speeds(rotor, speeds, freq, lines)
     return Campbell(speeds, freq, logdec, whirl.astype(str), lines, tuple(critical))
+
+
+def check_critical(result: Campbell) -> None:
+    """InputError unless the speed range passes at least one critical speed (asked for with
+    ``--critical-speeds``), naming the lowest mode's frequency to aim at."""
+    if result.critical:
+        return
+    lines = ", ".join(result.lines)
+    lowest = result.frequency_hz[0]
+    near = ""
+    if np.isfinite(lowest).any():
+        order = min(result.lines.values())
+        near = (f"; the lowest mode is at {np.nanmin(lowest):.4g} to {np.nanmax(lowest):.4g} "
+                f"Hz, near {np.nanmin(lowest) * 60 / order:.0f} rpm on the lowest line")
+    raise InputError(f"--speeds: {result.speed_rpm[0]:g} to {result.speed_rpm[-1]:g} rpm "
+                     f"passes no mode's crossing with {lines}{near}; widen the speed range")
 
 
 def _mode_frequency(rotor: RotorMatrices, speed_rpm: float, mode: int) -> float:

@@ -139,3 +139,36 @@ def test_unbalance_response_equals_ross(rs, which, tmp_path):
     assert ours.amplitude_m[away] == pytest.approx(np.abs(theirs[away]), rel=0.02)
     assert ours.x[away] == pytest.approx(theirs[away], rel=0.02)  # phase too
     assert np.max(np.abs(ours.x / theirs - 1)) < 1e-6  # everywhere, in fact
+
+
+def test_import_ross_swaps_a_bearing_and_refuses_what_ross_cannot_read(rs, tmp_path, cli):
+    import tomllib
+
+    from analysis.cli.import_ross import parse_ball_bearings
+    from analysis.errors import InputError
+    from modelgen.errors import SpecError
+    from modelgen.fe.ross_import import ross_spec_text
+
+    rotor_file = tmp_path / "rotor.toml"
+    rs.rotor_example().save(rotor_file)
+    text = ross_spec_text(rotor_file, tmp_path / "ross-example.toml",
+                          parse_ball_bearings(["6=6205"]))
+    spec = tomllib.loads(text)
+    assert spec["model"]["name"] == "ross-example"
+    assert spec["bearings"] == [{"name": "b6", "inner": "shaft", "node": 6, "n_balls": 9}]
+    assert [b["node"] for b in spec["shaft"]["bearings"]] == [0]  # node 6's linear one gone
+    assert spec["parameters"]["ball_diameter"]["value"] == pytest.approx(4.762e-3)
+    assert {t["kind"] for t in spec["terms"]} == {"hertz_contact", "viscous_damping"}
+    assert len(spec["shaft"]["elements"]) == 6 and len(spec["shaft"]["disks"]) == 2
+    with pytest.raises(SpecError, match="no bearing at node 3 to swap"):
+        ross_spec_text(rotor_file, tmp_path / "x.toml", parse_ball_bearings(["3=6205"]))
+    with pytest.raises(InputError, match="--ball-bearing: no bearing 'nonesuch'"):
+        parse_ball_bearings(["6=nonesuch"])
+    with pytest.raises(InputError, match="--ball-bearing: expected NODE=NAME"):
+        parse_ball_bearings(["six=6205"])
+    bad = tmp_path / "broken.toml"
+    bad.write_text('[parameters]\n["ShaftElement_0"]\nL = "long"\n')
+    res = cli("import-ross", bad, "-o", "x.toml", cwd=tmp_path)
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert "broken.toml: ROSS cannot read it as a rotor" in res.stderr
+    assert not (tmp_path / "x.toml").exists()

@@ -1,0 +1,79 @@
+"""A spec's finite-element rotor, ready for the linear analyses: its ``[shaft]`` read and
+assembled, with the provenance its results and figures carry.
+
+The shaft's linear bearings (``[[shaft.bearings]]``) support it. A spec whose ball bearings
+sit on the shaft (``[[bearings]]`` with ``inner = "shaft"``) is refused here: its linear
+model about the static equilibrium needs the generated model's linearised coefficients.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from analysis.errors import InputError
+from modelgen.fe.assembly import RotorMatrices, assemble
+from modelgen.fe.schema import Shaft, Unbalance, load_shaft
+
+__all__ = ["LinearRotor", "load_rotor", "parse_unbalance"]
+
+
+@dataclass(frozen=True)
+class LinearRotor:
+    """A rotor's name, spec file, shaft and assembled matrices; ``lines``: the excitation
+    lines of its Campbell diagram (name: order of the shaft speed)."""
+
+    name: str
+    path: Path
+    shaft: Shaft
+    matrices: RotorMatrices
+    lines: dict[str, float] = field(default_factory=lambda: {"1X": 1.0})
+
+    def source(self) -> dict[str, str]:
+        """The provenance a result or figure of this rotor carries."""
+        from analysis.provenance import package_version
+        from modelgen.spec import spec_hash
+
+        return {"model": self.name, "spec_file": str(self.path),
+                "spec_sha256": spec_hash(self.path), "bearingdyn_version": package_version()}
+
+
+def load_rotor(model: str | Path) -> LinearRotor:
+    """The rotor of a spec (a path, or a shipped or user spec's name) with a ``[shaft]``."""
+    shaft, path = load_shaft(model)
+    data = tomllib.loads(path.read_bytes().decode("utf-8-sig"))
+    on_shaft = [b.get("name", "?") for b in data.get("bearings", []) or []
+                if isinstance(b, dict) and b.get("inner") == "shaft"]
+    if on_shaft:
+        raise InputError(f"model: ball bearings on the shaft ({', '.join(on_shaft)}) have no "
+                         "linear coefficients in the spec; the linear analyses take the "
+                         "shaft on its linear [[shaft.bearings]] (give the ball bearings' "
+                         "coefficients from `bearingdyn stiffness` as linear bearings)")
+    if not shaft.bearings:
+        raise InputError("model: the shaft has no [[shaft.bearings]]; a free rotor has no "
+                         "critical speeds or steady unbalance response")
+    name = str((data.get("model") or {}).get("name") or path.stem)
+    return LinearRotor(name, path, shaft, assemble(shaft))
+
+
+def parse_unbalance(text: str, node_count: int) -> Unbalance:
+    """``NODE:KG_M[:PHASE_DEG]`` (``--unbalance``) as an ``Unbalance``."""
+    import math
+
+    parts = str(text).split(":")
+    try:
+        if len(parts) not in (2, 3):
+            raise ValueError
+        node, magnitude = int(parts[0]), float(parts[1])
+        phase = math.radians(float(parts[2])) if len(parts) == 3 else 0.0
+    except ValueError:
+        raise InputError(f"--unbalance: expected NODE:KG_M[:PHASE_DEG] (e.g. 6:1e-4:90), got "
+                         f"{text!r}") from None
+    if not 0 <= node < node_count:
+        raise InputError(f"--unbalance: no node {node}; the shaft's nodes are 0 to "
+                         f"{node_count - 1}")
+    if not (math.isfinite(magnitude) and 0 < magnitude <= 1e3) or not math.isfinite(phase):
+        raise InputError(f"--unbalance: the unbalance must be in (0, 1000] kg m and the phase "
+                         f"finite, got {text!r}")
+    return Unbalance(node=node, magnitude=magnitude, phase=math.remainder(phase, 2 * math.pi))
