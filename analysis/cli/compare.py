@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from analysis.cli.common import app, figure_output, reports_errors, write_figure
+from analysis.cli.common import app, echo_json, figure_output, reports_errors, write_figure
 
 
 @app.command()
@@ -56,7 +55,7 @@ def compare(
 
         write_figure(compare_figure(comparison), output, err=as_json)
     if as_json:
-        typer.echo(json.dumps(comparison.as_dict(), indent=2, default=str))
+        echo_json(comparison.as_dict())
     else:
         print_comparison(comparison)
 
@@ -85,3 +84,24 @@ def print_comparison(comparison) -> None:
             typer.echo(f"  {m.name:<18}{cells[0]:>16}{cells[1]:>16}  {m.status}")
     for note in comparison.notes:
         typer.echo(f"note: {note}")
+
+
+def model_check(record_file: Path, diagnosis, model: str, *, channel: str | None,
+                fs: float | None, rpm: float | None, tacho: str | None):
+    """``diagnose --model MODEL``: the defect model (``auto``: the verdict's) simulated at
+    the record's speed, rate, bearing and band and compared with it
+    (``analysis.measured.model_check.simulate_matching``)."""
+    from analysis.measured.model_check import simulate_matching
+    from analysis.measured.records import read_record
+
+    record = read_record(record_file, fs=fs, channel=channel, rpm=rpm, tacho=tacho)
+    return simulate_matching(diagnosis, record, None if model == "auto" else model,
+                             channel=channel)
+
+
+ModelCheckOption = Annotated[str | None, typer.Option(
+    "--model", metavar="MODEL|auto",
+    help="Also simulate a defect model at the record's speed, sample rate, bearing and band "
+         "and compare it with the record (bearingdyn compare); auto: the verdict's "
+         "(6205-outer-defect, 6205-inner-defect, 6205-ball-defect).")]
+"""``diagnose --model``."""
