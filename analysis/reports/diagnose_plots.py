@@ -43,7 +43,8 @@ def _spectrum_axis(ax, diagnosis) -> None:
                 i = round(line.found_hz / diagnosis.resolution_hz)
                 y = float(amp[min(i, amp.size - 1)])
                 marker = "v" if line.role == "harmonic" else "."
-                ax.plot(line.found_hz, y + 0.03 * top, marker, color=colour, ms=5)
+                ax.plot(line.found_hz, y + 0.03 * top, marker, color=colour, ms=5,
+                        markerfacecolor=colour if family.clear else "none")
     ax.set_xlim(0, f_max)
     ax.set_ylim(0, 1.15 * top)
     ax.set_xlabel("frequency (Hz)")
@@ -51,8 +52,9 @@ def _spectrum_axis(ax, diagnosis) -> None:
     ax.set_ylabel(f"squared envelope amplitude ({unit}²)" if unit else
                   "squared envelope amplitude")
     handles = [Line2D([], [], color=c, ls="--", label=n) for n, c in COLOURS.items()]
-    handles.append(Line2D([], [], color="0.3", marker="v", ls="", label="found above "
-                              "threshold"))
+    handles.append(Line2D([], [], color="0.3", marker="v", ls="", label="over the threshold"))
+    handles.append(Line2D([], [], color="0.3", marker="v", ls="", markerfacecolor="none",
+                          label="over it, family not clear"))
     ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.8)
 
 
