@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from analysis.cli.common import app, echo_json, figure_output, reports_errors, write_figure
+from analysis.cli.compare import ModelCheckOption
 
 BearingOption = Annotated[str, typer.Option(
     "--bearing", metavar="NAME",
@@ -50,6 +51,7 @@ def diagnose(
         callback=figure_output)] = None,
     workers: Annotated[int | None, typer.Option(
         "--workers", help="Processes for a folder (default: all cores).")] = None,
+    model: ModelCheckOption = None,
 ):
     """Diagnose a bearing from a measured vibration record: the speed refined on the 1X
     line, pre-whitening, the band of the fast kurtogram, the squared envelope spectrum, and
@@ -59,27 +61,50 @@ def diagnose(
     from analysis.measured import diagnose as dg
 
     if record.is_dir():
-        if output is not None:
-            raise InputError("-o: one figure per record; not with a folder (give a file)")
-        jobs = dg.folder_jobs(record, channel=channel, bearing=bearing, rpm=rpm,
-                              tacho=tacho, fs=fs, prewhiten=prewhiten)
-        if workers is not None:
-            from analysis.errors import check_count
-
-            check_count("--workers", workers, 1, 1024)
-        results = dg.diagnose_folder(jobs, workers, None if as_json else _progress)
-        _print_folder(results) if not as_json else echo_json({"records": results})
+        if output is not None or model is not None:
+            raise InputError(f"{'-o' if output is not None else '--model'}: one per record; "
+                             "not with a folder (give a file)")
+        _folder(dg.folder_jobs(record, channel=channel, bearing=bearing, rpm=rpm,
+                               tacho=tacho, fs=fs, prewhiten=prewhiten), workers, as_json)
         return
     result = dg.diagnose_file(record, channel=channel, bearing=bearing, rpm=rpm, tacho=tacho,
                               fs=fs, prewhiten=prewhiten)
+    check = None
+    if model is not None:
+        from analysis.cli.compare import model_check
+
+        check = model_check(record, result, model, channel=result.channel, fs=fs, rpm=rpm,
+                            tacho=tacho)
     if output:
         from analysis.reports.diagnose_plots import diagnose_figure
 
         write_figure(diagnose_figure(result), output, err=as_json)
     if as_json:
-        echo_json(result.as_dict())
+        data = result.as_dict()
+        echo_json(data if check is None else {**data, "model_check": check.as_dict()})
+        return
+    _print(result)
+    if check is not None:
+        from analysis.cli.compare import print_comparison
+
+        typer.echo(f"model check: {check.provenance['simulation']['model']} at the record's "
+                   "speed, rate, bearing and band, against the record:")
+        print_comparison(check)
+
+
+def _folder(jobs: list, workers: int | None, as_json: bool) -> None:
+    """Every record of a folder on ``workers`` processes: progress, then the table."""
+    from analysis.measured import diagnose as dg
+
+    if workers is not None:
+        from analysis.errors import check_count
+
+        check_count("--workers", workers, 1, 1024)
+    results = dg.diagnose_folder(jobs, workers, None if as_json else _progress)
+    if as_json:
+        echo_json({"records": results})
     else:
-        _print(result)
+        _print_folder(results)
 
 
 def _progress(done: int, total: int, result: dict) -> None:

@@ -406,6 +406,24 @@ def test_speed_from_a_tacho_channel(tmp_path):
     assert data["verdict"] == "outer-race" and data["channel"] == "acc"
 
 
+def test_model_check_simulates_the_verdicts_model(tmp_path):
+    """``--model auto``: the inner-race verdict's model simulated at the record's speed and
+    rate, compared with the record; BPFI is a line both have."""
+    path = tmp_path / "inner.csv"
+    _csv(path, 2.0, {"acc": impacts("inner", 0.0, seed=4)})
+    res = _run("diagnose", path, "--bearing", "6205-cwru", "--rpm", 1797, "--model", "auto",
+               "--json")
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert data["verdict"] == "inner-race"
+    simulation = data["model_check"]["provenance"]["simulation"]
+    assert simulation["model"] == "6205-inner-defect"
+    assert simulation["speed_rpm"] == pytest.approx(data["speed"]["rpm"])
+    assert simulation["sample_rate_hz"] == FS
+    res = _run("diagnose", tmp_path, "--bearing", "6205-cwru", "--rpm", 1797, "--model", "auto")
+    assert res.exit_code == 2 and "--model: one per record" in res.output
+
+
 def test_short_record_gives_the_length_needed():
     bearing = lookup("6205-cwru")
     with pytest.raises(InputError, match=r"needs at least 0\.4\d* s \(\d+ samples\)"):
