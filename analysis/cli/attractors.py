@@ -159,7 +159,8 @@ def _exponent(alpha: float) -> str:
 
     if math.isnan(alpha):
         return "not measured (the grid is too small for two values of ε)"
-    return f"{alpha:.3g} (1: smooth boundary, < 1: fractal, near 0: riddled)"
+    return (f"{alpha:.3g} over interior states only, those whose four neighbours ε cells "
+            "away lie on the grid (1: smooth boundary, < 1: fractal, near 0: riddled)")
 
 
 def _echo_continuation(ds, output: Path) -> None:

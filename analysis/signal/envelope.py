@@ -29,6 +29,7 @@ come from impacts ringing the structure; elsewhere it may be the rotor's own VC 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -146,6 +147,18 @@ def structural_resonances(attrs: dict) -> tuple[float, ...]:
     return system.model.support_resonances(dict(system.parameters))
 
 
+def named_defects(attrs: dict) -> tuple[str, ...]:
+    """The races (``outer``, ``inner``, …) on which the run's model has a localized defect
+    term (its generated ``TERMS``); () for a healthy model or no model."""
+    if "model" not in attrs:
+        return ()
+    from analysis.provenance import system_of_attrs
+
+    terms = getattr(system_of_attrs(attrs).model.module, "TERMS", ())
+    return tuple(re.match(r"localized defect on the (\w+)", t).group(1) for t in terms
+                 if re.match(r"localized defect on the (\w+)", t))
+
+
 def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], str]:
     """The structural resonances (Hz) inside the band, and what a BPFO line there means."""
     resonances = structural_resonances(attrs)
@@ -160,8 +173,14 @@ def band_note(low: float, high: float, attrs: dict) -> tuple[tuple[float, ...], 
     bpfo = next(iter(faults.values()))["BPFO"]
     if inside:
         where = ", ".join(f"{f:.0f}" for f in inside)
-        return inside, (f"the band holds the structural resonance at {where} Hz: a BPFO line "
-                        "here comes from impacts ringing it (an outer-race defect)")
+        if "outer" in named_defects(attrs):
+            return inside, (f"the band holds the structural resonance at {where} Hz: a BPFO "
+                            "line here comes from impacts ringing it (the model's outer-race "
+                            "defect)")
+        return inside, (f"the band holds the structural resonance at {where} Hz, but the "
+                        "model names no outer-race defect: a BPFO line here (BPFO = VC for a "
+                        "fixed outer race) comes from the varying compliance ringing it, and "
+                        "does not by itself show a defect")
     first, last = max(1, math.ceil(low / bpfo)), math.floor(high / bpfo)
     harmonics = (f"VC harmonics k = {first}…{last}" if last >= first else "no VC harmonic")
     elsewhere = (f"; the model's resonance{'s' if len(resonances) > 1 else ''} "

@@ -179,7 +179,16 @@ class ShaftMap:
     (n × N) the end states, J (n × n N) the blocks ∂z_T/∂z_0 side by side (exact: the
     tangent of the discrete RK4 map), S (n × samples·N) the states at the shaft phases
     2πa/samples, a = 1..samples (the last is Z_T), D (n × N) dz_T/dp·e along the parameter
-    direction e (the step's and the phases' own dependence on p included)."""
+    direction e (the step's and the phases' own dependence on p included).
+
+    **Why its own RK4 step and not ``integrate.tangent``** (the one builder of RK4 steps
+    with derivatives, docs/architecture.md): that builder chains the model's
+    ``rk4_step(t, z, p, h)``, whose forcing has one time t. The shaft map starts each circle
+    point at its own cage phase φ, so its step evaluates the torus forcing
+    ``torus_function`` at the two phases (ω1 s, φ + ω2 s), with φ an input; and its
+    derivative along p carries ds/dp = (s/h)·dh/dp for the step's time. Building those on
+    ``tangent`` would need a second time input there; kept here, its forcing checked
+    against the model's right-hand side by ``check_phases`` before every solve."""
 
     system: System
     frequencies: tuple[Period, Period]
