@@ -85,25 +85,41 @@ def calibrate(
                 "faster than this estimate")
     try:
         cal = calibrate_to_file(problem, output, executor=ex,
-                                progress=ProgressReporter("calibrate", quiet or as_json,
-                                                          unit="runs"),
+                                progress=ProgressReporter("calibrate", quiet, unit="runs"),
                                 log=say, on_damaged=_recomputing)
     finally:
         ex.close()
     if as_json:
         echo_json(to_json(cal, str(output)), indent=1)
     else:
-        ci = cal.credible_interval(0.9)
-        typer.echo(f"wrote {output}: best {cal.best_matched()} of "
-                   f"{len(problem.target.rows)} rows; share of the prior matching k rows: "
-                   + ", ".join(f"{k}: {v:.3g}" for k, v in cal.share_of_prior().items()))
-        for name, (lo, hi) in ci.items():
-            unit = cal.model.units.get(name, "")
-            typer.echo(f"  {name}: 90 % credible interval {lo:.4g} to {hi:.4g} {unit}")
+        _print(cal, output)
     if plot:
         from analysis.reports.calibration_plots import corner_figure
 
         write_figure(corner_figure(to_dataset(cal)), plot, err=as_json)
+
+
+def _print(cal, output: Path) -> None:
+    """The answer, what is doubtful in it, how far it narrowed the prior, and whether it
+    can conclude."""
+    doubtful = cal.doubtful_share()
+    shares = ", ".join(f"{k}: {v:.3g}" + (f" (+{doubtful[k]:.3g} doubtful)" if doubtful[k]
+                                          else "")
+                       for k, v in cal.share_of_prior().items())
+    typer.echo(f"wrote {output}: best {cal.best_matched()} of {len(cal.target.rows)} rows; "
+               f"share of the prior matching k rows: {shares}")
+    typer.echo("  (doubtful: the class would match but lambda1's 95 % interval reaches "
+               "zero; not counted as matched)")
+    narrowing = cal.narrowing()
+    for name, (lo, hi) in cal.credible_interval(0.9).items():
+        unit = cal.model.units.get(name, "")
+        typer.echo(f"  {name}: 90 % credible interval {lo:.4g} to {hi:.4g} {unit}, "
+                   f"{narrowing[name]:.0%} of the prior's width")
+    typer.echo(f"  effective sample size {cal.effective_sample_size():.0f} of "
+               f"{len(cal.posterior.values)} sets")
+    verdict = cal.verdict()
+    if verdict:
+        typer.echo(f"too small to conclude: {verdict}; give more --samples or --rounds")
 
 
 def _recomputing(key: str) -> None:

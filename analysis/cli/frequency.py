@@ -85,7 +85,7 @@ def hb(
         request = Request(harmonics, period=period, param=param, start=start, stop=stop,
                           max_points=max_points, ds_max=ds_max,
                           options=given_options(dt=dt, settle=settle, samples=samples),
-                          progress=progress_lines(quiet))
+                          progress=progress_lines(quiet), figure=0.0 if plot else None)
         data = PERIODIC["hb"].measured(system, request, end, cost_lines(quiet))
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
@@ -300,7 +300,8 @@ def torus(
                           lyapunov_duration=lyapunov_duration,
                           stability_every=stability_every,
                           options=given_options(dt=dt, settle=settle),
-                          progress=progress_lines(quiet))
+                          progress=progress_lines(quiet),
+                          figure=max(duration, 2.0) if plot else None)
         data = chosen.measured(system, request, end, cost_lines(quiet))
     also = {}
     if run:  # an invariant circle's run is integrated between its sections

@@ -13,9 +13,15 @@ short timed probe of the method's own equations.
   estimate is points × steps per revolution × ``CIRCLE_EVALUATIONS`` shaft-map evaluations
   (the convergence check's 2N points included) per circle.
 
-Left out of both: the guess's settled simulation and λ1 (compiled RK4, seconds at most),
-the CasADi builds (seconds) and ``hb``'s two error-estimate solves (each about a first
-solve at 2H or 2x samples).
+The rest of the command is said beside them (``CostEstimate.also``, issue 41: `torus
+--method hb` said "about 4 s" and took 56 s of CPU): the start-up and probes already spent,
+the guess's settled simulations (one per solve), the two error-estimate solves of HB (at
+2H: ``DOUBLED_ITERATION`` × the probed iteration, measured 8.2× for a torus 8,4 → 16,8 and
+2.5× for a periodic H = 40 → 80, so 8 for a torus and 4 for a periodic response; at twice
+the samples: 2×), λ1 and the drift run (RK4 steps of ``lyapunov_duration`` s, the tangent
+as ``n`` more states), the invariant circle's integrated amplitude (6N revolutions), the
+figure's time run and a ``FILE_SECONDS`` per file and figure. RK4 steps are timed by
+``analysis.integrate.cost.probe_step_seconds``. The CasADi builds are still left out.
 Nothing here prints: the command line renders ``CostEstimate.lines()``.
 """
 
@@ -26,7 +32,7 @@ import time
 
 import numpy as np
 
-from analysis.integrate.cost import CostEstimate
+from analysis.integrate.cost import FILE_SECONDS, CostEstimate
 from analysis.model import System
 
 NEWTON_ITERATIONS = 6
@@ -40,6 +46,40 @@ PROBE_STEPS = 200
 """RK4 steps of the circle's timed probe (of two points)."""
 NEWTON = "Newton iterations"
 """The unit of an HB estimate."""
+DOUBLED_ITERATION = {True: 8.0, False: 4.0}
+"""A Newton iteration at doubled harmonics over one at H: a torus (True), a periodic
+response (False) (module docstring)."""
+
+
+def rk4_seconds(system: System, seconds: float, dt: float | None, vectors: int = 0) -> float:
+    """Expected seconds of ``seconds`` s of RK4 of ``system`` at its step ``dt`` (None: the
+    spec's) carrying ``vectors`` tangent columns (each counted as one more state)."""
+    from analysis.integrate.cost import probe_step_seconds
+    from analysis.integrate.plan import RunPlan
+
+    step = RunPlan.step(system, dt, warn=lambda message: None).dt
+    return seconds / step * probe_step_seconds(system, step) * (1 + vectors)
+
+
+def command_parts(system: System, request, solves: int, extra: float = 0.0
+                  ) -> list[tuple[str, float]]:
+    """The named parts of a frequency command beyond its Newton iterations or circle steps:
+    ``solves`` settled simulations for guesses, λ1 and the drift run, the figure's run
+    (``request.figure`` simulated s) and the files; ``extra``: simulated s more."""
+    settle = float(system.model.simulation_defaults["transient"])
+    dt = request.options.get("dt")
+    parts = [("settled simulations for the guesses",
+              rk4_seconds(system, solves * (settle + 1.0) + extra, dt))]
+    if request.lyapunov_duration > 0 and request.param is None:
+        parts.append(("lambda1 and the drift run",
+                      rk4_seconds(system, request.lyapunov_duration * 1.1, dt,
+                                  system.n_state) +
+                      rk4_seconds(system, request.lyapunov_duration, dt)))
+    if request.figure is not None:
+        run = rk4_seconds(system, settle + request.figure, dt) if request.figure else 0.0
+        parts.append(("the figure", run + FILE_SECONDS))
+    parts.append(("the file", FILE_SECONDS))
+    return parts
 
 
 def probe_newton_seconds(equations) -> float:
@@ -84,15 +124,22 @@ def hb_cost(system: System, request, torus: bool = False) -> CostEstimate:
         equations = HarmonicSystem(system, per, request.resolution,
                                    request.options.get("samples"))
         what = "responses" if request.param else "response"
-    return _newton_estimate(probe_newton_seconds(equations), request, what)
+    seconds = probe_newton_seconds(equations)
+    estimate = _newton_estimate(seconds, request, what)
+    errors = NEWTON_ITERATIONS * seconds * (DOUBLED_ITERATION[torus] + 2.0)
+    return estimate.with_parts(
+        ("the two error-estimate solves (2H, 2x samples)", errors),
+        *command_parts(system, request, 3))
 
 
 def _newton_estimate(seconds: float, request, what: str) -> CostEstimate:
+    from analysis.integrate.cost import process_seconds
+
     branch = request.param is not None
     return CostEstimate(members=request.max_points if branch else 1,
                         steps=BRANCH_ITERATIONS if branch else NEWTON_ITERATIONS, workers=1,
                         step_seconds=seconds, dt=math.nan, what=what, bound=branch,
-                        unit=NEWTON)
+                        unit=NEWTON, spent=process_seconds())
 
 
 def circle_cost(system: System, request, convergence: bool = True) -> CostEstimate:
@@ -113,10 +160,18 @@ def circle_cost(system: System, request, convergence: bool = True) -> CostEstima
     points = int(request.resolution)
     branch = request.param is not None
     per_circle = points if branch else points * (3 if convergence else 1)
-    return CostEstimate(members=request.max_points if branch else 1,
-                        steps=per_circle * steps * CIRCLE_EVALUATIONS, workers=1,
-                        step_seconds=seconds, dt=period / steps,
-                        what="circles" if branch else "circle", bound=branch)
+    from analysis.integrate.cost import process_seconds
+
+    estimate = CostEstimate(members=request.max_points if branch else 1,
+                            steps=per_circle * steps * CIRCLE_EVALUATIONS, workers=1,
+                            step_seconds=seconds, dt=period / steps,
+                            what="circles" if branch else "circle", bound=branch,
+                            spent=process_seconds())
+    revolutions = 6 * points * period  # the integrated amplitude: 2N and 4N phases
+    return estimate.with_parts(
+        ("the integrated amplitude and the run's errors",
+         rk4_seconds(system, revolutions + 30 * period, request.options.get("dt"))),
+        *command_parts(system, request, 1, extra=max(4 * points, 200) * period))
 
 
 

@@ -67,6 +67,9 @@ class Request:
     stability_every: int = 1
     options: Mapping = field(default_factory=dict)
     progress: Progress = None
+    figure: float | None = None
+    """With a figure, the simulated seconds of its time run (0: none); None: no figure.
+    Counted in the cost."""
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.lyapunov_duration) and self.lyapunov_duration >= 0):

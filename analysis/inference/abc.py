@@ -6,10 +6,12 @@ approximate Bayesian computation", Biometrika 96, 983).
 is missed or not (``targets.class_matches``), and so are its lines (every asked major
 line and present line found). The discrepancy is lexicographic, classes first, lines
 second: d = (class misses) + (line misses) / (rows + 1), so one more class matched
-always wins over any number of lines. ``matched`` counts the rows whose class matches;
-``lines_matched`` the rows whose lines match. A diverged member is the class
-``diverged`` at that row (a miss unless the row asks for it): never dropped, since
-dropping it would bias the posterior towards the region that stays bounded.
+always wins over any number of lines. A row whose class would match but is doubtful (λ1's
+interval reaching zero: ``doubtful``) is not matched and counts as half a miss.
+``matched`` counts the rows whose class firmly matches; ``lines_matched`` the rows whose
+lines match. A diverged member is the class ``diverged`` at that row (a miss unless the
+row asks for it): never dropped, since dropping it would bias the posterior towards the
+region that stays bounded.
 
 **Rounds.** Round 0 is N points of a scrambled Sobol sequence (``scipy.stats.qmc``) in the
 unit cube of the priors (log priors uniform in log). Its members have the prior's
@@ -36,6 +38,7 @@ particles.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -57,7 +60,13 @@ from analysis.inference.simulate import (
     row_system,
 )
 from analysis.inference.targets import Target, TargetRow, class_matches, load_target
-from analysis.integrate.cost import CostEstimate, duration_text, estimate_cost
+from analysis.integrate.cost import (
+    FILE_SECONDS,
+    CostEstimate,
+    duration_text,
+    estimate_cost,
+    process_seconds,
+)
 from analysis.model import Model, load_model
 
 MAX_SAMPLES = 200_000
@@ -74,6 +83,16 @@ above ``MAX_CORE_HOURS`` (the estimate printed before the work is ``calibrate_co
 from a timed probe)."""
 MIN_SD = 1e-3
 """Least kernel standard deviation per unit coordinate (a population of one point)."""
+DOUBTFUL_CREDIT = 0.5
+"""A doubtful row counts as half a class miss in the discrepancy (the sampler still moves
+towards it, the posterior between firm matches and misses), though never as matched."""
+MIN_ESS = 100
+"""A posterior worth fewer equally weighted sets than this is too small to conclude."""
+MIN_BEST = 10
+"""Fewer sets than this at the best count of rows matched: too few to conclude."""
+NARROWED = 0.8
+"""A calibration none of whose 90 % intervals is narrower than this share of the prior's
+has not narrowed it: too small to conclude."""
 
 
 @dataclass(frozen=True)
@@ -110,13 +129,38 @@ class Options:
 
 # --- scoring ------------------------------------------------------------------------------
 
+LAMBDA_CLASSES = ("chaotic", "quasi-periodic")
+"""The classes λ1 can decide (``classify_section``): where its interval reaches zero the
+class is doubtful."""
+
+
+def doubtful(result: MemberRow) -> bool:
+    """Whether a member's class at a row is doubtful: chaotic or quasi-periodic with λ1's
+    95 % interval reaching zero (λ1 − ci95 <= 0 <= λ1 + ci95), where a longer record or a
+    halved step may give the other class (issue 41: 8–24 ± 13–39 1/s at N_b = 7 was called
+    quasi-periodic; an independent twin-orbit classifier called 6 of 40 such sets chaotic).
+    Not judged here: whether the class changes with the step halved (a second run)."""
+    lam, ci = result.lambda1, result.ci95
+    return (result.nature in LAMBDA_CLASSES and math.isfinite(lam) and math.isfinite(ci)
+            and lam - ci <= 0 <= lam + ci)
+
+
 def row_marks(row: TargetRow, result: MemberRow) -> tuple[bool, bool]:
     """(class matches, lines match) of one member at one row (lines: every asked major
-    line is the largest, every present line is among the peaks; True when none asked)."""
-    klass = class_matches(row.classes, result.nature)
+    line is the largest, every present line is among the peaks; True when none asked). A
+    class that would match but is ``doubtful`` does not match (``doubtful_match``)."""
+    klass = class_matches(row.classes, result.nature) and not (
+        row.classes and doubtful(result))
     lines = all(result.major.get(c) == name for c, name in row.major) and all(
         name in result.lines.get(c, ()) for c, names in row.present for name in names)
     return klass, lines
+
+
+def doubtful_match(row: TargetRow, result: MemberRow) -> bool:
+    """The row asks for a class, the member's class is it, and that class is doubtful:
+    reported as doubtful, not counted as matched."""
+    return bool(row.classes) and class_matches(row.classes, result.nature) and \
+        doubtful(result)
 
 
 def discrepancy(class_missed: int, lines_missed: int, rows: int) -> float:
@@ -194,6 +238,8 @@ class Round:
     epsilon: float = math.inf
     weights: np.ndarray | None = None
     """Weights of the members in the population after this round (0 outside it)."""
+    doubtful: np.ndarray | None = None
+    """Per member: rows whose class would match but is doubtful (``doubtful_match``)."""
 
 
 @dataclass
@@ -217,8 +263,55 @@ class Calibration:
         first = self.rounds[0].matched
         return {k: float(np.mean(first == k)) for k in range(len(self.target.rows), -1, -1)}
 
+    def doubtful_share(self) -> dict[int, float]:
+        """Per k: the share of the prior (the Sobol round) that matches k rows only when its
+        doubtful rows are counted (``matched`` < k <= ``matched`` + ``doubtful``)."""
+        first = self.rounds[0]
+        extra = first.doubtful if first.doubtful is not None else np.zeros_like(first.matched)
+        return {k: float(np.mean((first.matched < k) & (first.matched + extra >= k)))
+                for k in range(len(self.target.rows), -1, -1)}
+
     def best_matched(self) -> int:
         return int(max(r.matched.max() for r in self.rounds))
+
+    def effective_sample_size(self) -> float:
+        """Kish's effective sample size of the posterior weights, 1 / Σ w² (w normalised):
+        how many equally weighted sets the posterior is worth."""
+        w = self.posterior.weights
+        w = w[w > 0] / w[w > 0].sum()
+        return float(1.0 / np.sum(w * w))
+
+    def narrowing(self, level: float = 0.9) -> dict[str, float]:
+        """Per parameter: the width of its central ``level`` posterior interval over that of
+        the prior, in the prior's own coordinate (log for a log prior): 1 is no narrowing,
+        0.1 a tenfold one."""
+        intervals = self.credible_interval(level)
+        out = {}
+        for prior in self.priors:
+            lo, hi = intervals[prior.name]
+            if prior.log:
+                width = math.log(hi / lo) / math.log(prior.hi / prior.lo)
+            else:
+                width = (hi - lo) / (prior.hi - prior.lo)
+            out[prior.name] = float(width / level)
+        return out
+
+    def verdict(self) -> str:
+        """'' when the calibration can conclude, else why it is too small to: fewer than
+        ``MIN_ESS`` effective sets, fewer than ``MIN_BEST`` sets at the best count of rows
+        matched, or no parameter's interval narrowed below ``NARROWED`` of the prior's."""
+        why = []
+        ess = self.effective_sample_size()
+        if ess < MIN_ESS:
+            why.append(f"effective sample size {ess:.0f} < {MIN_ESS}")
+        best = self.best_matched()
+        at_best = sum(int(np.sum(r.matched == best)) for r in self.rounds)
+        if at_best < MIN_BEST:
+            why.append(f"{at_best} set(s) match the best {best} rows (< {MIN_BEST})")
+        narrow = self.narrowing()
+        if narrow and min(narrow.values()) > NARROWED:
+            why.append(f"no 90 % interval is narrower than {NARROWED:.0%} of the prior's")
+        return "; ".join(why)
 
     def credible_interval(self, level: float = 0.9) -> dict[str, tuple[float, float]]:
         """Per parameter: the central ``level`` interval of the weighted posterior marginal
@@ -353,12 +446,40 @@ def prepare(
                          f"rows is estimated at {cost['core_seconds'] / 3600:.3g} "
                          f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or "
                          "rounds")
-    corners = [dict(zip([p.name for p in pri], c, strict=True))
-               for c in box(pri, np.array(np.meshgrid(*[[0.0, 1.0]] * len(pri)))
-                            .reshape(len(pri), -1).T)]
-    check_steps(mdl, tgt, corners, options.settings)
+    check_steps(mdl, tgt, prior_corners(pri), options.settings)
     check_row_kernels(mdl, tgt, options.device)
     return Problem(mdl, tgt, pri, options)
+
+
+def prior_corners(priors: Sequence[Prior]) -> list[dict[str, float]]:
+    """Every corner of the priors' box (SI units), as parameter values."""
+    return [dict(zip([p.name for p in priors], c, strict=True))
+            for c in box(priors, np.array(np.meshgrid(*[[0.0, 1.0]] * len(priors)))
+                         .reshape(len(priors), -1).T)]
+
+
+def accepted_dt(problem: Problem, largest: float | None) -> float | None:
+    """The largest step of the form 1, 2, 5 × 10^k, at most ``largest`` s and coarser than
+    the calibration's own, that ``check_steps`` accepts at every row and corner of the
+    priors, as the user would type it (``%.3g``: 0.0002 makes a per-revolution step of
+    0.00015000000000000001 at 5000 rpm, checked as such); None when there is none."""
+    from analysis.integrate.cost import nice_down
+
+    if largest is None or not largest > 0:
+        return None
+    settings = problem.options.settings
+    now = float(settings.dt or problem.model.simulation_defaults["dt"])
+    corners = prior_corners(problem.priors)
+    value = nice_down(largest)
+    while value > 1.5 * now:
+        typed = float(f"{value:.3g}")
+        try:
+            check_steps(problem.model, problem.target, corners,
+                        dataclasses.replace(settings, dt=typed))
+            return typed
+        except InputError:
+            value = nice_down(value * (1 - 1e-9))
+    return None
 
 
 def check_fixed(priors: Sequence[Prior], target: Target) -> None:
@@ -409,14 +530,22 @@ class CalibrationCost:
         """Expected wall time, s: the kernels' and the host's."""
         return self.kernels.seconds + self.host_total
 
+    @property
+    def whole_seconds(self) -> float:
+        """The whole command, s: the start-up and probes already spent (``kernels.spent``),
+        the kernels, the host and the result file."""
+        return self.kernels.spent + self.seconds + FILE_SECONDS
+
     def lines(self) -> list[str]:
-        """The kernels' estimate line, the host's line with the total, then the advice."""
-        head, *advice = self.kernels.lines()
+        """The kernels' estimate line, the host's line with the whole command's total, then
+        the advice."""
+        head = self.kernels.lines()[0]
         host = (f"estimate: {self.runs:,} runs x {self.host_seconds:.3g} s of classification "
                 f"and spectra on the host (probed) on {min(self.host_workers, self.runs)} "
                 f"worker(s) = {duration_text(self.host_total)}; in all "
-                f"{duration_text(self.seconds)}")
-        return [head, host, *advice]
+                f"{duration_text(self.whole_seconds)} with the start-up and probes "
+                f"({self.kernels.spent:.2g} s so far) and the file")
+        return [head, host, *self.kernels.advice()]
 
 
 def problem_cost(problem: Problem, workers: int | None = None,
@@ -440,8 +569,11 @@ def problem_cost(problem: Problem, workers: int | None = None,
     steps = member_steps(problem.target, opts.settings, problem.model)
     kernels = estimate_cost(system, opts.samples * opts.rounds, steps, dt=h,
                             workers=workers or cores(), what="parameter sets")
+    kernels = dataclasses.replace(kernels, coarsest_dt=accepted_dt(problem,
+                                                                   kernels.coarsest_dt))
     host = classify_seconds(problem.model, row, values, opts.settings,
                             problem.target.coordinates or ("x",))
+    kernels = dataclasses.replace(kernels, spent=process_seconds())  # after both probes
     return CalibrationCost(kernels, opts.samples * opts.rounds * len(problem.target.rows),
                            host, host_workers)
 
@@ -507,21 +639,25 @@ def run(problem: Problem, *, executor=None, store=None,
                           store, progress, done_count, total)
         marks = [[row_marks(row, res) for row, res in zip(tgt.rows, member, strict=True)]
                  for member in rows]
+        unsure = np.array([sum(doubtful_match(row, res) for row, res in
+                               zip(tgt.rows, member, strict=True)) for member in rows])
         matched = np.array([sum(k for k, _ in m) for m in marks])
         lines = np.array([sum(ln for _, ln in m) for m in marks])
-        d = np.array([discrepancy(len(tgt.rows) - k, len(tgt.rows) - ln, len(tgt.rows))
-                      for k, ln in zip(matched, lines, strict=True)])
+        d = np.array([discrepancy(len(tgt.rows) - k - DOUBTFUL_CREDIT * q,
+                                  len(tgt.rows) - ln, len(tgt.rows))
+                      for k, ln, q in zip(matched, lines, unsure, strict=True)])
         eps = tolerance(d, options.quantile)
         keep = d <= eps
         w = np.zeros(samples)
         w[keep] = 1.0 if r == 0 else smc_weights(u[keep], population, weights)
         w /= w.sum()
-        out.append(Round(r, u, values, rows, d, matched, lines, eps, w))
+        out.append(Round(r, u, values, rows, d, matched, lines, eps, w, unsure))
         population, weights = u[keep], w[keep] / w[keep].sum()
         if log:
             log(f"round {r + 1}/{rounds}: tolerance {eps:.3g} (rows missed), "
                 f"{int(keep.sum())} of {samples} sets kept, best {int(matched.max())} of "
-                f"{len(tgt.rows)} rows")
+                f"{len(tgt.rows)} rows; {int(np.sum(unsure > 0))} sets with a doubtful "
+                "row (not counted)")
     return Calibration(mdl, tgt, pri, options, out, time.perf_counter() - start,
                        options.device)
 

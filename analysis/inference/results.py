@@ -9,7 +9,11 @@ posterior) and the JSON of issue 30's layout::
      "provenance": {…}}
 
 with ``priors``, ``best`` (the sets of fewest rows missed), ``credible_90`` and ``cost``
-beside them. Parameters are in SI units (speed in rpm), λ1 in 1/s.
+beside them; and what the calibration says of itself (issue 41): ``doubtful_share`` (per k,
+the share of the prior that matches k rows only with its doubtful rows counted: λ1's
+interval reaching zero), ``narrowing`` (per parameter, the posterior's 90 % interval over
+the prior's, in the prior's coordinate), ``effective_sample_size`` and ``verdict`` ('' or
+why the run is too small to conclude). Parameters are in SI units (speed in rpm), λ1 in 1/s.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.inference.abc import Calibration, Problem, row_marks, run
+from analysis.inference.abc import Calibration, Problem, doubtful_match, row_marks, run
 from analysis.provenance import plain, provenance, run_attrs
 
 BEST = 10
@@ -47,6 +51,8 @@ def _attrs(cal: Calibration) -> dict[str, Any]:
         "samples_per_revolution": opts.settings.samples_per_revolution,
         "dt_max": float(opts.settings.dt or model.simulation_defaults["dt"]),
         "best_matched": cal.best_matched(), "wall_s": round(cal.wall_s, 3),
+        "effective_sample_size": cal.effective_sample_size(),
+        "verdict": cal.verdict() or "conclusive by its own measures",
     })
     return attrs
 
@@ -73,10 +79,16 @@ def to_dataset(cal: Calibration) -> xr.Dataset:
                     {"long_name": "tolerance (rows missed)"}),
         "share_of_prior": ("k", np.array(list(cal.share_of_prior().values())),
                            {"long_name": "share of the prior whose sets match k rows"}),
+        "doubtful_share": ("k", np.array(list(cal.doubtful_share().values())),
+                           {"long_name": "share of the prior that matches k rows only with "
+                                         "its doubtful rows counted (lambda1's 95 % interval "
+                                         "reaching zero)"}),
     }
+    narrowing = cal.narrowing()
     for j, name in enumerate(names):
         data[name] = ("member", np.array([r.values[i, j] for r, i in members]),
-                      {"units": units.get(name, ""), "prior": cal.priors[j].text()})
+                      {"units": units.get(name, ""), "prior": cal.priors[j].text(),
+                       "narrowing": narrowing[name]})
     grid = [[r.rows[i][k] for k in range(len(rows))] for r, i in members]
     data["nature"] = (("member", "row"), np.array([[g.nature for g in m] for m in grid]))
     data["lambda1"] = (("member", "row"), np.array([[g.lambda1 for g in m] for m in grid]),
@@ -89,6 +101,12 @@ def to_dataset(cal: Calibration) -> xr.Dataset:
     marks = [[row_marks(row, g) for row, g in zip(rows, m, strict=True)] for m in grid]
     data["class_ok"] = (("member", "row"), np.array([[k for k, _ in m] for m in marks]))
     data["lines_ok"] = (("member", "row"), np.array([[ln for _, ln in m] for m in marks]))
+    data["doubtful"] = (("member", "row"),
+                        np.array([[doubtful_match(row, g) for row, g in zip(rows, m,
+                                                                            strict=True)]
+                                  for m in grid]),
+                        {"long_name": "the class would match but lambda1's 95 % interval "
+                                      "reaches zero: not counted as matched"})
     for c in cal.target.coordinates:
         data[f"major_{c}"] = (("member", "row"),
                               np.array([[g.major.get(c, "") for g in m] for m in grid]))
@@ -111,6 +129,7 @@ def _member_json(cal: Calibration, r, i: int) -> dict[str, Any]:
                      "ci95": plain(res.ci95, finite=True),
                      "major": res.major, "lines": res.lines,
                      "class_ok": bool(klass), "lines_ok": bool(lines),
+                     "doubtful": bool(doubtful_match(row, res)),
                      "diverged_at": plain(res.diverged_at, finite=True)})
     return {"parameters": {p.name: float(r.values[i, j]) for j, p in enumerate(cal.priors)},
             "weight": float(r.weights[i]) if r.weights is not None else 0.0,
@@ -132,6 +151,10 @@ def to_json(cal: Calibration, output: str | None = None) -> dict[str, Any]:
             "accepted": accepted,
             "best_matched": cal.best_matched(),
             "share_of_prior": {str(k): v for k, v in cal.share_of_prior().items()},
+            "doubtful_share": {str(k): v for k, v in cal.doubtful_share().items()},
+            "narrowing": cal.narrowing(),
+            "effective_sample_size": cal.effective_sample_size(),
+            "verdict": cal.verdict(),
             "best": best,
             "credible_90": {k: list(v) for k, v in cal.credible_interval(0.9).items()},
             "tolerances": [r.epsilon for r in cal.rounds],

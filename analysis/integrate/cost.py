@@ -21,7 +21,7 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -63,6 +63,32 @@ class CostEstimate:
     (``probe_note`` says which), where the bound alone would overstate it; None: the
     expectation is the bound."""
     probe_note: str = ""
+    spent: float = 0.0
+    """Seconds the command had run when the estimate was made: its start-up and the probes
+    (``process_seconds``)."""
+    also: tuple[tuple[str, float], ...] = ()
+    """The rest of the command's work, each part named with its expected seconds (files,
+    figures, error-estimate solves, λ1, the host's work)."""
+
+    @property
+    def whole_seconds(self) -> float:
+        """The whole command's expected wall time, s: what was spent before the estimate,
+        the steps (``seconds``) and every part of ``also``."""
+        return self.spent + self.seconds + sum(s for _, s in self.also)
+
+    def with_parts(self, *parts: tuple[str, float]) -> CostEstimate:
+        """This estimate with more named parts of the command's work."""
+        return replace(self, also=self.also + tuple((n, float(s)) for n, s in parts))
+
+    def whole_line(self) -> str:
+        """'in all about 6 s: 2.1 s start-up and probes so far, 1 s the file, …'."""
+        parts = [(f"{self.spent:.2g} s start-up and probes so far", self.spent),
+                 (f"{duration_text(self.seconds).removeprefix('about ')} the "
+                  f"{self.unit if self.unit != RK4_STEPS else 'RK4 steps'}", self.seconds),
+                 *((f"{duration_text(sec).removeprefix('about ')} {name}", sec)
+                   for name, sec in self.also)]
+        return (f"estimate: in all {duration_text(self.whole_seconds)} for the whole command ("
+                + ", ".join(text for text, _ in parts) + ")")
 
     @property
     def total_steps(self) -> int:
@@ -103,7 +129,8 @@ class CostEstimate:
                         "probed)")
         head = (f"estimate: {self.members:,} {self.what} x {steps} {unit} = "
                 f"{self.total_steps:.3g} {total}; {expected}")
-        return [head, *self.advice()]
+        whole = [self.whole_line()] if self.spent or self.also else []
+        return [head, *self.advice(), *whole]
 
     def advice(self) -> list[str]:
         """What would make a long run shorter: a coarser ``--dt`` the plan accepts, fewer
@@ -120,6 +147,24 @@ class CostEstimate:
             found.append(f"hint: {fewer:,} {self.what} instead of {self.members:,} would take "
                          f"{duration_text(self.seconds * fewer / self.members)}")
         return found
+
+
+FILE_SECONDS = 1.0
+"""Expected seconds to write a result file or a figure (the netCDF or matplotlib import
+included: 0.5–1.6 s on the two-core development machine, more under load)."""
+
+
+def process_seconds() -> float:
+    """Wall seconds since this process started (its start-up, imports and probes so far);
+    0 where the system does not say (Linux's /proc)."""
+    try:
+        with open("/proc/self/stat") as stat:
+            ticks = int(stat.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as uptime:
+            up = float(uptime.read().split()[0])
+        return max(0.0, up - ticks / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
 
 
 def duration_text(seconds: float) -> str:
@@ -219,4 +264,4 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
     return CostEstimate(members=int(members), steps=int(steps),
                         workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
                         dt=float(dt), coarsest_dt=coarsest_step(system), what=what,
-                        bound=bound)
+                        bound=bound, spent=process_seconds())

@@ -23,9 +23,11 @@ import xarray as xr
 from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_seconds
 from analysis.integrate.cost import (
+    FILE_SECONDS,
     CostEstimate,
     coarsest_step,
     estimate_cost,
+    process_seconds,
     tangent_step_factor,
 )
 from analysis.integrate.plan import RunPlan
@@ -316,7 +318,8 @@ def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
         factor = tangent_step_factor(system, dt) or float(system.n_state + 1)
     steps_fine = [c for c in (coarsest_step(corner) for corner in corners) if c is not None]
     return replace(est, step_seconds=est.step_seconds * factor, average=len(picked) > 1,
-                   coarsest_dt=min(steps_fine) if len(steps_fine) == len(corners) else None)
+                   coarsest_dt=min(steps_fine) if len(steps_fine) == len(corners) else None,
+                   spent=process_seconds()).with_parts(("the file", FILE_SECONDS))
 
 
 def _check_section_at(setting: Setting, name: str, value: float) -> None:

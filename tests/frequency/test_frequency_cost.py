@@ -73,4 +73,5 @@ def test_hb_prints_its_probed_estimate_first(cli, tmp_path):
     assert lines[0].startswith("estimate: 12 responses x up to 3 Newton iterations = 36 "
                                "iterations; expected at most "), lines
     assert "s per iteration, probed)" in lines[0]
-    assert lines[1].startswith("10 points, speed_rpm = "), "the progress after the estimate"
+    assert lines[1].startswith("estimate: in all "), "the whole command (issue 41)"
+    assert lines[2].startswith("10 points, speed_rpm = "), "the progress after the estimate"

@@ -129,7 +129,10 @@ def _target(model, rows):
 def calibrations(truth_rows):
     model, rows = truth_rows
     out = {}
-    for label, chosen in (("few", rows[3:4]), ("all", rows)):
+    # "few": N_b = 8 alone, whose class is firm (λ1 49 ± 31 1/s); the truth's own classes
+    # at N_b = 9 and 10 are doubtful (λ1 −15 ± 21, −15 ± 18: the interval reaches zero,
+    # issue 41), so a row of them alone cannot be matched firmly and narrows nothing
+    for label, chosen in (("few", rows[2:3]), ("all", rows)):
         out[label] = calibrate(model, _target(model, chosen), PRIORS, samples=32, rounds=2,
                                seed=1, quantile=0.3, settings=SETTINGS)
     return out
@@ -157,9 +160,13 @@ def test_a_far_point_is_excluded(truth_rows, calibrations):
     assert any(not box[k][0] <= v <= box[k][1] for k, v in FAR.items())
 
 
-def test_posterior_narrows_as_rows_are_added(calibrations):
-    def log_area(cal):
-        box = cal.credible_interval(0.9)
-        return sum(math.log(hi / lo) for lo, hi in box.values())
-
-    assert log_area(calibrations["all"]) < log_area(calibrations["few"])
+def test_posterior_narrows_and_says_it_is_too_small(calibrations):
+    """The five rows narrow the prior (damping's 90 % interval 0.70 of the prior's log
+    width, measured). Whether they narrow it more than one row does is within the noise of
+    32 sets × 2 rounds once doubtful rows no longer count (issue 41; log areas 3.29 and
+    3.17, measured), and the calibration says so itself: its effective sample size (16-20)
+    is too small to conclude."""
+    for cal in calibrations.values():
+        assert min(cal.narrowing().values()) < 0.8
+        assert "effective sample size" in cal.verdict()
+        assert cal.effective_sample_size() < 32
