@@ -41,8 +41,9 @@ def campbell(
     from analysis.linear.campbell import check_critical
     from analysis.linear.rotor import load_rotor
 
-    rotor = load_rotor(model)
-    result = compute(rotor.matrices, parse_speeds(speeds), modes, rotor.lines)
+    rpm = parse_speeds(speeds)
+    rotor = load_rotor(model, rpm)
+    result = compute(rotor.matrices, rpm, modes, rotor.lines)
     if critical:
         check_critical(result)
     if output:
@@ -94,10 +95,10 @@ def unbalance(
     from analysis.linear import unbalance_response
     from analysis.linear.rotor import load_rotor, parse_unbalance
 
-    rotor = load_rotor(model)
+    rpm = parse_speeds(speeds)
+    rotor = load_rotor(model, rpm)
     given = [parse_unbalance(u, rotor.matrices.n_nodes) for u in unbalances or []]
-    result = unbalance_response(rotor.matrices, node, parse_speeds(speeds),
-                                given or list(rotor.shaft.unbalances))
+    result = unbalance_response(rotor.matrices, node, rpm, given or list(rotor.shaft.unbalances))
     if output:
         from analysis.reports.campbell_plots import bode_figure
 

@@ -3,7 +3,8 @@ diagram), and its critical speeds.
 
 At a speed Omega (rad/s) the rotor ``M q'' + (C + C_b + Omega G) q' + (K + K_b) q = 0`` has
 the eigenvalues of ``[[0, I], [-M⁻¹K, -M⁻¹(C + Omega G)]]``. Each pair with positive imaginary
-part lambda = -zeta w_n ± i w_d is a mode: damped frequency w_d / 2 pi (Hz), log decrement
+part lambda = -zeta w_n ± i w_d (and not overdamped in all but name, ``OVERDAMPED``) is a
+mode: damped frequency w_d / 2 pi (Hz), log decrement
 ``-2 pi Re(lambda) / Im(lambda)`` (= 2 pi zeta / sqrt(1 - zeta²), as ROSS), and whirl:
 at each node the orbit of the mode's (x, y) turns with the shaft (forward) or against it
 (backward); a mode whose nodes disagree is ``mixed`` (ROSS's rule: the sign of
@@ -34,6 +35,10 @@ WHIRLS = ("forward", "backward", "mixed")
 """The whirl names of a mode."""
 RAD_S = np.pi / 30.0
 """rad/s per rpm."""
+OVERDAMPED = 0.01
+"""A pair with Im(lambda) below this fraction of |lambda| (damping ratio above 0.99995) is
+overdamped in all but name (structural damping beta K on the highest element modes, coupled
+by the gyroscopic terms): not a mode."""
 STILL = 1e-6
 """A node whose orbit is smaller than this fraction of the largest does not vote on the
 whirl."""
@@ -52,7 +57,7 @@ def damped_modes(rotor: RotorMatrices, speed_rad_s: float
     a[n:, n:] = -la.lu_solve(lu, c)
     lam, vec = la.eig(a)
     scale = max(np.abs(lam).max(), 1.0)
-    keep = np.flatnonzero(lam.imag > 1e-9 * scale)
+    keep = np.flatnonzero((lam.imag > 1e-9 * scale) & (lam.imag >= OVERDAMPED * np.abs(lam)))
     keep = keep[np.argsort(lam.imag[keep], kind="stable")]
     return lam[keep], vec[:n, keep]
 

@@ -1,14 +1,15 @@
 """A spec's finite-element rotor, ready for the linear analyses: its ``[shaft]`` read and
 assembled, with the provenance its results and figures carry.
 
-The shaft's linear bearings (``[[shaft.bearings]]``) support it. A spec whose ball bearings
-sit on the shaft (``[[bearings]]`` with ``inner = "shaft"``) is refused here: its linear
-model about the static equilibrium needs the generated model's linearised coefficients.
+The shaft's linear bearings (``[[shaft.bearings]]``) support it; its ball bearings
+(``[[bearings]]`` with ``inner = "shaft"``) enter as their linearised coefficients at the
+static equilibrium (``analysis.linear.ball_bearings``), and bring their VC lines.
 """
 
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,22 +40,34 @@ class LinearRotor:
                 "spec_sha256": spec_hash(self.path), "bearingdyn_version": package_version()}
 
 
-def load_rotor(model: str | Path) -> LinearRotor:
-    """The rotor of a spec (a path, or a shipped or user spec's name) with a ``[shaft]``."""
+def load_rotor(model: str | Path, speeds_rpm: Sequence[float] = (0.0,)) -> LinearRotor:
+    """The rotor of a spec (a path, or a shipped or user spec's name) with a ``[shaft]``;
+    its ball bearings linearised at the static equilibrium over ``speeds_rpm``."""
+    from analysis.linear.ball_bearings import (
+        linearised_bearings,
+        shaft_ball_bearings,
+        static_loads,
+    )
+
     shaft, path = load_shaft(model)
     data = tomllib.loads(path.read_bytes().decode("utf-8-sig"))
-    on_shaft = [b.get("name", "?") for b in data.get("bearings", []) or []
-                if isinstance(b, dict) and b.get("inner") == "shaft"]
-    if on_shaft:
-        raise InputError(f"model: ball bearings on the shaft ({', '.join(on_shaft)}) have no "
-                         "linear coefficients in the spec; the linear analyses take the "
-                         "shaft on its linear [[shaft.bearings]] (give the ball bearings' "
-                         "coefficients from `bearingdyn stiffness` as linear bearings)")
-    if not shaft.bearings:
-        raise InputError("model: the shaft has no [[shaft.bearings]]; a free rotor has no "
-                         "critical speeds or steady unbalance response")
     name = str((data.get("model") or {}).get("name") or path.stem)
-    return LinearRotor(name, path, shaft, assemble(shaft))
+    balls = shaft_ball_bearings(data)
+    lines = {"1X": 1.0}
+    if balls:
+        matrices = assemble(shaft)
+        linear = linearised_bearings(matrices, balls, static_loads(data, shaft.node_count),
+                                     speeds_rpm)
+        shaft = shaft.model_copy(update={"bearings": [*shaft.bearings, *linear]})
+        orders = {b.name: b.vc_order() for b in balls}
+        if len(set(orders.values())) == 1:
+            lines["VC"] = next(iter(orders.values()))
+        else:
+            lines.update({f"VC[{n}]": order for n, order in orders.items()})
+    if not shaft.bearings:
+        raise InputError("model: the shaft has no bearings; a free rotor has no critical "
+                         "speeds or steady unbalance response")
+    return LinearRotor(name, path, shaft, assemble(shaft), lines)
 
 
 def parse_unbalance(text: str, node_count: int) -> Unbalance:
