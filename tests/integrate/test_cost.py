@@ -116,5 +116,6 @@ def test_attractors_say_their_cost_before_the_work(tmp_path, cli):
     assert lines[0].startswith("estimate: 4 initial states x up to ")
     assert "on 1 worker(s)" in lines[0]
     progress = [i for i, line in enumerate(lines) if line.startswith("attractors: ")]
-    assert progress and progress[0] == 1, "the estimate comes before the progress"
+    assert lines[1].startswith("estimate: in all "), "the whole command (issue 41)"
+    assert progress and progress[0] == 2, "the estimate comes before the progress"
     assert lines[progress[-1]].startswith("attractors: 4/4"), "progress reaches every state"
