@@ -126,18 +126,18 @@ def hb_error(method, system: System, request, data: xr.Dataset) -> xr.Dataset:
              "error_aliasing": [replace(single, options={
                  **options, "samples": _doubled_samples(data.attrs["samples"])})]}
     for name, asks in tries.items():
-        out[name], why = float("nan"), ""
+        out[name], why = float("nan"), []
         for ask in asks:
             try:
                 out[name] = change(data, method.run(system, ask))
             except InputError as exc:
-                why = f"{name}: not computed: {exc}"
+                why.append(f"at H = {ask.resolution}: {exc}" if len(asks) > 1 else str(exc))
                 continue
             if name == "error_harmonics":
                 out["error_harmonics_at"] = str(ask.resolution)
             break
         if why and not math.isfinite(out[name]):
-            notes.append(why)
+            notes.append(f"{name}: not computed: " + " / ".join(why))
     out.setdefault("error_harmonics_at", str(doubled(harmonics)))
     if not _is_torus(data):
         larger = max(out["error_harmonics"], out["error_aliasing"])
