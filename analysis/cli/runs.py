@@ -435,7 +435,7 @@ def plot(
         raise InputError(f"{chosen[1]}: give one of --orbit, --full-spectrum, --bode, "
                          f"--polar, got {' and '.join(chosen)}")
     options = record_options(channel, fs, rpm, tacho, None)
-    if options.given() or is_record_file(result):
+    if options.given() or is_record_file(result, foreign=False):
         write_figure(record_figure(chosen[0] if chosen else None, result, options), output)
         return
     if not chosen:

@@ -133,9 +133,10 @@ def _profile(ds: xr.Dataset, record: xr.Dataset, what: str) -> None:
                     speed_rpm=float(rpm[0]))
 
 
-def is_record_file(path: str | Path) -> bool:
+def is_record_file(path: str | Path, foreign: bool = True) -> bool:
     """Whether ``path`` is read as a measured record: any file that is not netCDF, or a
-    netCDF file that is a record or names no model (a simulated result names its model)."""
+    netCDF file that is a record or (with ``foreign``) names no model (a simulated result
+    names its model)."""
     from analysis.io import NETCDF_SUFFIXES, read_attrs
 
     path = Path(path)
@@ -145,7 +146,8 @@ def is_record_file(path: str | Path) -> bool:
         attrs = read_attrs(path)
     except Exception:  # damaged: the run reader says why
         return False
-    return attrs.get("kind") == "record" or not isinstance(attrs.get("model"), str)
+    return attrs.get("kind") == "record" or (foreign and not isinstance(attrs.get("model"),
+                                                                          str))
 
 
 def open_record_run(path: str | Path, chosen: Sequence[str] | str | None = None, *,
