@@ -62,7 +62,9 @@ def info(
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
         return
-    typer.echo(f"{summary['source_file']}: {len(summary['channels'])} channel(s), "
+    saved = "" if summary["file"] == summary["source_file"] else \
+        f" (saved from {summary['source_file']})"
+    typer.echo(f"{summary['file']}{saved}: {len(summary['channels'])} channel(s), "
                f"{summary['sample_rate_hz']:g} Hz ({summary['sample_rate_source']}), "
                f"{summary['samples']} samples = {summary['duration_s']:.4g} s")
     typer.echo(f"speed: {summary['speed']}")

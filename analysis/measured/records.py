@@ -424,15 +424,18 @@ def needs_speed(record: xr.Dataset, what: str) -> float:
 
 
 def record_summary(record: xr.Dataset) -> dict[str, Any]:
-    """What ``bearingdyn record info`` shows, in plain JSON types: the file, rate and its
-    source, samples and duration (s), the speed (rpm, its source; None without one), each
-    channel (name, units, original name, rms, min, max in its units) and the provenance."""
+    """What ``bearingdyn record info`` shows, in plain JSON types: the file read and the one
+    the record came from (a saved record's original), the rate and its source, samples and
+    duration (s), the speed (rpm, its source; None without one), each channel (name, units,
+    original name, rms, min, max in its units) and the provenance."""
     from analysis.provenance import plain
 
     n = record.sizes["t"]
     rate = float(record.attrs["sample_rate_hz"])
     speed = record_speed_hz(record)
-    out = {"source_file": str(record.attrs.get("source_file")), "sample_rate_hz": rate,
+    read = record.attrs.get("saved_file", record.attrs.get("source_file"))
+    out = {"file": str(read), "source_file": str(record.attrs.get("source_file")),
+           "sample_rate_hz": rate,
            "sample_rate_source": str(record.attrs.get("sample_rate_source", "")),
            "samples": int(n), "duration_s": n / rate, "speed": speed_words(record),
            "speed_rpm": None if speed is None else 60.0 * speed,

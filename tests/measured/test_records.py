@@ -587,6 +587,9 @@ def test_record_save_keeps_scale_units_speed_and_provenance(tmp_path):
     assert channels(back) == ["ch2"] and back["ch2"].attrs["units"] == "g"
     np.testing.assert_array_equal(back["ch2"].values, pcm[:, 1] / 32768.0 * 100)
     assert back.attrs["speed_rpm"] == 1800.0 and back.attrs["reader"] == "scipy.io.wavfile.read"
+    res = _invoke("record", "info", out)
+    assert res.output.startswith(f"{out} (saved from {tmp_path / 'acc.wav'}): 1 channel(s), "
+                                 "2000 Hz (file), 1000 samples")
     res = _invoke("record", "save", tmp_path / "acc.wav", "--channel", "ch9", "-o",
                   tmp_path / "no.nc")
     assert res.exit_code == 2 and not (tmp_path / "no.nc").exists()
