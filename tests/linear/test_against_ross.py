@@ -117,6 +117,34 @@ def test_three_disk_rotor_modes_equal_ross(rs):
     assert worst_f < 1e-9 and worst_ld < 1e-6
 
 
+def test_rotor_with_structural_damping_equals_ross_state_matrix(rs):
+    """ROSS's ``rotor_example_with_damping`` (33 elements with C = alpha M + beta K): the
+    eigenvalues of ROSS's own state matrix ``Rotor.A(speed)``, its lateral ones (90 % of the
+    eigenvector in x, y, alpha, beta) that are not overdamped in all but name (as ours:
+    ``OVERDAMPED``; ROSS's ``run_modal`` lists those first, with damped frequencies near 0)."""
+    import scipy.linalg as la
+
+    from analysis.linear import campbell
+    from analysis.linear.campbell import OVERDAMPED
+    from modelgen.fe.ross_import import shaft_data
+    from modelgen.fe.schema import parse_shaft
+
+    rotor = rs.rotor_example_with_damping()
+    ours = campbell(assemble(parse_shaft(shaft_data(rotor))),
+                    np.array(SPEEDS) * 30 / np.pi, n_modes=MODES)
+    lateral = np.array([i for i in range(rotor.ndof) if i % 6 in (0, 1, 3, 4)])
+    for j, speed in enumerate(SPEEDS):
+        lam, vec = la.eig(rotor.A(speed=speed))
+        share = (np.abs(vec[lateral]) ** 2).sum(0) / (np.abs(vec[:rotor.ndof]) ** 2).sum(0)
+        keep = (lam.imag > 0) & (share > 0.9) & (lam.imag >= OVERDAMPED * np.abs(lam))
+        theirs = np.sort_complex(lam[keep] * -1j)[:MODES] * 1j  # ascending imaginary part
+        assert ours.frequency_hz[:, j] * 2 * np.pi == pytest.approx(theirs.imag, rel=1e-3)
+        assert ours.frequency_hz[:, j] * 2 * np.pi == pytest.approx(theirs.imag, rel=1e-8)
+        log_dec = -2 * np.pi * theirs.real / theirs.imag
+        assert ours.log_dec[:, j] == pytest.approx(log_dec, rel=0.05)
+        assert ours.log_dec[:, j] == pytest.approx(log_dec, rel=1e-6)
+
+
 @pytest.mark.parametrize("which", ["example", "three_disk"])
 def test_unbalance_response_equals_ross(rs, which, tmp_path):
     from analysis.linear import campbell, unbalance_response
