@@ -287,13 +287,16 @@ def verdict_of(families: dict[str, ev.Family]) -> tuple[str, float, str]:
     clear = sorted((f for f in families.values() if f.clear), key=lambda f: -f.score)
     ball = families.get("ball")
     audible = [] if ball is None else ev.above_noise(ball)
-    if any(f.name == "cage" for f in clear) and audible:
+    blind = [] if ball is None else [ln.name for ln in ball.lines if ln.note == ev.MASKED
+                                      and ln.name in ("BSF", "2BSF")]
+    if any(f.name == "cage" for f in clear) and (audible or blind):
         clear = [f for f in clear if f.name != "cage"]
         if not clear:
-            return "none", 0.5, ("no clear fault: FTF lines beside ball lines over the "
-                                 f"noise ({', '.join(ln.name for ln in audible)}): the "
-                                 "cage's modulation of a ball defect whose lines are not "
-                                 "clear, or a cage fault; not named")
+            why = (f"ball lines over the noise ({', '.join(ln.name for ln in audible)})"
+                   if audible else f"{' and '.join(blind)} on shaft harmonics, where a ball "
+                   "defect's lines cannot be seen")
+            return "none", 0.5, (f"no clear fault: FTF lines beside {why}: the cage's "
+                                 "modulation of a ball defect, or a cage fault; not named")
     if not clear:
         best = max(families.values(), key=lambda f: (len(f.harmonics_above), f.score),
                    default=None)
@@ -345,6 +348,12 @@ def diagnose_signal(values: np.ndarray, fs_hz: float, shaft_hz: float, bearing: 
                                0.001 if speed.refined else ev.SPEED_UNCERTAINTY)
     verdict, confidence, reason = verdict_of(families)
     notes = [n for n in (speed.note,) if n]
+    for family in families.values():
+        hidden = [f"{ln.name} ({ln.theory_multiple:.4f} X)" for ln in family.lines
+                  if ln.note == ev.MASKED]
+        if hidden:
+            notes.append(f"{family.name}: {', '.join(hidden)} on a shaft harmonic or a "
+                         "clearer family's line: not searched")
     return Diagnosis(verdict, confidence, reason, families, band, speed, bearing, table,
                      prewhiten, fs, int(x.size), df, notes=notes, envelope_hz=freq,
                      envelope_amplitude=amplitude, kurtogram=gram)

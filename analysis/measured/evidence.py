@@ -235,19 +235,29 @@ def explained_mask(size: int, df: float, frequencies: list[float]) -> np.ndarray
     return mask
 
 
+def masked(searched: np.ndarray, f: float, df: float) -> bool:
+    """Whether the bin of ``f`` (Hz) is left out (a shaft harmonic's, or a line a clearer
+    family explains): a line there cannot be told from that one, so it is not searched."""
+    i = round(f / df)
+    return 0 <= i < searched.size and searched[i] == 0
+
+
 def _search(searched: np.ndarray, amplitude: np.ndarray, df: float, f: float, half: float
             ) -> tuple[float | None, float | None]:
     """(frequency Hz, level dB) of the line in [f − half, f + half]: the largest bin of
     ``searched`` (the spectrum with the excluded bins zeroed) that is a local maximum of
     ``amplitude``, its frequency interpolated (log-parabolic, exact for a Gaussian peak and
-    close for Hann); Nones when there is none."""
+    close for Hann); Nones when there is none, when ``f`` itself is left out (``masked``)
+    or when the bin found lies beside a left-out bin (a left-out line's flank)."""
     lo = max(1, math.floor((f - half) / df))
     hi = min(amplitude.size - 2, math.ceil((f + half) / df))
-    if hi < lo or not searched[lo:hi + 1].any():
+    if hi < lo or not searched[lo:hi + 1].any() or masked(searched, f, df):
         return None, None
     i = lo + int(np.argmax(searched[lo:hi + 1]))
     if not (amplitude[i] > amplitude[i - 1] and amplitude[i] >= amplitude[i + 1]):
         return None, None  # the window's largest bin is on the flank of a line outside it
+    if searched[i - 1] == 0 or searched[i + 1] == 0:
+        return None, None  # beside a left-out line: its flank, not a line of its own
     floor = noise_floor(amplitude, i, FLOOR_BINS)
     if not floor > 0:
         return None, None
@@ -319,7 +329,8 @@ def family_evidence(name: str, spec: Spectrum, table: dict[str, float], shaft_hz
             found, level = first[h]
             f = h * table[base]
             lines.append(Line(_harmonic_name(base, h), "harmonic", f, f, wide[h], found, level,
-                              f / shaft_hz, None if found is None else found / shaft_hz))
+                              f / shaft_hz, None if found is None else found / shaft_hz,
+                              note=MASKED if masked(searched, f, df) else ""))
         return Family(name, base, threshold, tuple(lines), df, note=excluded_note)
     _, h, lines = best
     fundamental = first[h][0] / h  # type: ignore[operator]
@@ -347,7 +358,8 @@ def _consistent(name: str, anchor: int, fundamental: float, first: dict, spec: S
             half = max(TIGHT * centre, MIN_WINDOW_BINS * spec.df)
             found, level = _search(searched, spec.amplitude, spec.df, centre, half)
         lines.append(_line(_harmonic_name(base, h), "harmonic", f, centre, half, found, level,
-                           shaft_hz, threshold))
+                           shaft_hz, threshold,
+                           MASKED if masked(searched, centre, spec.df) else ""))
         if spacing:
             tag = "X" if name == "inner-race" else "FTF"
             for sign in (-1, 1):
@@ -363,10 +375,15 @@ def _consistent(name: str, anchor: int, fundamental: float, first: dict, spec: S
 
 
 def _line(name: str, role: str, theory: float, centre: float, half: float,
-          found: float | None, level: float | None, shaft_hz: float, threshold: float) -> Line:
+          found: float | None, level: float | None, shaft_hz: float, threshold: float,
+          note: str = "") -> Line:
     return Line(name, role, theory, centre, half, found, level, theory / shaft_hz,
                 None if found is None else found / shaft_hz,
-                bool(level is not None and level >= threshold))
+                bool(level is not None and level >= threshold), note)
+
+
+MASKED = "on a left-out line (a shaft harmonic nX, or a clearer family's): not searched"
+"""The note of a line whose own frequency is left out."""
 
 
 def explained_frequencies(family: Family, table: dict[str, float], shaft_hz: float,
