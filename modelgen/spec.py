@@ -540,16 +540,28 @@ def _shaft_layout_problems(spec: Spec) -> list[str]:
 
 
 def _shaft_held_problems(spec: Spec) -> list[str]:
-    """The shaft cannot move freely with its ball-bearing nodes held (else it drifts)."""
+    """The shaft cannot move freely with its ball-bearing nodes held (Craig–Bampton needs
+    the held shaft's stiffness to be invertible): in each bending plane at least two nodes
+    held, by ball bearings or by linear bearings of positive direct stiffness (a connected
+    beam held at two nodes has no rigid motion left)."""
+    assert spec.shaft is not None
     if spec.reduction_options().method != "craig_bampton":
         return []
-    from modelgen.fe.assembly import assemble as assemble_shaft
-    from modelgen.fe.reduction import held_stiffness_problem
-
-    rotor = assemble_shaft(spec.shaft)
-    stiffness = rotor.K + rotor.bearing_matrices(0.0)[0]
-    problem = held_stiffness_problem(stiffness, spec.interface_nodes())
-    return [problem] if problem else []
+    interface = set(spec.interface_nodes())
+    for direct in ("kxx", "kyy"):
+        held = set(interface)
+        for bearing in spec.shaft.bearings:
+            value = getattr(bearing, direct)
+            if value is None:  # kyy defaults to kxx
+                value = bearing.kxx
+            if max(value if isinstance(value, list) else [value]) > 0:
+                held.add(bearing.node)
+        if len(held) < 2:
+            nodes = ", ".join(str(n) for n in sorted(interface)) or "none"
+            return [f"shaft: the shaft moves freely with its ball-bearing nodes held (nodes "
+                    f"{nodes}): give it ball bearings at two different nodes, or linear "
+                    "bearings ([[shaft.bearings]]) at other nodes"]
+    return []
 
 
 def _parameter_problems(spec: Spec) -> list[str]:
