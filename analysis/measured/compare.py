@@ -15,8 +15,9 @@ Both signals are taken to the same quantity and the same axis before they are co
    both whatever their speeds.
 3. **Two spectra per signal**: the raw Hann amplitude spectrum, and the squared envelope
    spectrum of the band of largest spectral kurtosis (the fast kurtogram;
-   ``diagnose.choose_band`` and ``diagnose.squared_envelope_spectrum``: the same envelope
-   as ``bearingdyn diagnose``), each band chosen on its own signal.
+   ``diagnose.choose_band`` and ``diagnose.squared_envelope_spectrum``: the envelope of
+   ``bearingdyn diagnose``, here without pre-whitening, so that both signals are treated
+   alike), each band chosen on its own signal.
 4. **Normalised**: each spectrum in dB relative to its own largest line between
    ``MIN_ORDER`` and the largest order shown (the record's g and the model's m differ, and
    a model's level depends on its assumed masses and damping: only the pattern of lines is
