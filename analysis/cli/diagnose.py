@@ -149,7 +149,7 @@ def _print_family(family) -> None:
             continue
         if line.found_hz is None:
             typer.echo(f"  {line.name:>10} theory {line.theory_hz:8.2f} Hz "
-                       f"({line.theory_multiple:.4f} X): no line")
+                       f"({line.theory_multiple:.4f} X): {line.note or 'no line'}")
             continue
         mark = "*" if line.above else " "
         typer.echo(f"{mark} {line.name:>10} theory {line.theory_hz:8.2f} Hz "
