@@ -495,7 +495,9 @@ def _quiet_worker(parent: int) -> None:
 def diagnose_folder(jobs: Sequence[Job], workers: int | None = None,
                     progress: Callable[[int, int, dict], None] | None = None) -> list[dict]:
     """Each job's ``run_job`` result, in the jobs' order, on ``workers`` processes (default:
-    all cores; one: in this process); ``progress(done, total, result)`` after each."""
+    all cores; one: in this process); ``progress(done, total, result)`` after each. The
+    workers ignore SIGINT (the parent reports a Ctrl-C once) and end with the parent; on
+    an interruption the records not yet started are dropped."""
     import concurrent.futures as cf
 
     from analysis.threads import blas_threads
@@ -509,11 +511,15 @@ def diagnose_folder(jobs: Sequence[Job], workers: int | None = None,
                 if progress:
                     progress(i + 1, len(jobs), results[i])  # type: ignore[arg-type]
         return results  # type: ignore[return-value]
-    with cf.ProcessPoolExecutor(count, initializer=_quiet_worker,
-                                initargs=(os.getpid(),)) as pool:
+    pool = cf.ProcessPoolExecutor(count, initializer=_quiet_worker, initargs=(os.getpid(),))
+    try:
         futures = {pool.submit(run_job, job): i for i, job in enumerate(jobs)}
         for done, future in enumerate(cf.as_completed(futures), 1):
             results[futures[future]] = future.result()
             if progress:
                 progress(done, len(jobs), results[futures[future]])  # type: ignore[arg-type]
+    except BaseException:  # Ctrl-C: the records not started are dropped, not waited for
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
     return results  # type: ignore[return-value]
