@@ -109,7 +109,10 @@ def _print(cal, output: Path) -> None:
     typer.echo(f"wrote {output}: best {cal.best_matched()} of {len(cal.target.rows)} rows; "
                f"share of the prior matching k rows: {shares}")
     typer.echo("  (doubtful: the class would match but lambda1's 95 % interval reaches "
-               "zero; not counted as matched)")
+               "zero, or it changed with the step halved; not counted as matched)")
+    if cal.halved is not None:
+        typer.echo(f"  step halved at the best sets: {cal.halved[1]} of {cal.halved[0]} "
+                   "matched rows changed class")
     narrowing = cal.narrowing()
     for name, (lo, hi) in cal.credible_interval(0.9).items():
         unit = cal.model.units.get(name, "")

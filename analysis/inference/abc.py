@@ -139,7 +139,10 @@ def doubtful(result: MemberRow) -> bool:
     95 % interval reaching zero (λ1 − ci95 <= 0 <= λ1 + ci95), where a longer record or a
     halved step may give the other class (issue 41: 8–24 ± 13–39 1/s at N_b = 7 was called
     quasi-periodic; an independent twin-orbit classifier called 6 of 40 such sets chaotic).
-    Not judged here: whether the class changes with the step halved (a second run)."""
+    Also doubtful: a class that changes with the RK4 step halved (``halved``, set by
+    ``recheck_halved`` on the best sets)."""
+    if result.halved and result.halved != result.nature:
+        return True
     lam, ci = result.lambda1, result.ci95
     return (result.nature in LAMBDA_CLASSES and math.isfinite(lam) and math.isfinite(ci)
             and lam - ci <= 0 <= lam + ci)
@@ -253,6 +256,9 @@ class Calibration:
     rounds: list[Round]
     wall_s: float = 0.0
     device: str = "cpu"
+    halved: tuple[int, int] | None = None
+    """(rows rechecked, rows whose class changed) with the step halved
+    (``recheck_halved``); None: not rechecked."""
 
     @property
     def posterior(self) -> Round:
@@ -660,6 +666,51 @@ def run(problem: Problem, *, executor=None, store=None,
                 "row (not counted)")
     return Calibration(mdl, tgt, pri, options, out, time.perf_counter() - start,
                        options.device)
+
+
+RECHECK_SETS = 10
+"""The best sets whose matched rows ``recheck_halved`` runs again with the step halved."""
+
+
+def recheck_halved(cal: Calibration, sets: int = RECHECK_SETS) -> tuple[int, int]:
+    """Run the ``sets`` best distinct sets (fewest rows missed over every round) again at
+    each row whose class they firmly match, with the RK4 step halved (the same record, in
+    twice the steps), and keep that class as ``MemberRow.halved``: a row whose class changes
+    becomes doubtful and leaves its member's ``matched`` (``doubtful`` gains it). The
+    rounds' discrepancies and weights are left as they were. Returns (rows rechecked, rows
+    whose class changed)."""
+    tgt, names = cal.target, [p.name for p in cal.priors]
+    everyone = sorted(((r, i) for r in cal.rounds for i in range(len(r.values))),
+                      key=lambda ri: (ri[0].discrepancy[ri[1]], -ri[0].index))
+    chosen, seen = [], set()
+    for r, i in everyone:
+        key = tuple(np.round(r.values[i], 12))
+        if key not in seen and r.matched[i] > 0:
+            seen.add(key)
+            chosen.append((r, i))
+        if len(chosen) == sets:
+            break
+    checked = changed = 0
+    coordinates = tgt.coordinates or ("x",)
+    for j, row in enumerate(tgt.rows):
+        members = [(r, i) for r, i in chosen if row_marks(row, r.rows[i][j])[0]]
+        if not members:
+            continue
+        settings = cal.options.settings
+        h, _ = settings.steps(row_system(cal.model, row))
+        halved = dataclasses.replace(settings, dt=h / 2)
+        thetas = np.array([r.values[i] for r, i in members])
+        again = evaluate_row(cal.model, row, names, thetas, halved, coordinates,
+                             cal.options.device)
+        for (r, i), res in zip(members, again, strict=True):
+            r.rows[i][j] = dataclasses.replace(r.rows[i][j], halved=res.nature)
+            checked += 1
+            if res.nature != r.rows[i][j].nature:
+                changed += 1
+                r.matched[i] -= 1
+                r.doubtful[i] += 1
+    cal.halved = (checked, changed)
+    return checked, changed
 
 
 def model_reference(model: Model) -> str:

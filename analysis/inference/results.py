@@ -25,7 +25,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.inference.abc import Calibration, Problem, doubtful_match, row_marks, run
+from analysis.inference.abc import (
+    RECHECK_SETS,
+    Calibration,
+    Problem,
+    doubtful_match,
+    recheck_halved,
+    row_marks,
+    run,
+)
 from analysis.provenance import plain, provenance, run_attrs
 
 BEST = 10
@@ -54,6 +62,8 @@ def _attrs(cal: Calibration) -> dict[str, Any]:
         "effective_sample_size": cal.effective_sample_size(),
         "verdict": cal.verdict() or "conclusive by its own measures",
     })
+    if cal.halved is not None:
+        attrs.update(halved_rows_checked=cal.halved[0], halved_rows_changed=cal.halved[1])
     return attrs
 
 
@@ -95,6 +105,11 @@ def to_dataset(cal: Calibration) -> xr.Dataset:
                        {"units": "1/s"})
     data["ci95"] = (("member", "row"), np.array([[g.ci95 for g in m] for m in grid]),
                     {"units": "1/s"})
+    data["class_at_half_step"] = (("member", "row"),
+                                  np.array([[g.halved for g in m] for m in grid]),
+                                  {"long_name": "the class with the RK4 step halved ('' not "
+                                                "checked: only the best sets' matched rows "
+                                                "are)"})
     data["diverged_at"] = (("member", "row"),
                            np.array([[g.diverged_at for g in m] for m in grid]),
                            {"units": "s"})
@@ -130,6 +145,7 @@ def _member_json(cal: Calibration, r, i: int) -> dict[str, Any]:
                      "major": res.major, "lines": res.lines,
                      "class_ok": bool(klass), "lines_ok": bool(lines),
                      "doubtful": bool(doubtful_match(row, res)),
+                     "class_at_half_step": res.halved or None,
                      "diverged_at": plain(res.diverged_at, finite=True)})
     return {"parameters": {p.name: float(r.values[i, j]) for j, p in enumerate(cal.priors)},
             "weight": float(r.weights[i]) if r.weights is not None else 0.0,
@@ -155,6 +171,9 @@ def to_json(cal: Calibration, output: str | None = None) -> dict[str, Any]:
             "narrowing": cal.narrowing(),
             "effective_sample_size": cal.effective_sample_size(),
             "verdict": cal.verdict(),
+            "halved_step_check": (None if cal.halved is None else
+                                  {"rows_checked": cal.halved[0],
+                                   "rows_changed": cal.halved[1]}),
             "best": best,
             "credible_90": {k: list(v) for k, v in cal.credible_interval(0.9).items()},
             "tolerances": [r.epsilon for r in cal.rounds],
@@ -185,6 +204,10 @@ def calibrate_to_file(problem: Problem, output: str | Path, *, executor=None,
     total = problem.options.rounds * -(-problem.options.samples // problem.options.block)
     try:
         cal = run(problem, executor=executor, store=store, progress=progress, log=log)
+        checked, changed = recheck_halved(cal)
+        if log:
+            log(f"step halved at the {RECHECK_SETS} best sets: {changed} of {checked} matched "
+                "rows changed class (now doubtful, not matched)")
         write_calibration(cal, output)
     except BaseException as exc:
         store.stopped(exc, total, f"blocks of {problem.options.block} parameter sets")

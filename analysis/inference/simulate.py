@@ -137,6 +137,9 @@ class MemberRow:
     major: dict[str, str]
     lines: dict[str, list[str]]
     diverged_at: float
+    halved: str = ""
+    """The class of the same run with the RK4 step halved ('' where not checked:
+    ``abc.recheck_halved`` checks the best sets' matched rows)."""
 
     def as_dict(self) -> dict:
         return asdict(self)

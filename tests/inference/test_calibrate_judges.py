@@ -44,6 +44,15 @@ def test_a_class_decided_by_an_interval_through_zero_is_doubtful(nature, lam, ci
     assert doubtful_match(N_B7, result) is unsure
 
 
+def test_a_class_that_changes_with_the_step_halved_is_doubtful():
+    firm = member("quasi-periodic", -40.0, 10.0)
+    assert row_marks(N_B7, firm)[0] and not doubtful_match(N_B7, firm)
+    same = MemberRow("quasi-periodic", -40.0, 10.0, {}, {}, math.nan, "quasi-periodic")
+    assert row_marks(N_B7, same)[0]
+    flips = MemberRow("quasi-periodic", -40.0, 10.0, {}, {}, math.nan, "chaotic")
+    assert not row_marks(N_B7, flips)[0] and doubtful_match(N_B7, flips)
+
+
 def calibration(values: np.ndarray, weights: np.ndarray, matched: np.ndarray,
                 unsure: np.ndarray) -> Calibration:
     """A finished one-round calibration of damping (log prior 10-1000 N s/m) by hand."""
@@ -88,11 +97,19 @@ def test_a_tiny_calibration_says_it_cannot_conclude(cli, tmp_path):
     assert doc["verdict"] and "effective sample size" in doc["verdict"]
     assert set(doc["narrowing"]) == {"damping"} and doc["effective_sample_size"] <= 4
     assert list(doc["doubtful_share"]) == list(doc["share_of_prior"])
+    check = doc["halved_step_check"]
+    assert check["rows_checked"] > 0 and 0 <= check["rows_changed"] <= check["rows_checked"]
+    best = [row for b in doc["best"] for row in b["rows"] if row["class_at_half_step"]]
+    assert len(best) >= 1 and all(r["class_ok"] != r["doubtful"] or not r["class_ok"]
+                                  for r in best)
+    for b in doc["best"]:
+        assert b["matched"] == sum(r["class_ok"] for r in b["rows"])
     assert "calibrate: " in res.stderr and " runs/s" in res.stderr, "progress under --json"
     text = cli(*args, "-o", str(tmp_path / "b.nc"))
     assert text.returncode == 0, text.stderr
     assert "too small to conclude: effective sample size" in text.stdout
     assert "of the prior's width" in text.stdout and "effective sample size" in text.stdout
+    assert "step halved at the best sets: " in text.stdout
 
 
 def test_the_suggested_dt_is_accepted_at_every_corner():
