@@ -45,9 +45,13 @@ def campbell_figure(result: Campbell, title: str = "",
     for i, c in enumerate(result.critical):
         ax.plot(c.speed_rpm, c.frequency_hz, "o", ms=9, mfc="none", mec="darkorange", mew=1.6,
                 zorder=3)
-        ax.annotate(f"{c.speed_rpm:.0f} rpm", (c.speed_rpm, c.frequency_hz),
-                    textcoords="offset points", xytext=(7, -12) if i % 2 else (-52, 6),
-                    fontsize=7, color="darkorange")
+        named = f" ({c.line})" if len(result.lines) > 1 else ""
+        left = (-52 - 6 * len(named), 6)  # alternate sides: close crossings stay legible
+        ax.annotate(f"{c.speed_rpm:.0f} rpm{named}", (c.speed_rpm, c.frequency_hz),
+                    textcoords="offset points", xytext=(7, -12) if i % 2 else left,
+                    fontsize=7, color="darkorange", zorder=4,
+                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none",
+                          "alpha": 0.85})
     for whirl, colour in WHIRL_COLOURS.items():
         ax.scatter([], [], s=12, color=colour, label=f"{whirl} whirl")
     ax.plot([], [], "o", ms=9, mfc="none", mec="darkorange", mew=1.6, label="critical speed")
