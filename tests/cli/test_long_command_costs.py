@@ -24,7 +24,9 @@ def test_the_estimate_is_the_first_line_before_any_progress(cli, tmp_path, name)
     lines = res.stderr.splitlines()
     assert lines and lines[0].startswith(f"estimate: {points} points x "), res.stderr
     assert "RK4 steps" in lines[0] and "expected" in lines[0]
-    assert sum(line.startswith("estimate:") for line in lines) == 1
+    assert sum(line.startswith("estimate:") for line in lines) == 2
+    assert lines[1].startswith("estimate: in all ") and "start-up and probes" in lines[1] \
+        and "the file" in lines[1], "the whole command (issue 41)"
     shown = [i for i, line in enumerate(lines) if line.startswith(progress)]
     assert shown and shown[0] > 0, f"no progress line after the estimate: {res.stderr}"
     assert lines[shown[-1]].startswith(f"{progress}{points}/{points} points"), res.stderr
