@@ -305,12 +305,10 @@ def attractors(
     executor), matched across values. Resumable: re-run the same command to continue."""
     from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Box, Range
-    from analysis.stability.attractors.continuation import MATCH_DISTANCE, check_threshold
     from analysis.sweeps.attractor_blocks import (
         check_branch_of,
         check_continuation,
         check_fractions,
-        check_value_count,
         continuation_to_file,
         fractions_to_file,
     )
@@ -318,13 +316,7 @@ def attractors(
     sides = Box.parse(box, "--box")
     options = _options(resolution, revisits, record, hits, max_periods)
     along = Range.parse(param, "--param", with_num=True) if param is not None else None
-    if along is not None:
-        check_value_count("--param", along.num)  # before its values are made
-        match_threshold = check_threshold(MATCH_DISTANCE if match_threshold is None
-                                          else match_threshold)
-    elif match_threshold is not None:
-        raise _input_error("--match-threshold: matches attractors between consecutive "
-                           "--param values; give --param NAME:LO:HI:N, or leave it out")
+    match_threshold = _threshold(along, match_threshold)
     branches = [_branch(path) for path in branch or []]
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
@@ -371,6 +363,21 @@ def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | N
     count = 1 if executor == "serial" else (workers or os.cpu_count() or 1)
     typer.echo("\n".join(study_cost(system, members, workers=count, sides=sides,
                                      **settings).lines()), err=True)
+
+
+def _threshold(along, match_threshold: float | None) -> float | None:
+    """The matching threshold of a continuation over ``along`` (checked; default
+    ``MATCH_DISTANCE``); given without --param it is refused (it was ignored)."""
+    from analysis.stability.attractors.continuation import MATCH_DISTANCE, check_threshold
+    from analysis.sweeps.attractor_blocks import check_value_count
+
+    if along is None:
+        if match_threshold is not None:
+            raise _input_error("--match-threshold: matches attractors between consecutive "
+                               "--param values; give --param NAME:LO:HI:N, or leave it out")
+        return None
+    check_value_count("--param", along.num)  # before its values are made
+    return check_threshold(MATCH_DISTANCE if match_threshold is None else match_threshold)
 
 
 def _input_error(text: str):

@@ -496,14 +496,7 @@ def main(args: list[str] | None = None) -> None:
     signal.signal(signal.SIGTERM, _terminated)
     signal.signal(signal.SIGINT, _terminated)
     _state["said"] = False
-    from analysis.errors import InputError
-    from analysis.threads import thread_count
-
-    try:
-        thread_count()  # the environment judged before any command starts
-    except InputError as exc:
-        typer.echo(f"error: {exc}", err=True)
-        sys.exit(2)
+    _judge_environment()
     try:
         code = app(args=args, standalone_mode=False)
     except click.exceptions.UsageError as exc:
@@ -529,11 +522,34 @@ def main(args: list[str] | None = None) -> None:
         typer.echo(f"internal error: {type(exc).__name__}: {exc} (run with --debug for the "
                    "traceback)", err=True)
         sys.exit(1)
+    _flush_stdout()
+    _leave(_said(code if isinstance(code, int) else 0))
+
+
+def _judge_environment() -> None:
+    """The environment's settings (``BEARINGDYN_THREADS``) judged before any command
+    starts: a bad one is one line, exit code 2."""
+    import sys
+
+    from analysis.errors import InputError
+    from analysis.threads import thread_count
+
     try:
-        sys.stdout.flush()  # a reader that went away shows here, not in Python's exit
+        thread_count()
+    except InputError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        sys.exit(2)
+
+
+def _flush_stdout() -> None:
+    """Flush standard output now: a reader that went away shows here (``closed_pipe``),
+    not in Python's exit."""
+    import sys
+
+    try:
+        sys.stdout.flush()
     except BrokenPipeError:
         closed_pipe()
-    _leave(_said(code if isinstance(code, int) else 0))
 
 
 def closed_pipe() -> None:
