@@ -4,14 +4,13 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from analysis.cli.common import app, netcdf_output, reports_errors
+from analysis.cli.common import app, echo_json, netcdf_output, reports_errors
 from analysis.errors import InputError
 
 record_app = typer.Typer(no_args_is_help=True, rich_markup_mode=None, add_completion=False,
@@ -60,7 +59,7 @@ def info(
     data = read_record(record, fs=fs, rpm=rpm, tacho=tacho, scale=scale, units=units)
     summary = record_summary(data)
     if as_json:
-        typer.echo(json.dumps(summary, indent=2))
+        echo_json(summary, indent=2)
         return
     saved = "" if summary["file"] == summary["source_file"] else \
         f" (saved from {summary['source_file']})"
