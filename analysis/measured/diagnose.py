@@ -481,45 +481,28 @@ def run_job(job: Job) -> dict:
     return {"path": job.path, **result.as_dict()}
 
 
-def _quiet_worker(parent: int) -> None:
-    """Worker initializer: Ctrl-C is the parent's to handle (the workers ignore SIGINT),
-    and a worker ends with its parent."""
-    import signal
-
-    from analysis.sweeps.executors import die_with_parent
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    die_with_parent(parent)
+def _indexed_job(task: tuple[int, Job]) -> dict:
+    """A folder's task with its place in the folder (``run_job``)."""
+    return run_job(task[1])
 
 
 def diagnose_folder(jobs: Sequence[Job], workers: int | None = None,
                     progress: Callable[[int, int, dict], None] | None = None) -> list[dict]:
     """Each job's ``run_job`` result, in the jobs' order, on ``workers`` processes (default:
-    all cores; one: in this process); ``progress(done, total, result)`` after each. The
-    workers ignore SIGINT (the parent reports a Ctrl-C once) and end with the parent; on
-    an interruption the records not yet started are dropped."""
-    import concurrent.futures as cf
-
+    all cores; one: in this process) through the project's executors
+    (``analysis.sweeps.executors``: the workers ignore SIGINT, so the parent reports a
+    Ctrl-C once, and end with the parent; on an interruption the records not yet started
+    are dropped); ``progress(done, total, result)`` after each."""
+    from analysis.sweeps.executors import ProcessExecutor, SerialExecutor
     from analysis.threads import blas_threads
 
     count = min(len(jobs), workers or os.cpu_count() or 1)
     results: list[dict | None] = [None] * len(jobs)
-    if count <= 1:
-        with blas_threads():
-            for i, job in enumerate(jobs):
-                results[i] = run_job(job)
-                if progress:
-                    progress(i + 1, len(jobs), results[i])  # type: ignore[arg-type]
-        return results  # type: ignore[return-value]
-    pool = cf.ProcessPoolExecutor(count, initializer=_quiet_worker, initargs=(os.getpid(),))
-    try:
-        futures = {pool.submit(run_job, job): i for i, job in enumerate(jobs)}
-        for done, future in enumerate(cf.as_completed(futures), 1):
-            results[futures[future]] = future.result()
+    executor = SerialExecutor() if count <= 1 else ProcessExecutor(count)
+    with blas_threads():
+        for done, ((i, _), result) in enumerate(
+                executor.run(_indexed_job, list(enumerate(jobs))), 1):
+            results[i] = result
             if progress:
-                progress(done, len(jobs), results[futures[future]])  # type: ignore[arg-type]
-    except BaseException:  # Ctrl-C: the records not started are dropped, not waited for
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
+                progress(done, len(jobs), result)
     return results  # type: ignore[return-value]

@@ -86,8 +86,9 @@ class ProcessExecutor:
         todo, attempts = list(range(len(tasks))), [0] * len(tasks)
         while todo:
             broken = []
-            with cf.ProcessPoolExecutor(self.workers, initializer=die_with_parent,
-                                        initargs=(os.getpid(),)) as pool:
+            pool = cf.ProcessPoolExecutor(self.workers, initializer=die_with_parent,
+                                          initargs=(os.getpid(),))
+            try:
                 futures = {pool.submit(fn, tasks[i]): i for i in todo}
                 for future in cf.as_completed(futures):
                     i = futures[future]
@@ -97,6 +98,10 @@ class ProcessExecutor:
                         broken.append(i)
                         continue
                     yield tasks[i], result
+            except BaseException:  # Ctrl-C, an error, a consumer that stopped: the tasks
+                pool.shutdown(wait=False, cancel_futures=True)  # not started are dropped
+                raise
+            pool.shutdown()
             for i in broken:
                 attempts[i] += 1
                 if attempts[i] > self.retries:
