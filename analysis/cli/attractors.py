@@ -148,9 +148,18 @@ def _echo_table(ds, output: Path) -> None:
                    f"basin entropy {float(a['boundary_basin_entropy']):.3g} nats"
                    f"{fractal} ({int(a['entropy_box'])}-cell boxes, "
                    f"{100 * float(a['boundary_boxes']):.1f} % on a boundary); uncertainty "
-                   f"exponent {_exponent(float(a['uncertainty_exponent']))}")
+                   f"exponent {_exponent(float(a['uncertainty_exponent']))}"
+                   + _edges(a))
     for line in unsettled(ds):
         typer.echo(f"  {line}")
+
+
+def _edges(attrs) -> str:
+    """'; with the edge states too: α' (the exponent over every state), or ''."""
+    import math
+
+    alpha = float(attrs.get("uncertainty_exponent_edges", math.nan))
+    return f"; {alpha:.3g} with the edge states too" if math.isfinite(alpha) else ""
 
 
 def _exponent(alpha: float) -> str:

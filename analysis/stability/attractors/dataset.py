@@ -154,9 +154,17 @@ def add_boundary(ds: xr.Dataset, b: Boundary) -> None:
     ds["uncertain_fraction"] = ("epsilon", b.uncertain,
                                 {"long_name": "fraction of epsilon-uncertain initial states"})
     ds["epsilon"] = ("epsilon", b.epsilons, {"units": "grid cells"})
+    ds.uncertain_fraction.attrs["counted"] = ("interior states only: those whose four "
+                                              "neighbours epsilon cells away lie on the grid")
     ds.attrs.update(basin_entropy=b.basin_entropy, boundary_basin_entropy=b.boundary_entropy,
                     boundary_boxes=b.boundary_boxes, entropy_box=b.box,
                     uncertainty_exponent=b.exponent)
+    if b.uncertain_edges is not None:
+        ds["uncertain_fraction_edges"] = (
+            "epsilon", b.uncertain_edges,
+            {"long_name": "fraction of epsilon-uncertain initial states, every state "
+                          "against the neighbours it has on the grid"})
+        ds.attrs["uncertainty_exponent_edges"] = b.exponent_edges
 
 
 def boundary_json(ds: xr.Dataset) -> dict | None:
@@ -170,6 +178,9 @@ def boundary_json(ds: xr.Dataset) -> dict | None:
             "box_cells": int(ds.attrs["entropy_box"]),
             "uncertainty_exponent": plain(float(ds.attrs["uncertainty_exponent"]),
                                           finite=True),
+            "uncertainty_exponent_counts": "interior states only",
+            "uncertainty_exponent_edges": plain(float(ds.attrs.get(
+                "uncertainty_exponent_edges", float("nan"))), finite=True),
             "uncertain_fraction": {str(int(e)): float(f) for e, f in
                                    zip(ds.epsilon.values, ds.uncertain_fraction.values,
                                        strict=True)}}
