@@ -325,10 +325,39 @@ def test_bad_shaft_input_is_one_line_and_exit_2_on_the_command_line(tmp_path, cl
         assert not out.exists()
 
 
+STUDY = "## A study no other tool makes"
+"""The section of docs/flexible-rotors.md whose commands ``study_commands`` runs."""
+
+
+def study_commands(tmp_path: Path) -> list[list[str]]:
+    """The commands of the docs page's study, at a reduced size: 2 × 2 points, short
+    transient and record, files in ``tmp_path``."""
+    page = (SPECS.parent.parent / "docs" / "flexible-rotors.md").read_text()
+    section = page.split(STUDY)[1].split("\n## ")[0]
+    block = section.split("```bash\n")[1].split("```")[0]
+    commands = []
+    for line in block.replace("\\\n", " ").splitlines():
+        words = line.split()[1:]  # without "bearingdyn"
+        for option, small in (("--x", 2), ("--y", 2)):
+            if option in words:
+                i = words.index(option) + 1
+                words[i] = ":".join([*words[i].split(":")[:3], str(small)])
+        for option, small in (("--transient", "0.01"), ("--revolutions", "10")):
+            if option in words:
+                words[words.index(option) + 1] = small
+        out = words.index("-o") + 1
+        words[out] = str(tmp_path / Path(words[out]).name)
+        words = [str(tmp_path / w) if w.endswith(".nc") and "/" not in w else w
+                 for w in words]
+        commands.append(words)
+    return commands
+
+
 def test_simulate_plot_lyapunov_and_chart_run_on_flexible_models(tmp_path, cli):
     """The commands take a flexible model unchanged (short runs): the shipped three-disk
     rotor's run and its orbits at both bearings; Lyapunov exponents of the stiff rotor (8
-    states: its full spectrum compiles quickly); a 2 × 2 chart of the stiff rotor."""
+    states: its full spectrum compiles quickly); the docs page's study (a chart of the
+    three-disk rotor and its figure) at 2 × 2 points."""
     run, orbit = tmp_path / "run.nc", tmp_path / "orbit.png"
     res = cli("simulate", "three-disk-rotor", "-o", str(run), "--duration", "0.003",
               "--transient", "0", "--no-compile")
@@ -342,15 +371,17 @@ def test_simulate_plot_lyapunov_and_chart_run_on_flexible_models(tmp_path, cli):
     assert [o.name for o in drawn] == ["bearing left", "bearing right"]
     assert all(o.clearance == pytest.approx(10e-6) for o in drawn)
     stiff = _write(tmp_path, STIFF_ROTOR, "stiff-rotor")
-    env = {"BEARINGDYN_CACHE": str(tmp_path / "cache")}
     res = cli("lyapunov", str(stiff), "--duration", "0.01", "--transient", "0.01", "--json",
-              env=env)
+              env={"BEARINGDYN_CACHE": str(tmp_path / "cache")})
     assert res.returncode == 0, res.stderr
     assert len(json.loads(res.stdout)["exponents"]) == 8
-    chart = tmp_path / "chart.nc"
-    res = cli("chart", str(stiff), "--x", "speed_rpm:3000:6000:2", "--y",
-              "radial_clearance:1e-6:4e-6:2", "--transient", "0.01", "--revolutions", "10",
-              "--executor", "serial", "--quiet", "-o", str(chart), env=env)
-    assert res.returncode == 0, res.stderr
+    commands = study_commands(tmp_path)
+    assert [c[0] for c in commands] == ["chart", "plot"] and "three-disk-rotor" in commands[0]
+    for command in commands:
+        res = cli(*command, "--quiet") if command[0] == "chart" else cli(*command)
+        assert res.returncode == 0, (command, res.stderr)
+    chart = next(tmp_path / w for w in commands[0] if w.endswith(".nc"))
     with xr.open_dataset(chart) as ds:
         assert ds.sizes["speed_rpm"] == ds.sizes["radial_clearance"] == 2
+        assert np.all(np.isfinite(ds["lyapunov"].values))
+    assert Path(commands[1][commands[1].index("-o") + 1]).stat().st_size > 10_000
