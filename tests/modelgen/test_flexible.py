@@ -274,6 +274,21 @@ def test_the_generated_model_is_the_finite_element_model(user_cache):
     assert np.allclose(accel * mass, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
 
 
+def test_modal_truncation_keeps_the_lowest_modes_of_a_shaft_on_linear_bearings():
+    spec = parse_spec(tomllib.loads(LINEAR_ROTOR))
+    rotor = assemble_shaft(spec.shaft)
+    k_b, c_b = rotor.bearing_matrices(0.0)
+    full = (rotor.M, rotor.K + k_b, rotor.C + c_b, rotor.G)
+    red = reduce_rotor(*full, (), "modal", 3, 2)
+    assert red.names == ("x", "y", "x_q1", "y_q1", "x_q2", "y_q2")
+    assert "modal truncation: the 3 lowest modes per bending plane" in red.kept()
+    x_row, y_row = red.node_rows(2)
+    assert list(x_row) == [1.0, 0, 0, 0, 0, 0] and list(y_row) == [0, 1.0, 0, 0, 0, 0]
+    for speed in (0.0, 6000.0, 12000.0):
+        error, count = frequency_differences(full, red, speed, 0.0, 800.0)
+        assert count >= 3 and error < 1e-3, (speed, error)
+
+
 def _bad_specs() -> dict[str, tuple[dict, str]]:
     base = tomllib.loads((SPECS / "three-disk-rotor.toml").read_text())
     cases = {}
