@@ -313,7 +313,8 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
             if withheld := names_withheld(chosen, ds.attrs):
                 typer.echo(withheld)
             elif any(w in n for p in peaks for n in (p.label or "", *p.also)
-                   for w in ("BPFO", "VC")) or "holds the structural" in chosen.note:
+                   for w in ("BPFO", "VC")) or "holds the structural" in chosen.note \
+                    or "round-off, not the response" in chosen.note:
                 typer.echo(f"note: {chosen.note}")
         typer.echo("lines are named only 15 dB or more above the median of the 100 bins "
                    "on either side (the noise floor)")

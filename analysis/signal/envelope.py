@@ -279,9 +279,27 @@ def envelope(ds: xr.Dataset, var: str | None = None,
     attrs = dict(ds.attrs)
     attrs.update(band_hz=f"{chosen.low_hz:g}:{chosen.high_hz:g}", envelope_of=var,
                  state_names=name)
-    out = xr.Dataset({name: ("t", np.abs(analytic[start:start + kept]), {"units": units})},
+    level = np.abs(analytic[start:start + kept])
+    out = xr.Dataset({name: ("t", level, {"units": units})},
                      coords={"t": ds["t"].values[start:start + kept]}, attrs=attrs)
-    return out, chosen
+    return out, _with_level(chosen, float(np.mean(level)),
+                            float(np.std(values)), units)
+
+
+NEGLIGIBLE = 1e-6
+"""An envelope whose mean is below this share of the signal's standard deviation holds
+round-off, not a response: its band's note says so."""
+
+
+def _with_level(band: Band, mean: float, spread: float, units: str) -> Band:
+    """``band`` with a note added when its envelope is negligible (``NEGLIGIBLE``): issue
+    41's paper model kept a 25–50 kHz default band where its envelope is about 1e-14 m."""
+    if not (spread > 0 and mean < NEGLIGIBLE * spread):
+        return band
+    said = (f"the envelope in this band is {mean:.2g} {units}".rstrip() +
+            f", {mean / spread:.1g} of the signal's standard deviation: round-off, not the "
+            "response; choose a band where the signal has content (--band LO:HI)")
+    return replace(band, note=f"{band.note}; {said}" if band.note else said)
 
 
 def envelope_spectrum(ds: xr.Dataset, var: str | None = None,

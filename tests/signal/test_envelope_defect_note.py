@@ -23,3 +23,23 @@ def test_healthy_model_names_no_defect():
 
 def test_defect_model_names_its_defect():
     assert "the model's outer-race defect" in note_at_resonance("model_6205_outer_defect")
+
+
+def test_a_band_of_round_off_says_so(cli, tmp_path):
+    """The paper model's default envelope band (25-50 kHz) holds an envelope of about
+    1e-14 m, 1e-8 of the signal: the note says it is round-off, in the text and the JSON."""
+    import json
+
+    nc = tmp_path / "r.nc"
+    assert cli("simulate", "vakharia2015", "--duration", "1.2", "--transient", "0.2", "-o",
+               str(nc)).returncode == 0
+    out = cli("spectrum", str(nc), "--envelope", "--var", "x")
+    assert out.returncode == 0, out.stderr
+    assert "band 25000:50000 Hz" in out.stdout
+    assert "round-off, not the response" in out.stdout
+    doc = json.loads(cli("spectrum", str(nc), "--envelope", "--var", "x", "--json").stdout)
+    note = doc["envelopes"][0]["note"]
+    level = float(note.split("the envelope in this band is ")[1].split()[0])
+    assert level < 1e-12, note
+    healthy = cli("spectrum", str(nc), "--envelope", "--var", "x", "--band", "100:1000")
+    assert "round-off" not in healthy.stdout  # a band with content says nothing of the kind
