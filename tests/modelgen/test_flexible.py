@@ -370,15 +370,13 @@ def study_commands(tmp_path: Path) -> list[list[str]]:
 
 def test_simulate_plot_lyapunov_and_chart_run_on_flexible_models(tmp_path, cli):
     """The commands take a flexible model unchanged (short runs): the shipped three-disk
-    rotor's run and its orbits at both bearings; Lyapunov exponents of the stiff rotor (8
-    states: its full spectrum compiles quickly); the docs page's study (a chart of the
-    three-disk rotor and its figure) at 2 × 2 points."""
-    run, orbit = tmp_path / "run.nc", tmp_path / "orbit.png"
+    rotor's run and its orbits at both bearings (what ``plot --orbit`` draws); Lyapunov
+    exponents of the stiff rotor (8 states: its full spectrum compiles quickly); the docs
+    page's study (a chart of the three-disk rotor and its figure) at 2 × 2 points."""
+    run = tmp_path / "run.nc"
     res = cli("simulate", "three-disk-rotor", "-o", str(run), "--duration", "0.003",
               "--transient", "0", "--no-compile")
     assert res.returncode == 0, res.stderr
-    res = cli("plot", str(run), "--orbit", "-o", str(orbit))
-    assert res.returncode == 0 and orbit.stat().st_size > 10_000, res.stderr
     from analysis.provenance import load_dataset
     from analysis.signal.orbit import orbits
 
