@@ -411,3 +411,67 @@ def to_json(ds: xr.Dataset, output: str = "") -> dict[str, Any]:
     if output:
         provenance["output"] = output
     return {"values": values, "sobol": sobol, "provenance": provenance}
+
+
+# --- the cost, said first ------------------------------------------------------------------
+
+def classify_seconds(study: Study) -> float:
+    """Seconds the host takes to classify one member's record (the best of two, one
+    record run alone at the first value and the distributions' centres)."""
+    centre = {d.name: d.centre for d in study.dists}
+    system = study.system(study.values[0]).replace(**centre)
+    settings = study.settings
+    h, every = settings.steps(system)
+    per = settings.samples_per_revolution
+    result = run_engine(system, system.state[None, :], system.p[None, :], h, every, 0,
+                        settings.revolutions * per, per)
+    best = math.inf
+    for _ in range(2):  # the first also imports and warms what classifying needs
+        begin = time.perf_counter()
+        classify_member(system, result.samples[0], float(result.lambda1[0]),
+                        float(result.ci95[0]), h, every, 0, int(result.diverged_at[0]))
+        best = min(best, time.perf_counter() - begin)
+    return best
+
+
+def study_cost(study: Study, workers: int | None = None, host_workers: int = 1):
+    """The cost said before any work (``inference.abc.CalibrationCost``: the member
+    kernels' RK4 steps timed by ``analysis.integrate.cost``, and the host's classification
+    of each run, probed): every draw at every value, each taking its transient and twice
+    its record (the tangent counted as one more member), at the first value's step."""
+    from analysis.inference.abc import CalibrationCost
+    from analysis.integrate.cost import estimate_cost, process_seconds
+    from analysis.integrate.kernels.cpu import cores
+
+    centre = {d.name: d.centre for d in study.dists}
+    system = study.system(study.values[0]).replace(**centre)
+    settings = study.settings
+    h, every = settings.steps(system)
+    steps = settings.samples_per_revolution * every * (settings.transient_revolutions +
+                                                       2 * settings.revolutions)
+    kernels = estimate_cost(system, study.runs, steps, dt=h, workers=workers or cores(),
+                            what="draws x values")
+    host = classify_seconds(study)
+    kernels = dataclasses.replace(kernels, spent=process_seconds())
+    return CalibrationCost(kernels, study.runs, host, host_workers)
+
+
+def uncertainty_to_file(study: Study, output, *, executor=None,
+                        progress: Callable[[int, int], None] | None = None,
+                        on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
+    """Run a prepared study resumably: each finished block stored in ``<output>.parts``
+    (``analysis.sweeps.store``) as it arrives; run again with the same definition, only
+    the missing blocks are computed; at the end the netCDF file is written atomically and
+    the folder removed."""
+    from analysis.io import save_dataset
+    from analysis.sweeps.store import PointStore
+
+    store = PointStore(output, study.definition(), lock=True, on_damaged=on_damaged)
+    try:
+        ds = run(study, executor=executor, store=store, progress=progress)
+        save_dataset(ds, output)
+    except BaseException as exc:
+        store.stopped(exc, len(study.blocks()), f"blocks of {study.block} draws")
+        raise
+    store.remove()
+    return ds

@@ -1,0 +1,174 @@
+"""`uncertainty`: the probability of each regime under manufacturing tolerances, with its
+intervals, and which tolerance matters most (Sobol' indices; ``analysis.uncertainty``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from analysis.cli.common import (
+    DtOption,
+    ExecutorOption,
+    JsonOption,
+    ModelArgument,
+    QuietOption,
+    SchedulerOption,
+    SetOption,
+    WorkersOption,
+    app,
+    echo_json,
+    executor_of,
+    figure_output,
+    netcdf_output,
+    parse_sets,
+    reports_errors,
+    write_figure,
+)
+from analysis.cli.devices import DeviceOption
+from analysis.errors import InputError
+
+
+def parse_balls_list(text: str) -> list[int]:
+    """``7,8,9`` or ``5:12`` (every whole number from low to high) -> counts."""
+    try:
+        if ":" in text:
+            low, high = (int(p) for p in text.split(":"))
+            if high < low:
+                raise ValueError
+            return list(range(low, high + 1))
+        return [int(p) for p in text.split(",") if p.strip()]
+    except ValueError:
+        raise InputError(f"--n-balls: expected a list 7,8,9 or a range LOW:HIGH, "
+                         f"got {text!r}") from None
+
+
+def swept(param: str | None, n_balls: str | None) -> dict:
+    """The swept axis as ``prepare`` takes it: ``param`` or ``n_balls``."""
+    from analysis.sweeps.grid import Axis
+
+    if (param is None) == (n_balls is None):
+        raise InputError("--param/--n-balls: give exactly one of them")
+    if n_balls is not None:
+        return {"n_balls": parse_balls_list(n_balls)}
+    axis = Axis.parse(param)
+    if axis.structural:
+        raise InputError("--param: sweep the balls with --n-balls LIST")
+    return {"param": (axis.name, axis.values)}
+
+
+@app.command()
+@reports_errors
+def uncertainty(
+    model: ModelArgument,
+    dist: Annotated[list[str], typer.Option(
+        "--dist", help="NAME=uniform:LO:HI, NAME=normal:MEAN:SD or "
+                       "NAME=lognormal:MEDIAN:FACTOR (SI units), an uncertain parameter; "
+                       "repeat for each.")],
+    samples: Annotated[int, typer.Option(
+        help="Base draws N (Sobol'): N (P + 2) members per value for P uncertain "
+             "parameters, 2N of them independent for the probabilities.")],
+    param: Annotated[str | None, typer.Option(
+        help="Swept parameter NAME:LO:HI:N (e.g. speed_rpm:4000:8000:5).")] = None,
+    n_balls: Annotated[str | None, typer.Option(
+        "--n-balls", help="Swept balls: a list 7,8,9 or a range 5:12.")] = None,
+    sets: SetOption = None,
+    seed: Annotated[int, typer.Option(help="Seed of the Sobol' scramble.")] = 0,
+    device: DeviceOption = "cpu",
+    transient: Annotated[int, typer.Option(
+        "--transient-revolutions", help="Shaft revolutions dropped per member.")] = 50,
+    revolutions: Annotated[int, typer.Option(
+        help="Shaft revolutions recorded per member (a multiple of 10).")] = 100,
+    dt: DtOption = None,
+    block: Annotated[int | None, typer.Option(
+        help="Members per executor task (default: 256 on cpu, a value's draws on gpu).")
+    ] = None,
+    executor: ExecutorOption = "serial",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    output: Annotated[Path | None, typer.Option(
+        "-o", "--output", help="netCDF file to write (resumable: run again to continue).",
+        callback=netcdf_output)] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Figure to write (PNG, PDF, SVG): stacked regime probabilities and "
+                       "Sobol' indices.", callback=figure_output)] = None,
+    as_json: JsonOption = False,
+    quiet: QuietOption = False,
+):
+    """Regime probabilities under tolerances, with intervals and Sobol' indices."""
+    from analysis.inference.simulate import RunSettings
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.executors import workers_of
+    from analysis.uncertainty.study import prepare, run, to_json, uncertainty_to_file
+
+    study = prepare(model, dist, sets=parse_sets(sets), **swept(param, n_balls),
+                    samples=samples, seed=seed, device=device, block=block,
+                    settings=RunSettings(transient_revolutions=transient,
+                                         revolutions=revolutions, dt=dt))
+    ex = executor_of(executor, workers, scheduler)
+    _say_cost(study, ex, quiet, workers_of)
+    progress = ProgressReporter("uncertainty", quiet, unit="runs")
+    try:
+        if output is not None:
+            ds = uncertainty_to_file(study, output, executor=ex, progress=progress,
+                                     on_damaged=_recomputing)
+        else:
+            ds = run(study, executor=ex, progress=progress)
+    finally:
+        ex.close()
+    if as_json:
+        echo_json(to_json(ds, str(output or "")), indent=1)
+    else:
+        _print(ds, output)
+    if plot:
+        from analysis.reports.uncertainty_plots import uncertainty_figure
+
+        write_figure(uncertainty_figure(ds), plot, err=as_json)
+
+
+def _say_cost(study, ex, quiet: bool, workers_of) -> None:
+    """The run count, any truncation note and the estimate, before the work (stderr)."""
+    if quiet:
+        return
+    from analysis.uncertainty.study import study_cost
+
+    def say(text: str) -> None:
+        typer.echo(text, err=True)
+
+    say(f"uncertainty: {study.design.samples} draws -> {study.design.runs} members x "
+        f"{len(study.values)} values = {study.runs} runs ({ex.name})")
+    for dist in study.dists:
+        if dist.note:
+            say(f"note: {dist.note}")
+    for line in study_cost(study, host_workers=workers_of(ex)).lines():
+        say(line)
+    if study.device != "cpu":
+        say("note: the probe times the CPU's RK4; the member kernels on a GPU run faster "
+            "than this estimate")
+
+
+def _print(ds, output: Path | None) -> None:
+    """Per value: each regime's probability and interval, and the parameter P(chaos) is
+    most sensitive to (the largest total Sobol' index)."""
+    import numpy as np
+
+    axis = ds.attrs["axis"]
+    if output is not None:
+        typer.echo(f"wrote {output}")
+    names = [str(n) for n in ds["parameter"].values]
+    for i, v in enumerate(ds[axis].values):
+        parts = [f"{g} {ds['probability'].values[i, k]:.3f} "
+                 f"[{ds['probability_ci95'].values[i, k, 0]:.3f}, "
+                 f"{ds['probability_ci95'].values[i, k, 1]:.3f}]"
+                 for k, g in enumerate(ds["regime"].values)]
+        st = ds["sobol_chaotic_ST"].values[i]
+        most = "" if np.all(np.isnan(st)) else \
+            (f"; P(chaos) most sensitive to {names[int(np.nanargmax(st))]} "
+             f"(ST {np.nanmax(st):.2f})")
+        typer.echo(f"{axis} = {v:g}: " + ", ".join(parts) + most)
+
+
+def _recomputing(key: str) -> None:
+    typer.echo(f"warning: stored block {key} could not be read; computing it again",
+               err=True)
