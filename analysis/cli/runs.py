@@ -274,6 +274,14 @@ def _print_peaks(ds, variables, peaks) -> None:
                    f"{p.amplitude:10.3e} {unit:<4} {p.name}{also}")
 
 
+def _note_matters(peaks, note: str) -> bool:
+    """Whether the band's note is printed: a BPFO or VC line named, a structural resonance
+    in the band, or a band of round-off."""
+    return any(w in n for p in peaks for n in (p.label or "", *p.also)
+               for w in ("BPFO", "VC")) or "holds the structural" in note \
+        or "round-off, not the response" in note
+
+
 def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> None:
     """`spectrum --envelope`: per variable the band, then the named envelope peaks."""
     from analysis.signal.envelope import envelope_peaks, envelope_spectrum, names_withheld
@@ -312,9 +320,7 @@ def _envelope_spectrum(ds, variables, passband, max_peaks, as_json, output) -> N
             _print_peaks(ds, variables, peaks)
             if withheld := names_withheld(chosen, ds.attrs):
                 typer.echo(withheld)
-            elif any(w in n for p in peaks for n in (p.label or "", *p.also)
-                   for w in ("BPFO", "VC")) or "holds the structural" in chosen.note \
-                    or "round-off, not the response" in chosen.note:
+            elif _note_matters(peaks, chosen.note):
                 typer.echo(f"note: {chosen.note}")
         typer.echo("lines are named only 15 dB or more above the median of the 100 bins "
                    "on either side (the noise floor)")
