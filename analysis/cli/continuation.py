@@ -157,10 +157,12 @@ def _switched_branch(branch, kind: str, stop: float, common: dict,
 
 
 def _print_branch(branch, path: Path) -> None:
-    from analysis.stability.continuation import special_point_lines
+    from analysis.stability.continuation.dataset import special_point_lines, special_point_notes
 
     lines = special_point_lines(branch)
     typer.echo(f"wrote {path}: {branch.sizes['point']} orbits ({branch.attrs['branch']}), "
                f"{branch.attrs['status']}; special points: {len(lines) or 'none'}")
-    for line in lines:
+    for line, note in zip(lines, special_point_notes(branch), strict=True):
         typer.echo(f"  {line}")
+        if note:
+            typer.echo(f"      {note}")

@@ -57,6 +57,36 @@ def branch_dataset(model: Model, prob: ContinuedParameter, branch: list[BranchPo
         attrs=attrs)
 
 
+def with_normal_forms(branch: xr.Dataset, prob: ContinuedParameter,
+                      points: list[BranchPoint]) -> xr.Dataset:
+    """``branch`` with the normal forms of its LP, PD and NS points
+    (``normal_form.branch_normal_forms``): ``normal_form_coefficient`` (the fold's a, the
+    flip's c, the Neimark–Sacker d in the scaled states; NaN elsewhere) and
+    ``criticality`` ("supercritical", "subcritical", "fold", "nonsmooth" or "")."""
+    from analysis.stability.continuation.normal_form import branch_normal_forms
+
+    coefficient, label = branch_normal_forms(prob, points)
+    branch["normal_form_coefficient"] = ("point", coefficient, {
+        "long_name": "normal-form coefficient (fold a, flip c, Neimark-Sacker d) of the "
+                     "period map in z / state_scale; flip: c > 0 supercritical; NS: d < 0 "
+                     "supercritical"})
+    branch["criticality"] = ("point", label)
+    return branch
+
+
+def normal_form_of(branch: xr.Dataset, j: int) -> dict | None:
+    """``{"coefficient": c, "criticality": …}`` of point ``j`` (``"nonsmooth": true`` and
+    no coefficient where a ball is at the contact threshold), or None: no normal form
+    there, or a branch file written before normal forms were stored."""
+    if "criticality" not in branch or not branch.criticality.values[j]:
+        return None
+    label = str(branch.criticality.values[j])
+    if label == "nonsmooth":
+        return {"coefficient": None, "criticality": None, "nonsmooth": True}
+    return {"coefficient": float(branch.normal_form_coefficient.values[j]),
+            "criticality": None if label == "fold" else label}
+
+
 def first_point(branch: xr.Dataset, kind: str) -> int | None:
     """Index of the first point labelled ``kind`` (LP, PD, BP, NS) on ``branch``, or None."""
     found = np.nonzero(branch.special.values == kind)[0]
@@ -64,13 +94,22 @@ def first_point(branch: xr.Dataset, kind: str) -> int | None:
 
 
 def special_points(branch: xr.Dataset) -> list[dict]:
-    """The labelled points of a branch: label, point index, the parameter value (its unit)
-    and the n multipliers (real and imaginary parts)."""
+    """The labelled points of a branch: label, point index, the parameter value (its unit),
+    the n multipliers (real and imaginary parts) and, at LP, PD and NS points, the
+    ``normal_form`` (``normal_form_of``)."""
     param = branch.attrs["param"]
-    return [{"kind": str(kind), "point": int(j), "value": float(branch[param].values[j]),
-             "multipliers_real": branch.multiplier_real.values[j].tolist(),
-             "multipliers_imag": branch.multiplier_imag.values[j].tolist()}
-            for j, kind in enumerate(branch.special.values) if kind]
+    out = []
+    for j, kind in enumerate(branch.special.values):
+        if not kind:
+            continue
+        entry = {"kind": str(kind), "point": int(j), "value": float(branch[param].values[j]),
+                 "multipliers_real": branch.multiplier_real.values[j].tolist(),
+                 "multipliers_imag": branch.multiplier_imag.values[j].tolist()}
+        form = normal_form_of(branch, j)
+        if form is not None:
+            entry["normal_form"] = form
+        out.append(entry)
+    return out
 
 
 def special_point_lines(branch: xr.Dataset) -> list[str]:
@@ -80,6 +119,26 @@ def special_point_lines(branch: xr.Dataset) -> list[str]:
     unit = str(branch[param].attrs.get("units", ""))
     return [f"{p['kind']}  {param} = {p['value']:.6g} {unit}".rstrip() + f"  (point {p['point']})"
             for p in special_points(branch)]
+
+
+def special_point_notes(branch: xr.Dataset) -> list[str]:
+    """Per special point (as ``special_point_lines``), its criticality in words, or "":
+    ``supercritical (flip coefficient c = 113)``, ``subcritical (…)``, ``fold (quadratic
+    coefficient a = …)`` or ``non-smooth: a ball at the contact threshold, no normal
+    form``."""
+    names = {"LP": "quadratic coefficient a", "PD": "flip coefficient c",
+             "NS": "first Lyapunov coefficient d"}
+    notes = []
+    for p in special_points(branch):
+        form = p.get("normal_form")
+        if form is None:
+            notes.append("")
+        elif form.get("nonsmooth"):
+            notes.append("non-smooth: a ball at the contact threshold, no normal form")
+        else:
+            notes.append(f"{form['criticality'] or 'fold'} ({names[p['kind']]} = "
+                         f"{form['coefficient']:.4g})")
+    return notes
 
 
 def branch_summary(branch: xr.Dataset) -> dict:

@@ -36,7 +36,7 @@ from analysis.integrate.flow import (
 from analysis.integrate.plan import RunPlan
 from analysis.model import BallCounts, Model, Structure, System, as_system
 from analysis.provenance import system_of_attrs
-from analysis.stability.continuation.dataset import branch_dataset
+from analysis.stability.continuation.dataset import branch_dataset, with_normal_forms
 from analysis.stability.continuation.options import (
     DEFAULT_DS,
     ContinuationOptions,
@@ -240,10 +240,12 @@ def trace_branch(prob: ShootingProblem, first: BranchPoint, stop: float,
                  attrs: dict | None = None) -> xr.Dataset:
     """The branch of ``prob`` traced by the engine from ``first`` (its tangent oriented the
     way to go, its ``ds`` the first step) towards ``stop`` (``options``), as a Dataset
-    (``branch_dataset``; ``attrs``: more attributes)."""
+    (``branch_dataset``; ``attrs``: more attributes) with the normal forms of its LP, PD
+    and NS points (``with_normal_forms``)."""
     out = trace(prob, first, stop, options, progress=progress)
-    return branch_dataset(prob.model, prob, out.points, prob.param_name, out.status, label,
-                          refused_steps=out.refused, **(attrs or {}))
+    ds = branch_dataset(prob.model, prob, out.points, prob.param_name, out.status, label,
+                        refused_steps=out.refused, **(attrs or {}))
+    return with_normal_forms(ds, prob, out.points)
 
 
 def continue_from_branch(branch: xr.Dataset | str | Path, point: int = -1, *, stop: float,
