@@ -555,11 +555,19 @@ FIGURE_KINDS: dict[str, Callable[[xr.Dataset, list[str] | None], Figure]] = {
 result without one is a run or a branch."""
 
 SPECIAL_MARKERS = {"LP": "s", "PD": "D", "NS": "*", "BP": "^", "grazing?": "x"}
+CRITICALITY_STYLE = {
+    "subcritical": ({"color": "red", "mfc": "none", "mew": 1.8}, " (subcritical)"),
+    "nonsmooth": ({"color": "0.5", "mfc": "none", "mew": 1.2}, " (non-smooth)"),
+}
+"""How ``branch_figure`` marks a special point by its ``criticality`` (the branch file's
+normal forms): a subcritical (dangerous) point red and hollow, a non-smooth one grey and
+hollow; supercritical points and folds black."""
 
 
 def branch_figure(branches: list[xr.Dataset]) -> Figure:
     """Continuation diagram: parameter vs orbit amplitude; stable solid, unstable dashed,
-    special points (LP fold, PD period doubling, NS Neimark–Sacker, BP branch point)."""
+    special points (LP fold, PD period doubling, NS Neimark–Sacker, BP branch point),
+    subcritical and non-smooth ones marked apart (``CRITICALITY_STYLE``)."""
     fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
     for i, br in enumerate(branches):
         param = br.attrs["param"]
@@ -572,11 +580,16 @@ def branch_figure(branches: list[xr.Dataset]) -> Figure:
             ax.plot(lam[run], amp[run], color=color, ls="-" if stable[run[0]] else "--",
                     lw=1.4)
         ax.plot([], [], color=color, label=br.attrs.get("branch", f"branch {i + 1}"))
+        crit = br.criticality.values if "criticality" in br else [""] * len(lam)
         for j, kind in enumerate(br.special.values):
             if kind:
-                ax.plot(lam[j], amp[j], SPECIAL_MARKERS.get(str(kind), "o"), color="k", ms=6)
-                ax.annotate(str(kind), (lam[j], amp[j]), xytext=(4, 4),
-                            textcoords="offset points", fontsize=8)
+                style, note = CRITICALITY_STYLE.get(str(crit[j]), ({"color": "k"}, ""))
+                ax.plot(lam[j], amp[j], SPECIAL_MARKERS.get(str(kind), "o"), ms=6, **style)
+                ax.annotate(str(kind) + note, (lam[j], amp[j]), xytext=(4, 4),
+                            textcoords="offset points", fontsize=8, color=style["color"])
+        for label, (style, note) in CRITICALITY_STYLE.items():
+            if label in set(map(str, crit)):
+                ax.plot([], [], "o", ms=6, **style, label=f"{label}{note}".strip())
     first = branches[0]
     grid_axis(ax.xaxis, first, first.attrs["param"])
     largest = max(float(np.nanmax(np.abs(br.amplitude.values), initial=0.0))

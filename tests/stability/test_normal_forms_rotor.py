@@ -153,3 +153,22 @@ def test_rotor_doublings_are_supercritical_by_simulation(rotor, which):
     nf = normal_form(period_map(prob), zs, prob.p(lam), kind="PD")
     rate = transversality(period_map(prob), zs, prob.p(lam), nf, prob.param_index)
     assert nf.coefficient < 0 < rate * inside  # the AD coefficient: wrong sign
+
+
+def test_branch_figure_marks_subcritical_and_nonsmooth_points_apart(duffing, rotor):
+    from matplotlib.colors import to_rgba
+
+    from analysis.reports.plots import branch_figure
+
+    def pd_markers(branch):
+        ax = branch_figure([branch]).axes[0]
+        return [(to_rgba(line.get_color()), line.get_markerfacecolor())
+                for line in ax.lines if line.get_marker() == "D" and len(line.get_xdata())]
+
+    assert {c for c, _ in pd_markers(duffing)} == {to_rgba("k")}
+    marked = duffing.copy()
+    crit = marked.criticality.values.copy()
+    crit[np.nonzero(marked.special.values == "PD")[0][0]] = "subcritical"
+    marked["criticality"] = ("point", crit)
+    assert sorted(c for c, _ in pd_markers(marked)) == sorted([to_rgba("k"), to_rgba("red")])
+    assert {c for c, _ in pd_markers(rotor)} == {to_rgba("0.5")}
