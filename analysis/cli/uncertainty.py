@@ -48,14 +48,13 @@ def swept(param: str | None, n_balls: str | None) -> dict:
     """The swept axis as ``prepare`` takes it: ``param`` or ``n_balls``."""
     from analysis.sweeps.grid import Axis
 
-    if (param is None) == (n_balls is None):
-        raise InputError("--param/--n-balls: give exactly one of them")
-    if n_balls is not None:
-        return {"n_balls": parse_balls_list(n_balls)}
+    balls = None if n_balls is None else parse_balls_list(n_balls)
+    if param is None:
+        return {"n_balls": balls}
     axis = Axis.parse(param)
     if axis.structural:
         raise InputError("--param: sweep the balls with --n-balls LIST")
-    return {"param": (axis.name, axis.values)}
+    return {"param": (axis.name, axis.values), "n_balls": balls}
 
 
 @app.command()
@@ -72,7 +71,8 @@ def uncertainty(
     param: Annotated[str | None, typer.Option(
         help="Swept parameter NAME:LO:HI:N (e.g. speed_rpm:4000:8000:5).")] = None,
     n_balls: Annotated[str | None, typer.Option(
-        "--n-balls", help="Swept balls: a list 7,8,9 or a range 5:12.")] = None,
+        "--n-balls", help="Swept balls: a list 7,8,9 or a range 5:12 (with --param: one "
+                          "count, the balls of the sweep).")] = None,
     sets: SetOption = None,
     seed: Annotated[int, typer.Option(help="Seed of the Sobol' scramble.")] = 0,
     device: DeviceOption = "cpu",

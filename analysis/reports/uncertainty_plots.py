@@ -44,10 +44,10 @@ def uncertainty_figure(ds: xr.Dataset) -> Figure:
         else:
             left.bar(x, p, bottom=bottom, color=colour, width=width, label=str(name))
         top = bottom + p
-        left.errorbar(x, top, yerr=[p - lo, hi - p], fmt="none", ecolor="k", elinewidth=0.8,
-                      capsize=2.5)
+        left.errorbar(x, top, yerr=np.maximum([p - lo, hi - p], 0.0), fmt="none", ecolor="k",
+                      elinewidth=0.8, capsize=2.5)
         bottom = top
-    pad = 0.0 if wide else width
+    pad = 0.03 * float(np.ptp(x)) if wide else width  # the end intervals stay in view
     left.set_xlim(x.min() - pad, x.max() + pad)
     if axis == "n_balls":
         left.set_xticks(x)
@@ -66,7 +66,8 @@ def uncertainty_figure(ds: xr.Dataset) -> Figure:
             ci = ds[f"sobol_chaotic_{kind}_ci95"].values[:, j]
             line = right.plot(x, v, style, ms=4, label=f"{kind} {name}")[0]
             ok = np.isfinite(v)
-            right.errorbar(x[ok], v[ok], yerr=[v[ok] - ci[ok, 0], ci[ok, 1] - v[ok]],
+            right.errorbar(x[ok], v[ok],
+                           yerr=np.maximum([v[ok] - ci[ok, 0], ci[ok, 1] - v[ok]], 0.0),
                            fmt="none", ecolor=line.get_color(), elinewidth=0.8, capsize=2)
     right.set_ylim(-0.1, 1.2)
     right.set_xlabel(label)

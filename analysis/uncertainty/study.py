@@ -67,6 +67,8 @@ class Study:
     device: str = "cpu"
     settings: RunSettings = field(default_factory=RunSettings)
     block: int = BLOCK
+    balls: int | None = None
+    """The balls of a parameter sweep (None: the model's own)."""
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -82,7 +84,7 @@ class Study:
         draw replaces its parameters in it)."""
         if self.axis == "n_balls":
             return as_system(self.model, int(value), **self.sets)
-        return as_system(self.model, None, **{**self.sets, self.axis: float(value)})
+        return as_system(self.model, self.balls, **{**self.sets, self.axis: float(value)})
 
     def blocks(self) -> list[tuple[int, int]]:
         """(value index, first row) of every task."""
@@ -96,7 +98,7 @@ class Study:
                 "dists": [d.text() for d in self.dists], "sets": dict(self.sets),
                 "axis": self.axis, "values": list(self.values),
                 "samples": self.design.samples, "seed": self.seed, "block": self.block,
-                "settings": dataclasses.asdict(self.settings)}
+                "balls": self.balls, "settings": dataclasses.asdict(self.settings)}
 
 
 def prepare(model: str | Model, dists: Sequence[Dist | str], *,
@@ -114,8 +116,15 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
 
     mdl = load_model(model) if not isinstance(model, Model) else model
     sets = {str(k): float(v) for k, v in (sets or {}).items()}
-    if (param is None) == (n_balls is None):
-        raise InputError("--param/--n-balls: give exactly one of them")
+    balls = None
+    if param is not None and n_balls is not None:
+        if len(n_balls) != 1:
+            raise InputError("--n-balls: with --param, give one count (the balls of the "
+                             f"sweep), got {len(n_balls)}")
+        balls, n_balls = int(n_balls[0]), None
+    if param is None and n_balls is None:
+        raise InputError("--param/--n-balls: give one of them (--param NAME:LO:HI:N, or "
+                         "--n-balls LIST)")
     axis, values = ("n_balls", tuple(int(n) for n in n_balls)) if param is None else \
         (str(param[0]), tuple(float(v) for v in param[1]))
     if not 1 <= len(values) <= MAX_VALUES:
@@ -134,7 +143,8 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
         block = BLOCK if device == "cpu" else design.runs
     if isinstance(block, bool) or not isinstance(block, int) or block < 1:
         raise InputError(f"--block: must be a whole number >= 1, got {block!r}")
-    study = Study(mdl, found, sets, axis, values, design, int(seed), device, settings, block)
+    study = Study(mdl, found, sets, axis, values, design, int(seed), device, settings, block,
+                  balls)
     ends = [dict(zip(study.names, row, strict=True))
             for row in (design.values.min(axis=0), design.values.max(axis=0))]
     for value in dict.fromkeys((values[0], values[-1])):
