@@ -65,3 +65,29 @@ def test_zero_samples_and_no_axis(cli, tmp_path):
     res = cli("uncertainty", "vakharia2015", "--dist", "damping=uniform:100:300",
               "--samples", "2")
     assert res.returncode == 2 and "--param/--n-balls" in res.stderr
+
+
+def test_cli_resumes_a_stored_block(cli, tmp_path):
+    """A block stored before (as an interrupted command leaves it) is read back by the
+    command, not computed again: mark it and find the mark in the file."""
+    import numpy as np
+
+    from analysis.inference.simulate import RunSettings
+    from analysis.sweeps.store import PointStore
+    from analysis.uncertainty.study import evaluate_members, prepare
+
+    out = tmp_path / "unc.nc"
+    study = prepare("vakharia2015", ["radial_clearance=uniform:5e-6:20e-6"], n_balls=[8],
+                    samples=2, block=3,
+                    settings=RunSettings(transient_revolutions=10, revolutions=40))
+    store = PointStore(out, study.definition(), lock=True)
+    block = evaluate_members(study.system(8), study.names, study.design.values[3:6],
+                             study.settings)
+    block["lambda1"] = np.full(3, 4321.0)
+    store.save("v0-r3", block)
+    store.close()
+    res = cli("uncertainty", "vakharia2015", "--dist", "radial_clearance=uniform:5e-6:20e-6",
+              "--n-balls", "8", "--samples", "2", "--block", "3", *TINY, "-o", str(out))
+    assert res.returncode == 0, res.stderr
+    lam = open_result(out)["lambda1"].values[0]
+    assert np.all(lam[3:] == 4321.0) and np.all(lam[:3] != 4321.0)
