@@ -20,11 +20,13 @@ needs_data = pytest.mark.skipif(not (DATA / Path(RECORD).name).exists(),
 
 SMALL = {"simulate": {"--duration": "1.2"}}
 """Per command: options set to a smaller value (1 s kept instead of 2)."""
-EXPECT = {
-    "diagnose": ["inner-race"],
-    "simulate": ["saved at 12000 Hz: every 42 steps"],
-    "compare": ["BPFI                5.401", "both", "record only", "6205-cwru"],
-}
+EXPECT = [
+    ["verdict: inner-race"],
+    ["saved at 12000 Hz: every 42 steps"],
+    ["BPFI                5.401", "both", "record only", "6205-cwru"],
+    ["verdict: inner-race", "model check: 6205-inner-defect", "BPFI                5.401"],
+]
+"""Per command of the page, in its order: what its output must hold."""
 
 
 def page_commands(text: str) -> list[list[str]]:
@@ -46,7 +48,8 @@ def shrink(args: list[str]) -> list[str]:
 
 def test_the_page_names_its_commands():
     commands = page_commands(PAGE.read_text(encoding="utf-8"))
-    assert [c[0] for c in commands] == ["diagnose", "simulate", "compare"]
+    assert [c[0] for c in commands] == ["diagnose", "simulate", "compare", "diagnose"]
+    assert commands[3][-2:] == ["--model", "auto"]
     assert "--sample-rate" in commands[1] and "housing_resonance_hz=3000" in commands[1]
     assert commands[2][1] == RECORD and "figures/compare-cwru-inner.png" in \
         PAGE.read_text(encoding="utf-8")
@@ -54,10 +57,11 @@ def test_the_page_names_its_commands():
 
 @needs_data
 def test_the_page_commands_run(cli, tmp_path):
-    for args in page_commands(PAGE.read_text(encoding="utf-8")):
+    commands = page_commands(PAGE.read_text(encoding="utf-8"))
+    for args, expected in zip(commands, EXPECT, strict=True):
         done = cli(*shrink(args), cwd=tmp_path)
         assert done.returncode == 0, (args, done.stderr)
-        for words in EXPECT[args[0]]:
+        for words in expected:
             assert words in done.stdout, (args[0], words, done.stdout)
     assert (tmp_path / "compare-cwru-inner.png").stat().st_size > 10_000
 

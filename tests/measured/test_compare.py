@@ -225,3 +225,26 @@ def test_the_command_refuses_bad_input_in_one_line(self_record, run_file, tmp_pa
             done.output
         assert not figure.exists()
 
+
+CWRU = ROOT.parent / "shared" / "data" / "cwru" / "12k_Drive_End_IR007_0_105.mat"
+
+
+@pytest.mark.skipif(not CWRU.exists(), reason=f"the CWRU records are not in {CWRU.parent}")
+def test_diagnose_model_simulates_the_verdict_s_model_and_compares(tmp_path):
+    """diagnose --model auto on the CWRU inner-race record: the inner-defect model at the
+    record's speed, 12 kHz, the CWRU 6205's geometry and a resonance in the diagnosis's band;
+    BPFI and its X sidebands shared. A folder with --model is refused in one line."""
+    done = invoke("diagnose", CWRU, "--channel", "DE", "--bearing", "6205-cwru", "--model",
+                  "auto", "--json")
+    assert done.exit_code == 0, done.output
+    report = json.loads(done.stdout[done.stdout.index("{"):])
+    assert report["verdict"] == "inner-race"
+    check = report["model_check"]
+    sim = check["provenance"]["simulation"]
+    assert sim["model"] == "6205-inner-defect" and sim["sample_rate_hz"] == FS
+    assert sim["ball_diameter"] == pytest.approx(0.3126 * 0.0254)
+    low, high = report["band"]["low_hz"], report["band"]["high_hz"]
+    assert sim["housing_resonance_hz"] == pytest.approx((low + high) / 2)
+    assert {"BPFI", "BPFI-X", "BPFI+X"} <= set(check["shared"]["envelope"])
+    done = invoke("diagnose", tmp_path, "--bearing", "6205-cwru", "--model", "auto")
+    assert done.exit_code == 2 and done.output.count("\n") == 1 and "--model" in done.output
