@@ -14,20 +14,25 @@ by itself, from its own mass and stiffness (the linear bearings' direct terms in
 
 The kept space is then written in coordinates in which the mass matrix is diagonal, so
 that the generated model's equations are ``m_j q_j'' = F_j`` like every rigid model's:
-the space's mass-orthonormal modes, turned (one Householder reflection) so that the first
-coordinate of each plane is the displacement of one chosen node (``x``, ``y``: physical
-states, in m; by default a ball bearing's node), the others scaled so that their largest
-nodal translation is 1 (``x_q<j>``, ``y_q<j>``: generalised coordinates, in m). Only one
-node can be physical this way (two would couple the mass matrix); every node's translation
-is an exact linear map of the state (a bearing's is its station map). Gyroscopic,
+the space's mass-orthonormal modes, turned (Householder reflections: a QR factorisation of
+the interface rows) so that the first coordinate of each plane is the displacement of one
+chosen node (``x``, ``y``: physical states, in m; by default a ball bearing's node) and the
+k-th other ball-bearing node moves with the first k + 1 coordinates only, the others
+scaled so that their largest nodal translation is 1 (``x_q<j>``, ``y_q<j>``: generalised
+coordinates, in m). Only one node can be physical this way (two would couple the mass
+matrix); every node's translation is an exact linear map of the state (a bearing's is its
+station map, with as few terms as the QR leaves). Gyroscopic,
 damping and cross-coupled bearing terms (which join the planes) are projected onto this
 basis whole; only the basis is chosen per plane.
 
 The arithmetic of the basis is done in ``mpmath`` (30 digits) and the projections with
 ``math.fsum``: the numbers baked into generated code are the same bits on every machine
 (``bearingdyn generate --check`` compares them byte for byte). Inputs are rounded to 12
-significant digits first, so last-bit differences of the element matrices do not reach
-them.
+significant digits first, so last-bit differences of the element matrices (libm's ``pow``
+of another platform) do not reach them: a value changes only when it lies within its
+last-bit noise of a rounding boundary (about 1e-4 of the entries that have such noise at
+all). Fewer digits would be safer still but spoil the cancellations of a very stiff shaft
+(its rigid motion then meets a spurious stiffness).
 
 The reduction's error is the largest relative difference of the damped natural
 frequencies (modes below twice the highest speed of interest) between the reduced and the
@@ -196,25 +201,18 @@ def _plane_basis(mass: np.ndarray, stiffness: np.ndarray, plane: tuple[int, int]
     k_r = basis.T * k * basis
     _, v = _generalized_modes((k_r + k_r.T) / 2, (m_r + m_r.T) / 2)
     phi = basis * v
-    # one Householder reflection: the first coordinate is the chosen node's displacement
+    # Householder reflections (a QR factorisation of the interface rows): the first
+    # coordinate is the chosen node's displacement, and the k-th interface node's
+    # displacement depends on the first k + 1 coordinates only (its balls' loads reach
+    # k + 1 coordinates, not all)
     n_r = phi.cols
     row = local[4 * node + t_off]
-    a = [phi[row, j] for j in range(n_r)]
-    norm = mpmath.sqrt(mpmath.fsum(x * x for x in a))
-    if norm == 0:
-        raise ReductionError(f"reduction.node: node {node} does not move in the kept space; "
-                             "choose another node")
-    u = [(-x / norm) for x in a]
-    u[0] += 1
-    uu = mpmath.fsum(x * x for x in u)
-    if uu > mpmath.mpf(10) ** (-DIGITS + 5):
-        h = mpmath.eye(n_r)
-        for i in range(n_r):
-            for j in range(n_r):
-                h[i, j] -= 2 * u[i] * u[j] / uu
-        phi = phi * h
-        for j in range(1, n_r):  # exactly 0 (not 1e-32) where the reflection made it so
-            phi[row, j] = 0
+    others = [local[4 * n + t_off] for n in interface if 4 * n + t_off != 4 * node + t_off]
+    for step, target in enumerate([row, *others][:n_r]):
+        phi = _reflect(phi, target, step)
+        if step == 0 and phi[row, 0] == 0:
+            raise ReductionError(f"reduction.node: node {node} does not move in the kept "
+                                 "space; choose another node")
     translations = [local[4 * n + t_off] for n in range(n_nodes)]
     scales = []
     for j in range(n_r):
@@ -235,6 +233,30 @@ def _plane_basis(mass: np.ndarray, stiffness: np.ndarray, plane: tuple[int, int]
             if abs(phi[r, j]) < SNAP:
                 phi[r, j] = 0
     return dofs, phi, masses
+
+
+def _reflect(phi, row: int, step: int):
+    """``phi`` times the Householder reflection of coordinates ``step`` … that makes
+    ``phi[row, step + 1:]`` zero (set exactly 0) and ``phi[row, step]`` non-negative."""
+    import mpmath
+
+    n_r = phi.cols
+    a = [phi[row, j] for j in range(step, n_r)]
+    norm = mpmath.sqrt(mpmath.fsum(x * x for x in a))
+    if norm == 0:
+        return phi
+    u = [-x / norm for x in a]
+    u[0] += 1
+    uu = mpmath.fsum(x * x for x in u)
+    if uu > mpmath.mpf(10) ** (-DIGITS + 5):
+        h = mpmath.eye(n_r)
+        for i in range(len(u)):
+            for j in range(len(u)):
+                h[step + i, step + j] -= 2 * u[i] * u[j] / uu
+        phi = phi * h
+    for j in range(step + 1, n_r):  # exactly 0 (not 1e-32) where the reflection made it so
+        phi[row, j] = 0
+    return phi
 
 
 def _sub(a, rows, cols):

@@ -274,6 +274,27 @@ def test_the_generated_model_is_the_finite_element_model(user_cache):
     assert np.allclose(accel * mass, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
 
 
+def test_the_shipped_rotor_is_its_reduced_matrices_with_the_balls_off(three_disk):
+    """The generated three-disk rotor (its damping written as β K_r q', the elements' ROSS
+    proportional damping) linearised with the balls out of contact is
+    diag(m) q'' = -K_r q - (C_r + Ω G_r + c Σ_b T_b^T T_b) q', C_r projected separately."""
+    _, _, stated = three_disk
+    red = stated.reduced
+    model = load_model("three-disk-rotor")
+    values = {**model.defaults, "radial_clearance": 1e-3, "speed_rpm": 7000.0}
+    p = np.asarray(model.parameter_vector(values), dtype=float)
+    n = model.n_state
+    jac = np.array(model.functions(None).jac(0.0, np.zeros(n), p))
+    bearings = sum(np.outer(row, row) for node in (0, 12) for row in red.node_rows(node))
+    omega = 7000 * np.pi / 30
+    expected = -np.hstack([red.stiffness, red.damping + omega * red.gyroscopic
+                           + values["damping"] * bearings]) / red.mass[:, None]
+    found = jac[n // 2:]
+    assert np.allclose(found, expected, rtol=0, atol=1e-8 * np.abs(expected).max())
+    assert np.array_equal(jac[: n // 2], np.hstack([np.zeros((n // 2, n // 2)),
+                                                    np.eye(n // 2)]))
+
+
 def test_modal_truncation_keeps_the_lowest_modes_of_a_shaft_on_linear_bearings():
     spec = parse_spec(tomllib.loads(LINEAR_ROTOR))
     rotor = assemble_shaft(spec.shaft)
