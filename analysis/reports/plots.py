@@ -564,6 +564,14 @@ normal forms): a subcritical (dangerous) point red and hollow, a non-smooth one 
 hollow; supercritical points and folds black."""
 
 
+def _criticality_key(label: object) -> str:
+    """The ``CRITICALITY_STYLE`` key of a branch's ``criticality`` label: subcritical
+    whether or not the map is smooth there, else non-smooth, else none."""
+    label = str(label)
+    return "subcritical" if "subcritical" in label else \
+        "nonsmooth" if label.startswith("nonsmooth") else ""
+
+
 def branch_figure(branches: list[xr.Dataset]) -> Figure:
     """Continuation diagram: parameter vs orbit amplitude; stable solid, unstable dashed,
     special points (LP fold, PD period doubling, NS Neimark–Sacker, BP branch point),
@@ -580,10 +588,11 @@ def branch_figure(branches: list[xr.Dataset]) -> Figure:
             ax.plot(lam[run], amp[run], color=color, ls="-" if stable[run[0]] else "--",
                     lw=1.4)
         ax.plot([], [], color=color, label=br.attrs.get("branch", f"branch {i + 1}"))
-        crit = br.criticality.values if "criticality" in br else [""] * len(lam)
+        crit = [_criticality_key(c) for c in br.criticality.values] if "criticality" in br \
+            else [""] * len(lam)
         for j, kind in enumerate(br.special.values):
             if kind:
-                style, note = CRITICALITY_STYLE.get(str(crit[j]), ({"color": "k"}, ""))
+                style, note = CRITICALITY_STYLE.get(crit[j], ({"color": "k"}, ""))
                 ax.plot(lam[j], amp[j], SPECIAL_MARKERS.get(str(kind), "o"), ms=6, **style)
                 ax.annotate(str(kind) + note, (lam[j], amp[j]), xytext=(4, 4),
                             textcoords="offset points", fontsize=8, color=style["color"])

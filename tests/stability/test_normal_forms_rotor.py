@@ -4,10 +4,10 @@ The Duffing oscillator (smooth): its period doublings get flip coefficients by A
 period map, supercritical, and the predicted period-2 amplitude √(β/c) matches the branch
 that branch switching finds, within 10 % next to the point. The balanced rotor (50 N,
 N_b 8): its balls enter and leave contact along every orbit, so both doublings (near 8142
-and 8342 rpm) are flagged non-smooth, with no coefficient; simulation just past each shows
-what the flag protects against: a small stable period-2 orbit (supercritical) growing as
-the square root of the distance, where the AD coefficient of the discrete map says
-subcritical."""
+and 8342 rpm) are flagged non-smooth, with no coefficient, their criticality taken from the
+period-2 orbit solved next to each (supercritical); simulation just past each agrees (a
+small stable period-2 orbit growing as the square root of the distance) and shows what the
+flag protects against: the AD coefficient of the discrete map says subcritical."""
 
 from __future__ import annotations
 
@@ -19,7 +19,8 @@ import pytest
 from analysis.integrate.flow import orbit_states
 from analysis.stability.continuation import branch_summary, continue_orbits, switch_and_continue
 from analysis.stability.continuation.dataset import special_point_notes
-from analysis.stability.continuation.normal_form import period_map
+from analysis.stability.continuation.normal_form import orbit_criticality, period_map
+from analysis.stability.continuation.problem import BranchPoint
 from analysis.stability.continuation.shooting import _problem_of_branch
 from analysis.stability.normal_forms import amplitude, normal_form, transversality
 
@@ -121,10 +122,24 @@ def test_rotor_doublings_are_flagged_nonsmooth(rotor):
     pd = np.nonzero(rotor.special.values == "PD")[0]
     speeds = rotor.speed_rpm.values[pd]
     assert len(pd) == 2 and abs(speeds[0] - 8142) < 2 and abs(speeds[1] - 8342) < 2
-    assert list(rotor.criticality.values[pd]) == ["nonsmooth", "nonsmooth"]
+    # no coefficient; the criticality from the period-2 orbit solved next to each point,
+    # which the simulations of the next test confirm
+    assert list(rotor.criticality.values[pd]) == ["nonsmooth supercritical"] * 2
     assert np.isnan(rotor.normal_form_coefficient.values[pd]).all()
     forms = [p["normal_form"] for p in branch_summary(rotor)["special_points"]]
-    assert forms == [{"coefficient": None, "criticality": None, "nonsmooth": True}] * 2
+    assert forms == [{"coefficient": None, "criticality": "supercritical", "nonsmooth": True,
+                      "criticality_from": "period-2 orbit"}] * 2
+    assert special_point_notes(rotor)[0].endswith("supercritical by its period-2 orbit")
+
+
+def test_period_two_orbit_criticality_agrees_with_the_normal_form_where_smooth(duffing):
+    """``orbit_criticality`` (what non-smooth points get) on the smooth Duffing doublings:
+    the same verdict as the flip coefficient's sign."""
+    for k in np.nonzero(duffing.special.values == "PD")[0]:
+        lam, prob = _at(duffing, int(k))
+        point = BranchPoint(lam, duffing.z0.values[k], np.zeros(0), np.zeros((0, 0)),
+                            np.zeros(0), 0.0, "PD")
+        assert orbit_criticality(prob, point) == duffing.criticality.values[k]
 
 
 @pytest.mark.parametrize("which", [0, 1])

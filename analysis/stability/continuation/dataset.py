@@ -62,7 +62,9 @@ def with_normal_forms(branch: xr.Dataset, prob: ContinuedParameter,
     """``branch`` with the normal forms of its LP, PD and NS points
     (``normal_form.branch_normal_forms``): ``normal_form_coefficient`` (the fold's a, the
     flip's c, the Neimark–Sacker d in the scaled states; NaN elsewhere) and
-    ``criticality`` ("supercritical", "subcritical", "fold", "nonsmooth" or "")."""
+    ``criticality`` ("supercritical", "subcritical", "fold", "nonsmooth" or "";
+    "nonsmooth supercritical" or "nonsmooth subcritical" where a non-smooth PD's period-2
+    orbit decides, ``normal_form.orbit_criticality``)."""
     from analysis.stability.continuation.normal_form import branch_normal_forms
 
     coefficient, label = branch_normal_forms(prob, points)
@@ -76,13 +78,19 @@ def with_normal_forms(branch: xr.Dataset, prob: ContinuedParameter,
 
 def normal_form_of(branch: xr.Dataset, j: int) -> dict | None:
     """``{"coefficient": c, "criticality": …}`` of point ``j`` (``"nonsmooth": true`` and
-    no coefficient where a ball is at the contact threshold), or None: no normal form
-    there, or a branch file written before normal forms were stored."""
+    no coefficient where a ball is at the contact threshold; then the criticality, when
+    known, comes from the period-2 orbit: ``"criticality_from": "period-2 orbit"``), or
+    None: no normal form there, or a branch file written before normal forms were
+    stored."""
     if "criticality" not in branch or not branch.criticality.values[j]:
         return None
     label = str(branch.criticality.values[j])
-    if label == "nonsmooth":
-        return {"coefficient": None, "criticality": None, "nonsmooth": True}
+    if label.startswith("nonsmooth"):
+        words = label.split()
+        if len(words) == 1:
+            return {"coefficient": None, "criticality": None, "nonsmooth": True}
+        return {"coefficient": None, "criticality": words[1], "nonsmooth": True,
+                "criticality_from": "period-2 orbit"}
     return {"coefficient": float(branch.normal_form_coefficient.values[j]),
             "criticality": None if label == "fold" else label}
 
@@ -134,7 +142,9 @@ def special_point_notes(branch: xr.Dataset) -> list[str]:
         if form is None:
             notes.append("")
         elif form.get("nonsmooth"):
-            notes.append("non-smooth: a ball at the contact threshold, no normal form")
+            notes.append("non-smooth: a ball at the contact threshold, no normal form"
+                         + (f"; {form['criticality']} by its period-2 orbit"
+                            if form["criticality"] else ""))
         else:
             notes.append(f"{form['criticality'] or 'fold'} ({names[p['kind']]} = "
                          f"{form['coefficient']:.4g})")

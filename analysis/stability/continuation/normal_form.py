@@ -114,6 +114,86 @@ def at_contact_threshold(prob, z0: np.ndarray, lam: float) -> bool:
     return bool(near.any() or crossing.any())
 
 
+ORBIT_OFFSET = 1e-3
+"""How far past a non-smooth PD (× the parameter's scale in the unknowns) its period-2 orbit
+is solved for (``orbit_criticality``)."""
+ORBIT_GUESSES = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2)
+"""Kicks along the critical eigenvector (scaled states) from which Newton looks for it."""
+ORBIT_LIMIT = 0.05
+"""Largest half-difference of a period-2 orbit's two section states (scaled) that counts
+as the small orbit born at the point."""
+
+
+def _newton(prob, z: np.ndarray, p: np.ndarray, iterates: int, tol: float = 1e-10,
+            max_iter: int = 30) -> np.ndarray | None:
+    """A fixed point of the ``iterates``-th iterate of the period map from ``z`` (the
+    branch's compiled flow map and its monodromy matrices), or None."""
+    from analysis.integrate.flow import evaluate
+
+    s = np.asarray(prob.s_z, dtype=float)
+    for _ in range(max_iter):
+        x, jac = z, np.eye(z.size)
+        for _ in range(iterates):
+            x, mono, _ = evaluate(prob.flow, x, prob.t0, p)
+            jac = mono @ jac
+        res = (x - z) / s
+        if not np.all(np.isfinite(res)):
+            return None
+        if np.abs(res).max() < tol:
+            return z
+        step = np.linalg.solve((jac - np.eye(z.size)) * s[None, :] / s[:, None], -res)
+        z = z + step * s
+    return None
+
+
+def _monodromy(prob, z: np.ndarray, p: np.ndarray, iterates: int) -> tuple[np.ndarray, list]:
+    from analysis.integrate.flow import evaluate
+
+    jac, states = np.eye(z.size), [z]
+    for _ in range(iterates):
+        z, mono, _ = evaluate(prob.flow, z, prob.t0, p)
+        jac = mono @ jac
+        states.append(z)
+    return jac, states
+
+
+def orbit_criticality(prob, point: BranchPoint) -> str | None:
+    """The criticality of the period doubling ``point`` from the period-2 orbit born there,
+    where the map is not smooth enough for the normal form: ``ORBIT_OFFSET`` × the
+    parameter's scale to each side, the period-1 orbit is solved (Newton on the branch's
+    flow map) and, from kicks along its critical eigenvector (``ORBIT_GUESSES``), a small
+    period-2 orbit (half-difference below ``ORBIT_LIMIT`` in the scaled states, not the
+    period-1 orbit). "supercritical": a stable one on the side where the period-1 orbit is
+    unstable; "subcritical": an unstable one on the side where it is stable; None when
+    neither is found."""
+    s = np.asarray(prob.s_z, dtype=float)
+    for side in (1.0, -1.0):
+        p = prob.p(point.lam + side * ORBIT_OFFSET * prob.s_lam)
+        one = _newton(prob, point.z0, p, 1)
+        if one is None:
+            continue
+        mono, _ = _monodromy(prob, one, p, 1)
+        mu, vectors = np.linalg.eig(mono)
+        k = int(np.argmin(mu.real))
+        unstable = mu[k].real < -1
+        v = np.real(vectors[:, k]) / s
+        v = v / np.linalg.norm(v)
+        for kick in ORBIT_GUESSES:
+            two = _newton(prob, one + kick * v * s, p, 2)
+            if two is None:
+                continue
+            mono2, states = _monodromy(prob, two, p, 2)
+            half = np.abs((states[1] - states[0]) / s).max() / 2
+            if not 1e-8 < half < ORBIT_LIMIT:
+                continue
+            stable = bool(np.all(np.abs(np.linalg.eigvals(mono2)) < 1))
+            if unstable and stable:
+                return "supercritical"
+            if not unstable and not stable:
+                return "subcritical"
+    return None
+
+
 def point_normal_form(prob, point: BranchPoint) -> dict:
     """``{"coefficient": c, "criticality": …, "nonsmooth": bool}`` of the LP, PD or NS
     ``point`` of the branch of ``prob``: the coefficient of ``normal_forms.normal_form``
@@ -123,7 +203,8 @@ def point_normal_form(prob, point: BranchPoint) -> dict:
     if kind not in KINDS:
         raise InputError(f"point: LP, PD or NS points have a normal form, got '{kind}'")
     if at_contact_threshold(prob, point.z0, point.lam):
-        return {"coefficient": None, "criticality": None, "nonsmooth": True}
+        crit = orbit_criticality(prob, point) if kind == "PD" else None
+        return {"coefficient": None, "criticality": crit, "nonsmooth": True}
     nf = normal_form(period_map(prob), point.z0 / prob.s_z, prob.p(point.lam), kind=kind)
     return {**nf.as_dict(), "nonsmooth": False}
 
@@ -141,7 +222,7 @@ def branch_normal_forms(prob, points: list[BranchPoint]) -> tuple[np.ndarray, np
         except (InputError, np.linalg.LinAlgError):  # no critical multiplier of that kind
             continue
         if out["nonsmooth"]:
-            label[j] = "nonsmooth"
+            label[j] = "nonsmooth" + (f" {out['criticality']}" if out["criticality"] else "")
             continue
         coefficient[j] = out["coefficient"]
         label[j] = out["criticality"] or "fold"
