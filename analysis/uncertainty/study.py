@@ -145,6 +145,7 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
         raise InputError(f"--block: must be a whole number >= 1, got {block!r}")
     study = Study(mdl, found, sets, axis, values, design, int(seed), device, settings, block,
                   balls)
+    check_size(study)
     ends = [dict(zip(study.names, row, strict=True))
             for row in (design.values.min(axis=0), design.values.max(axis=0))]
     for value in dict.fromkeys((values[0], values[-1])):
@@ -158,6 +159,22 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
                 shown = ", ".join(f"{k} = {v:g}" for k, v in end.items())
                 raise InputError(f"--dist: at {shown} ({axis} = {value:g}): {exc}") from None
     return study
+
+
+def check_size(study: Study) -> None:
+    """Refuse, before any work, a study estimated at more CPU time than calibrate allows
+    (``inference.abc.MAX_CORE_HOURS`` at ``CPU_RATE`` member steps per second per core)."""
+    from analysis.inference.abc import CPU_RATE, MAX_CORE_HOURS
+
+    settings = study.settings
+    _, every = settings.steps(study.system(study.values[0]))
+    steps = settings.samples_per_revolution * every * (settings.transient_revolutions +
+                                                       2 * settings.revolutions)
+    hours = study.runs * steps / CPU_RATE / 3600
+    if hours > MAX_CORE_HOURS:
+        raise InputError(f"--samples: {study.runs:,} runs ({study.design.runs} members x "
+                         f"{len(study.values)} values) are estimated at {hours:.3g} "
+                         f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or values")
 
 
 def classify_member(system: System, samples: np.ndarray, lam: float, ci: float, h: float,

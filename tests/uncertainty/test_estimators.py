@@ -123,3 +123,11 @@ def test_bad_distributions_are_one_line(given, sets, words):
 def test_zero_samples_refused():
     with pytest.raises(InputError, match="--samples"):
         draw([Dist("a", "uniform", 0, 1)], 0)
+
+
+def test_a_study_too_large_is_refused_before_any_work():
+    from analysis.uncertainty.study import prepare
+
+    with pytest.raises(InputError, match="core-hours"):
+        prepare("vakharia2015", ["damping=uniform:100:300"], n_balls=[6, 7, 8, 9, 10],
+                samples=1_000_000)
