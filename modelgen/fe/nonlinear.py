@@ -154,9 +154,11 @@ class FlexibleEquations(Equations):
         return [sp.Float(float(m)) for m in self.rotor.reduced.mass]
 
     def proportional_damping(self) -> tuple[float, float] | None:
-        """(α, β) when the shaft's damping is C = α M + β K in the kept space (every element
-        with the same ROSS proportional damping, no linear bearings): the generated force
-        then takes K_r once (a quarter fewer operations for the shipped rotor)."""
+        """(α, β) when the shaft's damping is C = α M + β K (every element with the same
+        ROSS proportional damping, no linear bearings): the generated force then takes
+        C_r = α diag(m) + β K_r exactly, as the projection gives it in exact arithmetic.
+        (SymPy distributes β over K_r (q + β q'), so the operations are those of two
+        products; the gain is one set of numbers, not speed.)"""
         shaft = self.spec.shaft
         assert shaft is not None
         pairs = {(e.alpha, e.beta) for e in shaft.elements}
@@ -175,7 +177,7 @@ class FlexibleEquations(Equations):
         q, v = self.ctx.state[: self.n_dof], self.ctx.state[self.n_dof:]
         omega, t = self.ctx.omega, self.ctx.t
         proportional = self.proportional_damping()
-        if proportional is not None:  # C_r = α diag(m) + β K_r: one product, K_r (q + β q')
+        if proportional is not None:  # C_r = α diag(m) + β K_r exactly
             alpha, beta = proportional
             moved = [q[k] + _number(beta) * v[k] for k in range(self.n_dof)]
         forces = []
