@@ -31,6 +31,7 @@ in the eigenvector coordinate η = ⟨p, x − x0⟩ (|η| for the flip, |z| for
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import casadi as ca
@@ -61,6 +62,27 @@ class NormalForm:
         return {"coefficient": float(self.coefficient), "criticality": self.criticality}
 
 
+_BUILT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""The derivative Functions of each map (building them costs more than evaluating them)."""
+
+
+def _derivative_functions(f: ca.Function) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """A(x, a), B(x, a, u, v), C(x, a, u, v, w) of ``f`` (a: the parameters, 0 values for
+    a map of x alone), built once per map."""
+    if f not in _BUILT:
+        n = f.size1_in(0)
+        n_par = f.size1_in(1) * f.size2_in(1) if f.n_in() == 2 else 0
+        x, a = ca.MX.sym("x", n), ca.MX.sym("a", n_par)
+        u, v, w = (ca.MX.sym(name, n) for name in "uvw")
+        y = f(x) if f.n_in() == 1 else f(x, a)
+        y = y[0] if isinstance(y, (list, tuple)) else y
+        d2 = ca.jtimes(ca.jtimes(y, x, u), x, v)
+        _BUILT[f] = (ca.Function("A", [x, a], [ca.jacobian(y, x)]),
+                     ca.Function("B", [x, a, u, v], [d2]),
+                     ca.Function("C", [x, a, u, v, w], [ca.jtimes(d2, x, w)]))
+    return _BUILT[f]
+
+
 class _Derivatives:
     """A, B(u, v), C(u, v, w) of ``f`` at (x0, α) by AD; complex directions by linearity."""
 
@@ -68,30 +90,19 @@ class _Derivatives:
         n = f.size1_in(0)
         if x0.shape != (n,):
             raise InputError(f"x0: {n} values (the map's states), got {x0.shape}")
-        x = ca.MX.sym("x", n)
-        u = ca.MX.sym("u", n)
-        v = ca.MX.sym("v", n)
-        w = ca.MX.sym("w", n)
-        args = [x] if f.n_in() == 1 else [x, ca.DM(alpha)]
-        y = f(*args)
-        y = y[0] if isinstance(y, (list, tuple)) else y
-        d1 = ca.jtimes(y, x, u)
-        d2 = ca.jtimes(d1, x, v)
-        d3 = ca.jtimes(d2, x, w)
-        self._jac = ca.Function("A", [x], [ca.jacobian(y, x)])
-        self._b = ca.Function("B", [x, u, v], [d2])
-        self._c = ca.Function("C", [x, u, v, w], [d3])
+        self._jac, self._b, self._c = _derivative_functions(f)
+        self.alpha = np.zeros(0) if alpha is None else alpha
         self.x0 = x0
         self.n = n
 
     def A(self) -> np.ndarray:
-        return np.array(self._jac(self.x0), dtype=float)
+        return np.array(self._jac(self.x0, self.alpha), dtype=float)
 
     def B(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         out = np.zeros(self.n, dtype=complex)
         for cu, uu in _parts(u):
             for cv, vv in _parts(v):
-                out += cu * cv * np.array(self._b(self.x0, uu, vv)).ravel()
+                out += cu * cv * np.array(self._b(self.x0, self.alpha, uu, vv)).ravel()
         return out
 
     def C(self, u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -99,7 +110,8 @@ class _Derivatives:
         for cu, uu in _parts(u):
             for cv, vv in _parts(v):
                 for cw, ww in _parts(w):
-                    out += cu * cv * cw * np.array(self._c(self.x0, uu, vv, ww)).ravel()
+                    out += cu * cv * cw * np.array(
+                        self._c(self.x0, self.alpha, uu, vv, ww)).ravel()
         return out
 
 

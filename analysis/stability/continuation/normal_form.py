@@ -51,7 +51,12 @@ def period_map(prob) -> ca.Function:
     """``P(zs, p) -> zs'``: the period map of the shooting problem ``prob``
     (``ShootingProblem``) in its scaled states zs = z / s_z, its ``n_steps`` RK4 steps of
     h = T(p)/n_steps from t0 chained by ``fold`` in the virtual machine (differentiable to
-    any order by CasADi's forward mode)."""
+    any order by CasADi's forward mode). Kept on ``prob``, so that the points of one
+    branch share it and its derivative Functions."""
+    key = (prob.n_steps, prob.t0, str(prob.period), np.asarray(prob.s_z, float).tobytes())
+    cached = getattr(prob, "_period_map", None)
+    if cached is not None and cached[0] == key:
+        return cached[1]
     model, structure = prob.model, model_structure(prob)
     n, n_par = model.n_state, len(model.parameter_names)
     zs, p = ca.MX.sym("zs", n), ca.MX.sym("p", n_par)
@@ -60,7 +65,9 @@ def period_map(prob) -> ca.Function:
     scale = ca.DM(np.asarray(prob.s_z, dtype=float))
     s_end = run(ca.vertcat(zs * scale, 0),
                 *(ca.repmat(x, 1, prob.n_steps) for x in (p, h, prob.t0)))
-    return ca.Function("period_map", [zs, p], [s_end[:n] / scale])
+    fn = ca.Function("period_map", [zs, p], [s_end[:n] / scale])
+    prob._period_map = (key, fn)  # one map (so one set of derivative Functions) per branch
+    return fn
 
 
 def model_structure(prob) -> tuple[int, ...]:
