@@ -28,7 +28,7 @@ that stands ``LINE_DB`` over its local noise floor (the median of ``FLOOR_BINS``
 side, ``analysis.signal.spectrum.noise_floor``) and within ``RANGE_DB`` of the spectrum's
 largest line; the ``MAX_LINES`` strongest are kept. Each is named by the nearest line of
 its own signal's vocabulary within the order tolerance: the shaft harmonics nX, and the
-defect lines (:func:`vocabulary`: BPFO and harmonics; BPFI, harmonics and their ±X
+defect lines (:func:`vocabulary`: BPFO, BPFI, their harmonics and their ±X
 sidebands; BSF, 2xBSF, … with ±FTF sidebands; FTF and harmonics; the names of
 ``bearingdyn diagnose``), from the record's bearing and from the run's own geometry
 (:func:`name_lines`). A record line and a model line are **shared** when their orders agree
@@ -74,9 +74,6 @@ FLOOR_BINS = 50
 ORDER_TOLERANCE = 0.015
 """Relative order tolerance of two lines that are the same line (and of a line and its
 name): slip and geometry move real bearing lines by a few tenths of a percent."""
-TIGHT = 0.003
-"""Relative order window (at least two bins) within which a line makes its defect line
-present (its sidebands then the likelier names of lines near them)."""
 SPECTRA = ("envelope", "raw")
 """The two spectra compared, in the order shown."""
 DIFFERENTIATIONS = {"m/s^2": 0, "m/s": 1, "m": 2}
@@ -249,10 +246,12 @@ def acceleration(values: np.ndarray, fs_hz: float, units: str) -> tuple[np.ndarr
 
 HARMONICS = {"BPFO": 4, "BPFI": 4, "BSF": 6, "FTF": 3}
 """Harmonics of each defect line in the vocabulary."""
-SIDEBANDS = {"BPFI": "X", "BSF": "FTF"}
+SIDEBANDS = {"BPFO": "X", "BPFI": "X", "BSF": "FTF"}
 """The modulation whose sidebands each harmonic of a defect line carries: an inner-race
 defect turns through the load zone once per revolution (±X, ±2X, ±3X), a ball defect with
-the cage (±FTF, ±2FTF, ±3FTF) (R. B. Randall, J. Antoni, MSSP 25 (2011) 485–520, Sec. 2)."""
+the cage (±FTF, ±2FTF, ±3FTF) (R. B. Randall, J. Antoni, MSSP 25 (2011) 485–520, Sec. 2);
+an outer-race defect is not modulated by the load zone, but by a load that turns with the
+shaft (unbalance, misalignment: ±X, as the CWRU fan-end outer-race record shows)."""
 SIDEBAND_ORDERS = 3
 """Sidebands on each side of a modulated defect line in the vocabulary."""
 
@@ -261,9 +260,9 @@ def vocabulary(table_hz: dict[str, float], shaft_hz: float, max_order: float
                ) -> dict[str, float]:
     """Line name -> order of the shaft harmonics X, 2X, … and the defect lines up to
     ``max_order`` (cycles/rev), from the defect frequencies ``table_hz`` (FTF, BPFO, BPFI,
-    BSF; Hz) at shaft frequency ``shaft_hz``: FTF, 2FTF, 3FTF; BPFO … 4BPFO; BPFI … 4BPFI
-    with ±X, ±2X, ±3X sidebands (``BPFI-X``, ``2BPFI+2X``); BSF, 2xBSF … 6xBSF with ±FTF …
-    sidebands.
+    BSF; Hz) at shaft frequency ``shaft_hz``: FTF, 2FTF, 3FTF; BPFO … 4BPFO and BPFI …
+    4BPFI with ±X, ±2X, ±3X sidebands (``BPFI-X``, ``2BPFO+2X``); BSF, 2xBSF … 6xBSF with
+    ±FTF … sidebands.
     The first name of an order wins (a shaft harmonic before a defect line).
 
     >>> words = vocabulary({"FTF": 0.4, "BPFO": 3.6, "BPFI": 5.4, "BSF": 2.4}, 1.0, 6.0)
@@ -299,17 +298,21 @@ def is_sideband(name: str) -> bool:
     return "+" in name or "-" in name
 
 
-def name_lines(orders: list[float], words: dict[str, float], windows: list[float],
-               tight: list[float]) -> list[str]:
+def name_lines(orders: list[float], words: dict[str, float], windows: list[float]
+               ) -> list[str]:
     """A name for each line at ``orders`` (strongest first) from the vocabulary ``words``,
     within its ``windows`` (orders), '' where none fits. A defect line is *present* when a
-    line lies within its ``tight`` window of one of its harmonics; a line is named by the
+    line off the shaft harmonics lies within the window of it or of one of its harmonics
+    (a 2X line does not make a BSF of 1.99 orders present); a line is named by the
     nearest of the shaft harmonics, the defect harmonics and the sidebands of the present
     defect lines (a sideband of an absent line is the less likely name), else by the
     nearest name of all; each name goes to one line only, the nearest."""
     harmonics = [w for w in words if not is_sideband(w)]
-    present = {family_of(w) for i, o in enumerate(orders) for w in harmonics
-               if abs(words[w] - o) <= tight[i]}
+    shaft = [words[w] for w in harmonics if family_of(w) == "X"]
+    free = [i for i, o in enumerate(orders)  # a line on a shaft harmonic is the shaft's
+            if not any(abs(f - o) <= windows[i] for f in shaft)]
+    present = {family_of(w) for i in free for w in harmonics
+               if family_of(w) != "X" and abs(words[w] - orders[i]) <= windows[i]}
     likely = harmonics + [w for w in words if is_sideband(w) and family_of(w) in present]
     names = [""] * len(orders)
     taken: set[str] = set()
@@ -384,8 +387,7 @@ def find_lines(amp: np.ndarray, orders: np.ndarray, keep: np.ndarray, top: float
             found.append((float(orders[i] + shift * order_bin), level, over))
     found = sorted(found, key=lambda row: -row[1])[:MAX_LINES]
     names = name_lines([o for o, _, _ in found], words,
-                       [_window(o, tolerance, order_bin) for o, _, _ in found],
-                       [_window(o, TIGHT, order_bin) for o, _, _ in found])
+                       [_window(o, tolerance, order_bin) for o, _, _ in found])
     return tuple(Line(o, level, over, name)
                  for (o, level, over), name in zip(found, names, strict=True))
 
