@@ -248,3 +248,21 @@ def test_diagnose_model_simulates_the_verdict_s_model_and_compares(tmp_path):
     assert {"BPFI", "BPFI-X", "BPFI+X"} <= set(check["shared"]["envelope"])
     done = invoke("diagnose", tmp_path, "--bearing", "6205-cwru", "--model", "auto")
     assert done.exit_code == 2 and done.output.count("\n") == 1 and "--model" in done.output
+
+
+def test_lines_are_named_by_the_defect_lines_present():
+    """The CWRU fan-end outer-race record's envelope lines (orders of its 6203, BPFO 3.053
+    in theory, 3.066 measured): BPFO's X sidebands name the lines near them, not the
+    sidebands of a ball line that only the 2X line falls near (BSF 1.994)."""
+    from analysis.measured.bearings import lookup
+    from analysis.measured.compare import name_lines, vocabulary
+
+    shaft = 29.94
+    words = vocabulary(lookup("6203-cwru").frequencies(shaft), shaft, 12.0)
+    orders = [1.0, 2.066, 3.066, 2.0, 5.132, 5.066]
+    windows = [max(0.015 * o, 0.0067) for o in orders]
+    assert name_lines(orders, words, windows) == ["X", "BPFO-X", "BPFO", "2X", "2BPFO-X",
+                                                  "BPFO+2X"]
+    assert abs(words["2xBSF+3FTF"] - 5.132) < abs(words["2BPFO-X"] - 5.132)  # nearer, absent
+    assert name_lines([7.0], words, [0.01]) == ["7X"] and name_lines([6.7], words, [0.01]) \
+        == [""]
