@@ -266,3 +266,14 @@ def test_lines_are_named_by_the_defect_lines_present():
     assert abs(words["2xBSF+3FTF"] - 5.132) < abs(words["2BPFO-X"] - 5.132)  # nearer, absent
     assert name_lines([7.0], words, [0.01]) == ["7X"] and name_lines([6.7], words, [0.01]) \
         == [""]
+
+
+def test_simulate_sample_rate_refusals(tmp_path):
+    out = tmp_path / "r.nc"
+    for args, words in ((("--sample-rate", "12000", "--save-every", "3"),
+                         "--sample-rate: sets --save-every itself"),
+                        (("--sample-rate", "0"), "--sample-rate: must be a rate in Hz > 0"),
+                        (("--sample-rate", "nan"), "--sample-rate: must be a rate in Hz > 0")):
+        done = invoke("simulate", "6205-inner-defect", "-o", out, "--duration", "0.01", *args)
+        assert done.exit_code == 2 and done.output.startswith(f"error: {words}"), done.output
+        assert not out.exists()
