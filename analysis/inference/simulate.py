@@ -24,13 +24,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import xarray as xr
 
 from analysis.errors import InputError
 from analysis.inference.targets import Target, TargetRow
 from analysis.integrate.kernels import Schedule, run_members
 from analysis.integrate.plan import RunPlan
 from analysis.model import Model, System, as_system, load_model
-from analysis.provenance import completed_attrs, to_dataset
+from analysis.provenance import completed_attrs, state_names, to_dataset
 from analysis.signal.poincare import poincare_section
 from analysis.signal.spectrum import Peak, find_peaks
 from analysis.stability.classify import classify_section, verdict_points
@@ -156,29 +157,42 @@ def peak_names(peaks: Sequence[Peak]) -> list[str]:
     return names
 
 
+def member_record(system: System, samples: np.ndarray, h: float, every: int,
+                  start_step: int) -> xr.Dataset:
+    """One member's kept samples (K × n, every ``every`` steps of ``h`` s after step
+    ``start_step``) as a run Dataset with ``system``'s provenance."""
+    times = (start_step + every * np.arange(1, len(samples) + 1)) * h
+    attrs = completed_attrs(system, method="rk4", dt=h, save_every=every,
+                            duration=float(times[-1]), transient=float(times[0]))
+    return to_dataset(times, samples.T, attrs, system.model)
+
+
+def classify_member(run: xr.Dataset, samples: np.ndarray, lam: float,
+                    ci: float) -> tuple[str, dict[str, float]]:
+    """(class, peak-to-peak range by state) of a member's record (``member_record``): its
+    shaft Poincaré points classified with λ1 and its 95 % interval (``classify_section``),
+    as calibrate and the uncertainty study classify every member."""
+    ptp = {v: float(np.ptp(samples[:, i])) for i, v in enumerate(state_names(run))}
+    verdict = classify_section(poincare_section(run, "shaft"), ptp, lambda: (lam, ci))
+    return verdict.nature, ptp
+
+
 def _member_row(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
                 every: int, start_step: int, diverged_at: int, settings: RunSettings,
                 coordinates: Sequence[str]) -> MemberRow:
     """Classify one member's record and name its lines (``diverged`` when it blew up:
     ``diverged_at`` >= 0, the step of its first bad state)."""
-    model = system.model
-    times = (start_step + every * np.arange(1, len(samples) + 1)) * h
     if diverged_at >= 0 or not math.isfinite(lam) or not np.all(np.isfinite(samples)):
         step = diverged_at if diverged_at >= 0 else start_step + every * len(samples)
         return MemberRow("diverged", math.nan, math.nan, {}, {}, float(step * h))
-    duration = float(times[-1])
-    attrs = completed_attrs(system, method="rk4", dt=h, save_every=every, duration=duration,
-                            transient=float(times[0]))
-    run = to_dataset(times, samples.T, attrs, model)
-    points = poincare_section(run, "shaft")
-    ptp = {v: float(np.ptp(samples[:, i])) for i, v in enumerate(model.state_names)}
-    verdict = classify_section(points, ptp, lambda: (lam, ci))
+    run = member_record(system, samples, h, every, start_step)
+    nature, _ = classify_member(run, samples, lam, ci)
     major, lines = {}, {}
     for var in coordinates:
         names = peak_names(find_peaks(run, var, settings.max_peaks))
         major[var] = names[0] if names else "-"
         lines[var] = names
-    return MemberRow(verdict.nature, float(lam), float(ci), major, lines, math.nan)
+    return MemberRow(nature, float(lam), float(ci), major, lines, math.nan)
 
 
 def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],

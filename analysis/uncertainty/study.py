@@ -36,11 +36,14 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError
-from analysis.inference.simulate import RunSettings, run_engine
+from analysis.inference.simulate import (
+    RunSettings,
+    classify_member,
+    member_record,
+    run_engine,
+)
 from analysis.model import BallCounts, Model, System, as_system, load_model
-from analysis.provenance import completed_attrs, displacement_names, to_dataset
-from analysis.signal.poincare import poincare_section
-from analysis.stability.classify import classify_section
+from analysis.provenance import displacement_names
 from analysis.uncertainty.distributions import Dist, check_dists
 from analysis.uncertainty.probabilities import probabilities, regime, regime_order
 from analysis.uncertainty.sampling import Design, check_samples, draw
@@ -177,22 +180,17 @@ def check_size(study: Study) -> None:
                          f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or values")
 
 
-def classify_member(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
-                    every: int, start_step: int, diverged_at: int) -> tuple[str, dict]:
-    """(class, amplitudes by displacement in m) of one member's record: its shaft Poincaré
-    points classified with λ1 (``classify_section``); ``diverged`` (amplitudes NaN) when it
-    blew up."""
-    model = system.model
-    times = (start_step + every * np.arange(1, len(samples) + 1)) * h
-    attrs = completed_attrs(system, method="rk4", dt=h, save_every=every,
-                            duration=float(times[-1]), transient=float(times[0]))
-    names = displacement_names(attrs)
+def classify_draw(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
+                  every: int, start_step: int, diverged_at: int) -> tuple[str, dict]:
+    """(class, amplitudes by displacement in m) of one member's record, classified as
+    calibrate classifies its members (``inference.simulate.classify_member``); ``diverged``
+    (amplitudes NaN) when it blew up."""
+    run = member_record(system, samples, h, every, start_step)
+    names = displacement_names(run.attrs)
     if diverged_at >= 0 or not math.isfinite(lam) or not np.all(np.isfinite(samples)):
         return "diverged", {v: math.nan for v in names}
-    run = to_dataset(times, samples.T, attrs, model)
-    ptp = {v: float(np.ptp(samples[:, i])) for i, v in enumerate(model.state_names)}
-    verdict = classify_section(poincare_section(run, "shaft"), ptp, lambda: (lam, ci))
-    return verdict.nature, {v: ptp[v] / 2 for v in names}
+    nature, ptp = classify_member(run, samples, lam, ci)
+    return nature, {v: ptp[v] / 2 for v in names}
 
 
 def evaluate_members(system: System, names: Sequence[str], thetas: np.ndarray,
@@ -220,9 +218,9 @@ def evaluate_members(system: System, names: Sequence[str], thetas: np.ndarray,
                             per, device, part)
         start = settings.transient_revolutions * per * every
         for j, i in enumerate(idx):
-            nature, amp = classify_member(members[i], result.samples[j],
-                                          float(result.lambda1[j]), float(result.ci95[j]), h,
-                                          every, start, int(result.diverged_at[j]))
+            nature, amp = classify_draw(members[i], result.samples[j],
+                                        float(result.lambda1[j]), float(result.ci95[j]), h,
+                                        every, start, int(result.diverged_at[j]))
             out["nature"][i] = nature
             out["lambda1"][i] = result.lambda1[j]
             out["ci95"][i] = result.ci95[j]
@@ -455,8 +453,8 @@ def classify_seconds(study: Study) -> float:
     best = math.inf
     for _ in range(2):  # the first also imports and warms what classifying needs
         begin = time.perf_counter()
-        classify_member(system, result.samples[0], float(result.lambda1[0]),
-                        float(result.ci95[0]), h, every, 0, int(result.diverged_at[0]))
+        classify_draw(system, result.samples[0], float(result.lambda1[0]),
+                      float(result.ci95[0]), h, every, 0, int(result.diverged_at[0]))
         best = min(best, time.perf_counter() - begin)
     return best
 
