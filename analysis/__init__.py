@@ -8,6 +8,10 @@ Typical use::
     system = as_system("two-bearing-rotor", n_balls={"left": 7, "right": 11})
     simulate(system, duration=1.0)
 
+    from analysis import diagnose, read_record   # a measured record and its bearing's faults
+    record = read_record("12k_Drive_End_IR007_0_105.mat")
+    diagnose(record, channel="DE", bearing="6205-cwru").verdict   # 'inner-race'
+
 Names are imported on first use (PEP 562), so ``import analysis`` and the CLI start fast.
 
 The package is layered: ``model`` (the generated models), ``integrate`` (RK4/CVODES, compiled
@@ -39,14 +43,21 @@ _API = {
     "waterfall": "analysis.signal.waterfall", "order_spectrum": "analysis.signal.orders",
     "angle_resample": "analysis.signal.orders",
     "calibrate": "analysis.inference.abc",
+    "read_record": "analysis.measured.records", "diagnose": "analysis.measured.diagnose",
+    "lookup_bearing": "analysis.measured.bearings", "compare": "analysis.measured.compare",
+    "load_rotor": "analysis.linear.rotor", "campbell": "analysis.linear.campbell",
+    "unbalance_response": "analysis.linear.unbalance",
+    "uncertainty": "analysis.uncertainty.study",
 }
+_ALIASES = {"lookup_bearing": "lookup"}
+"""Names the package exports under another name than their module's."""
 __all__ = sorted(_API)
 
 
 def __getattr__(name: str) -> Any:
     if name not in _API:
         raise AttributeError(f"module 'analysis' has no attribute {name!r}")
-    return getattr(importlib.import_module(_API[name]), name)
+    return getattr(importlib.import_module(_API[name]), _ALIASES.get(name, name))
 
 
 def __dir__() -> list[str]:
