@@ -305,7 +305,9 @@ class Calibration:
     def verdict(self) -> str:
         """'' when the calibration can conclude, else why it is too small to: fewer than
         ``MIN_ESS`` effective sets, fewer than ``MIN_BEST`` sets at the best count of rows
-        matched, or no parameter's interval narrowed below ``NARROWED`` of the prior's."""
+        matched, no parameter's interval narrowed below ``NARROWED`` of the prior's, or a
+        last tolerance more than a row above the best set's discrepancy (the posterior is
+        then that of worse sets)."""
         why = []
         ess = self.effective_sample_size()
         if ess < MIN_ESS:
@@ -317,6 +319,11 @@ class Calibration:
         narrow = self.narrowing()
         if narrow and min(narrow.values()) > NARROWED:
             why.append(f"no 90 % interval is narrower than {NARROWED:.0%} of the prior's")
+        least = min(float(r.discrepancy.min()) for r in self.rounds)
+        if self.posterior.epsilon > least + 1:
+            why.append(f"the posterior's tolerance ({self.posterior.epsilon:.3g} rows missed) "
+                       f"is more than a row above the best set's ({least:.3g}): it describes "
+                       "worse sets than the best; more --rounds")
         return "; ".join(why)
 
     def credible_interval(self, level: float = 0.9) -> dict[str, tuple[float, float]]:

@@ -75,6 +75,8 @@ def test_narrowing_and_effective_sample_size():
     assert cal.narrowing()["damping"] == pytest.approx(0.1, abs=0.01)
     assert cal.effective_sample_size() == pytest.approx(1 / np.sum((weights / 8000) ** 2))
     assert cal.verdict() == ""
+    cal.posterior.epsilon = 2.5  # the posterior's sets miss 2.5 rows, the best none
+    assert "more than a row above the best" in cal.verdict()
 
 
 def test_share_of_prior_counts_doubtful_matches_apart():
