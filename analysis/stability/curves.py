@@ -37,10 +37,13 @@ the bound its ``past_end``:
   vectors q, p of M − I and Mᵀ − I), LPPD (fold–flip: det(M + I) = 0), LPNS (fold–NS: a
   complex pair crosses the unit circle);
 * on PD curves: R2 (1:2 resonance: −1 becomes a Jordan block, pᵀq = 0), LPPD
-  (det(M − I) = 0), PDNS (flip–NS);
+  (det(M − I) = 0), PDNS (flip–NS), GPD (generalised flip: the flip coefficient c of
+  ``normal_forms`` changes sign, the criticality changes);
 * on NS curves: R1 (κ = 1), R2 (κ = −1), R3 (κ = −1/2), R4 (κ = 0), LPNS (det(M − I) = 0),
-  PDNS (det(M + I) = 0). Beyond |κ| = 1 the NS curve continues as a neutral saddle
-  (real multipliers μ, 1/μ), not an NS curve.
+  PDNS (det(M + I) = 0), CH (Chenciner: the first Lyapunov coefficient d changes sign).
+  GPD and CH need a smooth map: where a ball is at the contact threshold their test
+  functions are NaN and no sign change is counted. Beyond |κ| = 1 the NS curve continues
+  as a neutral saddle (real multipliers μ, 1/μ), not an NS curve.
 
 Degenerate (conservative) systems whose test functions vanish identically along the curve
 (the undamped Mathieu equation: −1 is a double multiplier everywhere on its PD curve) get
@@ -348,9 +351,28 @@ def _tests(prob: _CurveProblem, e: dict, kappa: float) -> dict[str, float]:
                 "LPPD": _det_other(ms, 1.0), "LPNS": _complex_outside(ms)}
     if prob.kind == "PD":
         return {"R2": _unit_pairing(v, wl), "LPPD": _det_other(ms, -1.0),
-                "PDNS": _complex_outside(ms)}
+                "PDNS": _complex_outside(ms), "GPD": _criticality_test(prob, e)}
     return {"R1": kappa - 1, "R2": kappa + 1, "R3": kappa + 0.5, "R4": kappa,
-            "LPNS": _det_other(ms, -1.0), "PDNS": _det_other(ms, 1.0)}
+            "LPNS": _det_other(ms, -1.0), "PDNS": _det_other(ms, 1.0),
+            "CH": _criticality_test(prob, e)}
+
+
+def _criticality_test(prob: _CurveProblem, e: dict) -> float:
+    """The flip coefficient c (PD curves: GPD, the generalised flip, where it changes
+    sign) or the first Lyapunov coefficient d (NS curves: CH, the Chenciner point) of the
+    period map at the point (``continuation.normal_form``, in the scaled states); NaN where
+    a ball is at the contact threshold (the map is not smooth: no coefficient) or no
+    critical multiplier of the kind is found."""
+    from analysis.stability.continuation.normal_form import at_contact_threshold, period_map
+    from analysis.stability.normal_forms import normal_form
+
+    z, p = e["z"], e["p"]
+    if not np.all(np.isfinite(z)) or at_contact_threshold(prob, z, 0.0, p):
+        return math.nan
+    try:
+        return normal_form(period_map(prob), z / prob.s_z, p, kind=prob.kind).coefficient
+    except (InputError, np.linalg.LinAlgError):
+        return math.nan
 
 
 def _complex_outside(ms: np.ndarray) -> float:
@@ -397,6 +419,8 @@ def _codim2(prob: _CurveProblem, a: CurvePoint, b: CurvePoint, tol: float
     found = []
     for label, fa in a.tests.items():
         fb = b.tests[label]
+        if not (math.isfinite(fa) and math.isfinite(fb)):
+            continue  # no value at one end (GPD, CH at a non-smooth point)
         if np.sign(fa) != np.sign(fb) and fa != 0 and max(abs(fa), abs(fb)) > TEST_GUARD:
             found.append(_locate(prob, a, b, label, tol))
     return found

@@ -173,6 +173,7 @@ def normal_form(f: ca.Function, x0, alpha=None, kind: str | None = None) -> Norm
     q = np.real(_eigvec(A, mu))
     q = q / np.linalg.norm(q)
     p = np.real(_eigvec(A.T, mu))
+    _check_pairing(p @ q, p)
     p = p / (p @ q)
     bqq = np.real(der.B(q, q))
     if kind == "LP":
@@ -184,11 +185,21 @@ def normal_form(f: ca.Function, x0, alpha=None, kind: str | None = None) -> Norm
                       complex(mu), q, p)
 
 
+def _check_pairing(pairing: complex, p: np.ndarray) -> None:
+    """``InputError`` when ⟨p, q⟩ vanishes: the critical multiplier is a Jordan block (a
+    resonance, or a degenerate, e.g. conservative, map), where this normal form does not
+    apply."""
+    if not abs(pairing) > 1e-10 * np.linalg.norm(p):
+        raise InputError("x0: the critical multiplier is a Jordan block (⟨p, q⟩ = 0): no "
+                         "normal form of this kind there")
+
+
 def _neimark_sacker(der: _Derivatives, A: np.ndarray, mu: complex) -> NormalForm:
     theta = math.atan2(mu.imag, mu.real)
     q = _eigvec(A, mu)
     q = q / np.linalg.norm(q)
     p = _eigvec(A.conj().T, np.conj(mu))
+    _check_pairing(np.vdot(p, q), p)
     p = p / np.conj(np.vdot(p, q))  # ⟨p, q⟩ = p̄ᵀq = 1
     eye = np.eye(der.n)
     qb = np.conj(q)

@@ -150,3 +150,7 @@ def test_bad_input_is_one_input_error():
         normal_form(f, [2 / 3], [3.0], kind="NS")
     with pytest.raises(InputError, match="kind"):
         normal_form(f, [2 / 3], [3.0], kind="XX")
+    x = ca.SX.sym("x", 2)  # −1 as a Jordan block (1:2 resonance): no flip normal form
+    jordan = ca.Function("j", [x], [ca.vertcat(-x[0] + x[1] + x[0] ** 3, -x[1])])
+    with pytest.raises(InputError, match="Jordan"):
+        normal_form(jordan, [0.0, 0.0], kind="PD")

@@ -188,3 +188,27 @@ def test_branch_figure_marks_subcritical_and_nonsmooth_points_apart(duffing, rot
     marked["criticality"] = ("point", crit)
     assert sorted(c for c, _ in pd_markers(marked)) == sorted([to_rgba("k"), to_rgba("red")])
     assert {c for c, _ in pd_markers(rotor)} == {to_rgba("0.5")}
+
+
+def test_pd_curve_carries_the_flip_coefficient_and_marks_no_false_gpd(duffing):
+    """The first Duffing PD followed in the forcing amplitude (20 → 26 N): the test
+    function GPD is the flip coefficient of the period map at each curve point, equal at
+    the start to the branch's (the same point, re-solved on the curve) within 1 %, and to a direct
+    ``normal_form`` at a later point; it stays positive there (measured 113 → 127), so no
+    GPD label."""
+    from analysis.stability.continuation import orbit_scale
+    from analysis.stability.curves import continue_curve
+
+    cv = continue_curve(duffing, "PD", param="forcing_amplitude", stop=26.0, max_points=12)
+    gpd = cv.test_GPD.values
+    k = int(np.nonzero(duffing.special.values == "PD")[0][0])
+    # within 1 %: the curve has its own state scales (measured 113.47 vs 113.03)
+    assert gpd[0] == pytest.approx(duffing.normal_form_coefficient.values[k], rel=1e-2)
+    assert np.all(gpd > 0) and "GPD" not in set(cv.special.values)
+    _, prob = _at(duffing, k)
+    prob.s_z = orbit_scale(prob, duffing.z0.values[k])  # the curve's scales
+    j = cv.sizes["point"] - 1
+    prob.values["forcing_amplitude"] = float(cv.forcing_amplitude.values[j])
+    l1 = float(cv.speed_rpm.values[j])
+    nf = normal_form(period_map(prob), cv.z0.values[j] / prob.s_z, prob.p(l1), kind="PD")
+    assert gpd[j] == pytest.approx(nf.coefficient, rel=1e-6)

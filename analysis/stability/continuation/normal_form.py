@@ -74,14 +74,15 @@ def model_structure(prob) -> tuple[int, ...]:
     return prob.model.structure(prob.structure)
 
 
-def ball_deflections(prob, z0: np.ndarray, lam: float) -> np.ndarray:
+def ball_deflections(prob, z0: np.ndarray, lam: float, p: np.ndarray | None = None
+                     ) -> np.ndarray:
     """δ (m) of every ball of every bearing (rows, bearing by bearing) at the section and
     after each RK4 step of the orbit through ``z0`` at ``lam`` (columns): the paper's Eq. 5
     with the bearing's station map, cage speed and clearance (the first clearance-role
     parameter of the bearing, half a diametral one); empty for a model without bearings."""
     model = prob.model
     module = model.module
-    p = prob.p(lam)
+    p = prob.p(lam) if p is None else p
     states = np.column_stack([z0, np.asarray(prob.orbit(z0, prob.t0, p))])
     h = float(prob.period.seconds(model, model_structure(prob), p)) / prob.n_steps
     t = prob.t0 + h * np.arange(states.shape[1])
@@ -108,13 +109,16 @@ def _clearance(model, names: tuple[str, ...], k: int, p: np.ndarray) -> float:
     return value / 2 if "diametral" in name else value
 
 
-def at_contact_threshold(prob, z0: np.ndarray, lam: float) -> bool:
+def at_contact_threshold(prob, z0: np.ndarray, lam: float, p: np.ndarray | None = None
+                         ) -> bool:
     """Whether a ball's deflection is within ``CONTACT_TOLERANCE`` × its clearance of zero
-    at a step of the orbit, or changes sign between two steps (``ball_deflections``)."""
-    delta = ball_deflections(prob, z0, lam)
+    at a step of the orbit, or changes sign between two steps (``ball_deflections``; ``p``
+    the parameter vector when it is not ``prob.p(lam)``, e.g. on a two-parameter curve)."""
+    p = prob.p(lam) if p is None else p
+    delta = ball_deflections(prob, z0, lam, p)
     if delta.size == 0:
         return False
-    scale = max(abs(_clearance(prob.model, prob.model.role("clearance"), 0, prob.p(lam))),
+    scale = max(abs(_clearance(prob.model, prob.model.role("clearance"), 0, p)),
                 float(np.abs(delta).max()) * 1e-6, 1e-12)
     near = np.abs(delta) <= CONTACT_TOLERANCE * scale
     crossing = np.sign(delta[:, 1:]) * np.sign(delta[:, :-1]) < 0
