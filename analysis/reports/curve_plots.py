@@ -14,7 +14,7 @@ from analysis.stability.classify import NATURE_COLORS, NATURE_NAMES
 
 CURVE_STYLES = {"LP": ("C0", "-"), "PD": ("k", "-"), "NS": ("C3", "-")}
 CODIM2_MARKERS = {"CP": "v", "R1": "s", "R2": "D", "R3": "^", "R4": "p", "LPPD": "X",
-                  "LPNS": "P", "PDNS": "h"}
+                  "LPNS": "P", "PDNS": "h", "GPD": "*", "CH": "*"}
 CURVE_NAMES = {"LP": "fold (LP) curve", "PD": "period-doubling (PD) curve",
                "NS": "Neimark–Sacker (NS) curve"}
 
