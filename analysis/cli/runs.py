@@ -424,14 +424,18 @@ def plot(
                        "swept parameter.")] = False,
     polar: Annotated[bool, typer.Option(
         "--polar", help="A sweep's polar plot of the 1X amplitude and phase lag.")] = False,
+    node: Annotated[int | None, typer.Option(
+        "--node", help="With --orbit, a flexible model's run: the orbit of this shaft node "
+                       "(0 at the left end), from the reduced state.")] = None,
     channel: ChannelsOption = None,
     rpm: RpmOption = None,
     tacho: TachoOption = None,
     fs: FsOption = None,
 ):
     """Draw the natural figure of a result file (run, branch, diagram or chart), or a run's
-    orbits or full spectrum, or a sweep's Bode or polar plot; a measured record's orbit or
-    full spectrum of two channels (--channel X --channel Y: proximity probes)."""
+    orbits (at any shaft node of a flexible model: --node) or full spectrum, or a sweep's
+    Bode or polar plot; a measured record's orbit or full spectrum of two channels
+    (--channel X --channel Y: proximity probes)."""
     from analysis.io import open_result
     from analysis.measured.runs import is_record_file
     from analysis.reports.plots import any_figure
@@ -441,17 +445,24 @@ def plot(
     if len(chosen) > 1:
         raise InputError(f"{chosen[1]}: give one of --orbit, --full-spectrum, --bode, "
                          f"--polar, got {' and '.join(chosen)}")
+    if node is not None and chosen != ["--orbit"]:
+        raise InputError(f"--node: only with --orbit (a flexible model's shaft node), got "
+                         f"--node {node} with {' and '.join(chosen) or 'no --orbit'}")
     options = record_options(channel, fs, rpm, tacho, None)
     if options.given() or is_record_file(result, foreign=False):
+        if node is not None:
+            raise InputError(f"--node: only for a flexible model's run, '{result}' is a "
+                             "measured record")
         write_figure(record_figure(chosen[0] if chosen else None, result, options), output)
         return
     if not chosen:
         write_figure(any_figure(open_result(result), var, result), output)
         return
-    write_figure(_special_figure(chosen[0], result, var), output)
+    write_figure(_special_figure(chosen[0], result, var, node), output)
 
 
-def _special_figure(option: str, result: Path, var: list[str] | None):
+def _special_figure(option: str, result: Path, var: list[str] | None,
+                    node: int | None = None):
     """The figure of `plot --orbit`, `--full-spectrum`, `--bode` or `--polar` (lines of a
     full spectrum printed); every input checked before the figure is drawn."""
     from analysis.io import open_result
@@ -476,7 +487,7 @@ def _special_figure(option: str, result: Path, var: list[str] | None):
     if option == "--orbit":
         from analysis.reports.orbit_plots import orbit_figure
 
-        return orbit_figure(ds, x, y)
+        return orbit_figure(ds, x, y, node)
     from analysis.reports.orbit_plots import full_spectrum_figure
     from analysis.signal.full_spectrum import full_spectrum_peaks, orbit_pair
 

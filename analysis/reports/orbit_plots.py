@@ -96,11 +96,12 @@ def run_speeds(ds: xr.Dataset) -> np.ndarray | None:
     return profile.speed(t, float(ds.attrs.get("duration", t[-1])))
 
 
-def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> Figure:
+def orbit_figure(ds: xr.Dataset, x: str | None = None, y: str | None = None,
+                 node: int | None = None) -> Figure:
     """The orbits of a run (``analysis.signal.orbit.orbits``; ``x``, ``y``: one pair of
-    state variables only), one panel each, in µm, with the bearings' clearance circles and
-    a mark once per shaft revolution."""
-    found = orbits(ds, x, y)
+    state variables only; ``node``: a flexible model's shaft node only), one panel each, in
+    µm, with the bearings' clearance circles and a mark once per shaft revolution."""
+    found = orbits(ds, x, y, node)
     columns = min(len(found), 3)
     rows = math.ceil(len(found) / columns)
     fig, axes = plt.subplots(rows, columns, figsize=(max(6.4, 4.6 * columns), 4.4 * rows + 1.0),

@@ -87,12 +87,58 @@ def _clearances(model, values: dict[str, float]) -> list[float | None]:
     return [found[0] if found else None] * len(bearings)
 
 
-def orbits(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> list[Orbit]:
-    """The orbits of a run: with ``x`` and ``y`` (two state variables) that pair only; else
+def node_terms(model, node: int) -> list[tuple[int, float, float]]:
+    """Node ``node``'s translation (x, y) as a linear map of a flexible model's state: the
+    generated module's ``NODE_MAP`` rows (state index, ∂x/∂q, ∂y/∂q; m/m). ``InputError``
+    naming ``--node`` for a model without finite-element nodes or a node it lacks."""
+    node_map = getattr(model.module, "NODE_MAP", None)
+    if node_map is None:
+        raise InputError(f"--node: only for a flexible (finite-element) model; "
+                         f"{model.name} has no shaft nodes")
+    if isinstance(node, bool) or not isinstance(node, (int, np.integer)) \
+            or not 0 <= int(node) < len(node_map):
+        raise InputError(f"--node: a node of {model.name}, 0…{len(node_map) - 1}, got {node}")
+    return [(int(i), float(a), float(b)) for i, a, b in node_map[int(node)]]
+
+
+def node_orbit(ds: xr.Dataset, node: int) -> Orbit:
+    """The orbit of shaft node ``node`` of a flexible model's run: its translation (x, y, m)
+    from the run's reduced state through the model's ``NODE_MAP`` (``node_terms``), with
+    the marks once per revolution and, at a bearing's node, that bearing's clearance.
+    ``InputError`` (naming ``--node``) for a rigid model or a node it lacks."""
+    system = system_of_attrs(ds.attrs)
+    model = system.model
+    rows = node_terms(model, node)
+    names = state_names(ds)
+    terms = [(names[i], a, b) for i, a, b in rows]
+    marks = revolution_marks(ds)
+    bearing, clearance = None, None
+    for b, c in zip(model.bearings, _clearances(model, dict(system.parameters)), strict=True):
+        rows_b = getattr(model.module, f"station_map_{b.name}")(system.p)
+        if sorted((int(i), float(u), float(v)) for i, u, v in rows_b) == sorted(rows):
+            bearing, clearance = b.name, c  # the bearing whose station is this node
+            break
+    what = f"shaft node {int(node)}'s translation" + (f" (bearing {bearing})" if bearing
+                                                       else "")
+    mark = _linear(marks, terms) if marks is not None and marks.sizes.get("k", 0) \
+        else (np.array([]), np.array([]))
+    return Orbit(f"node {int(node)}", what, *_linear(ds, terms), *mark, unit="m",
+                 clearance=clearance, mark_t=None if marks is None else marks["t"].values)
+
+
+def orbits(ds: xr.Dataset, x: str | None = None, y: str | None = None,
+           node: int | None = None) -> list[Orbit]:
+    """The orbits of a run: with ``x`` and ``y`` (two state variables) that pair only; with
+    ``node`` (a flexible model's shaft node) that node's only (``node_orbit``); else
     each body's centre (bodies that move in a plane) and each bearing's relative
     displacement, a bearing whose displacement is its body's centre drawn once (as the
     bearing, with its clearance). ``InputError`` naming a variable the run lacks, or a
     run with no planar motion."""
+    if node is not None:
+        if x is not None or y is not None:
+            raise InputError("--node: draws one shaft node's orbit; give --node or --var, "
+                             "not both")
+        return [node_orbit(ds, node)]
     names = state_names(ds)
     marks = revolution_marks(ds)
     if x is not None or y is not None:
@@ -145,4 +191,4 @@ def orbits(ds: xr.Dataset, x: str | None = None, y: str | None = None) -> list[O
     return out
 
 
-__all__ = ["Orbit", "orbits", "revolution_marks"]
+__all__ = ["Orbit", "node_orbit", "node_terms", "orbits", "revolution_marks"]
