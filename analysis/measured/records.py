@@ -140,6 +140,9 @@ def _check_file(path: Path) -> None:
 
     if not path.exists():
         raise InputError(f"record: '{path}' {broken_link(path) or 'does not exist'}")
+    if path.is_dir():
+        raise InputError(f"record: '{path}' is a folder, not a result file or a measured "
+                         "record (diagnose takes a folder of records)")
     if not path.is_file():
         raise InputError(f"record: '{path}' is not a plain file")
 
