@@ -4,11 +4,11 @@ misleads)."""
 
 from __future__ import annotations
 
-import re
-import shlex
 from pathlib import Path
 
 import pytest
+
+from tests.docs.pages import page_commands
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "first-study.md"
 
@@ -32,16 +32,6 @@ EXPECT = {
     "spectrum": ["holds the structural resonance at 8000 Hz", "BPFO"],
 }
 """Per command: what its output must hold."""
-
-
-def page_commands(text: str) -> list[list[str]]:
-    """The ``bearingdyn`` commands of the page's bash blocks, continuation lines joined."""
-    out = []
-    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        for line in block.replace("\\\n", " ").splitlines():
-            if line.strip().startswith("bearingdyn "):
-                out.append(shlex.split(line.split("#")[0])[1:])
-    return out
 
 
 def key_of(args: list[str], table: dict) -> str:

@@ -4,14 +4,13 @@ the page shows; its figures are written to a temporary folder, not over the page
 
 from __future__ import annotations
 
-import re
-import shlex
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from tests.conftest import ROOT
+from tests.docs.pages import page_commands
 
 PAGE = ROOT / "docs" / "measured-signals.md"
 CWRU = ROOT.parent / "shared" / "data" / "cwru"
@@ -31,16 +30,6 @@ EXPECT = {
     "--json": ['"verdict": "inner-race"', '"bsf_convention"'],
 }
 """Per command (a piece of its text): what its output must hold."""
-
-
-def page_commands(text: str) -> list[list[str]]:
-    """The ``bearingdyn`` commands of the page's bash blocks, continuation lines joined."""
-    out = []
-    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        for line in block.replace("\\\n", " ").splitlines():
-            if line.strip().startswith("bearingdyn "):
-                out.append(shlex.split(line.split("#")[0])[1:])
-    return out
 
 
 def test_the_page_has_its_commands_and_figures():

@@ -5,12 +5,12 @@ the records are not beside the checkout (``../shared/data/cwru``)."""
 from __future__ import annotations
 
 import re
-import shlex
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import ROOT
+from tests.docs.pages import page_commands
 
 PAGE = ROOT / "docs" / "model-vs-measurement.md"
 DATA = Path(ROOT).parent / "shared" / "data" / "cwru"
@@ -27,16 +27,6 @@ EXPECT = [
     ["verdict: inner-race", "model check: 6205-inner-defect", "BPFI                5.401"],
 ]
 """Per command of the page, in its order: what its output must hold."""
-
-
-def page_commands(text: str) -> list[list[str]]:
-    """The ``bearingdyn`` commands of the page's bash blocks, continuation lines joined."""
-    out = []
-    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        for line in block.replace("\\\n", " ").splitlines():
-            if line.strip().startswith("bearingdyn "):
-                out.append(shlex.split(line.split("#")[0])[1:])
-    return out
 
 
 def shrink(args: list[str]) -> list[str]:
