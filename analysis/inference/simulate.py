@@ -268,13 +268,22 @@ def check_steps(model: Model, target: Target, corners: Sequence[dict[str, float]
             field = "--dt" if settings.dt is not None else f"model '{model.name}'"
             raise InputError(f"{field}: at {row.name()}: {exc}") from None
         for corner in corners:
-            system = base.replace(**corner)
-            h, _ = settings.steps(system)
-            try:
-                RunPlan.step(system, h, warn=lambda message: None)
-            except InputError as exc:
-                shown = ", ".join(f"{k} = {v:g}" for k, v in corner.items())
-                raise InputError(f"--prior: at {shown} ({row.name()}): {exc}") from None
+            check_corner_step(base, corner, settings, "--prior", row.name())
+
+
+def check_corner_step(base: System, corner: dict[str, float], settings: RunSettings,
+                      field: str, where: str) -> None:
+    """``InputError`` naming ``field``, the corner and ``where`` unless ``base`` with the
+    ``corner``'s values has an RK4 step (``settings.steps``) that ``RunPlan.step`` accepts:
+    a calibration's priors and an uncertainty study's distributions are judged at their
+    corners before any work."""
+    system = base.replace(**corner)
+    h, _ = settings.steps(system)
+    try:
+        RunPlan.step(system, h, warn=lambda message: None)
+    except InputError as exc:
+        shown = ", ".join(f"{k} = {v:g}" for k, v in corner.items())
+        raise InputError(f"{field}: at {shown} ({where}): {exc}") from None
 
 
 def member_steps(target: Target, settings: RunSettings, model: Model) -> int:

@@ -38,6 +38,7 @@ import xarray as xr
 from analysis.errors import InputError
 from analysis.inference.simulate import (
     RunSettings,
+    check_corner_step,
     classify_member,
     member_record,
     run_engine,
@@ -115,7 +116,6 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
     values, ``--set``), the swept ``param`` (NAME, values) or ``n_balls`` (exactly one of
     them), ``samples`` >= 1, the run settings, and the RK4 step at both ends of every
     distribution at the first and last swept value."""
-    from analysis.integrate.plan import RunPlan
 
     mdl = load_model(model) if not isinstance(model, Model) else model
     sets = {str(k): float(v) for k, v in (sets or {}).items()}
@@ -154,13 +154,7 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
     for value in dict.fromkeys((values[0], values[-1])):
         base = study.system(value)
         for end in ends:
-            system = base.replace(**end)
-            h, _ = settings.steps(system)
-            try:
-                RunPlan.step(system, h, warn=lambda message: None)
-            except InputError as exc:
-                shown = ", ".join(f"{k} = {v:g}" for k, v in end.items())
-                raise InputError(f"--dist: at {shown} ({axis} = {value:g}): {exc}") from None
+            check_corner_step(base, end, settings, "--dist", f"{axis} = {value:g}")
     return study
 
 
