@@ -109,3 +109,12 @@ def run_period_parameter(attrs: Mapping) -> str | None:
     it the parameter ``forcing_period``; None when the run has no such parameter."""
     name = str(attrs.get("forcing_parameter", LEGACY_ROLES["forcing_period"][0]))
     return name if name in attrs else None
+
+
+def run_unbalance(attrs: Mapping) -> float:
+    """The value in a run (its attrs) of the parameter that plays the ``unbalance_force``
+    role: the one the attr ``unbalance_parameter`` names (``Frequencies.as_dict``; a
+    shaft's ``unbalance_scale``), else ``unbalance_force``; 0 when the run has neither (no
+    unbalance)."""
+    name = str(attrs.get("unbalance_parameter", LEGACY_ROLES["unbalance_force"][0]))
+    return float(attrs.get(name, 0.0))

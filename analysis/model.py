@@ -184,6 +184,9 @@ class Frequencies:
     forcing_parameter: str = ""
     """The parameter that holds the model's own forcing period (s; the ``forcing_period``
     role), '' without one."""
+    unbalance_parameter: str = ""
+    """The parameter that plays the ``unbalance_force`` role, '' without one (a shaft's
+    ``unbalance_scale``, or ``unbalance_force``)."""
 
     @property
     def cage_hz(self) -> float:
@@ -198,7 +201,9 @@ class Frequencies:
     def as_dict(self) -> dict[str, float | str]:
         """Result-file attributes: ``cage_hz``, ``vc_hz`` with one bearing (or none), else
         ``cage_hz_<bearing>``, ``vc_hz_<bearing>`` per bearing; ``forcing_parameter`` (text)
-        for a model forced at a parameter's period."""
+        for a model forced at a parameter's period; ``unbalance_parameter`` (text) when a
+        parameter other than ``unbalance_force`` plays that role (a shaft's
+        ``unbalance_scale``: ``analysis.forcing.run_unbalance``)."""
         out: dict[str, float | str] = {"shaft_hz": self.shaft_hz}
         if len(self.vc) <= 1:
             out.update(cage_hz=self.cage_hz, vc_hz=self.vc_hz)
@@ -212,6 +217,8 @@ class Frequencies:
                         for key, value in fault.as_dict().items()})
         if self.forcing_parameter:
             out["forcing_parameter"] = self.forcing_parameter
+        if self.unbalance_parameter not in ("", LEGACY_ROLES["unbalance_force"][0]):
+            out["unbalance_parameter"] = self.unbalance_parameter
         return out
 
 
@@ -457,7 +464,8 @@ class Model:
                                                    named.get("contact_angle", 0.0)))
                   for b, n in zip(self.bearing_names, s, strict=True)}
         return Frequencies(shaft_hz=shaft, cage=cage, vc=vc, faults=faults,
-                           forcing_parameter=next(iter(self.role("forcing_period")), ""))
+                           forcing_parameter=next(iter(self.role("forcing_period")), ""),
+                           unbalance_parameter=next(iter(self.role("unbalance_force")), ""))
 
     def centre_indices(self) -> list[tuple[int, int | None]]:
         """State indices (x, y) of every body's centre (y None for a body moving along x)."""

@@ -165,7 +165,8 @@ def _tuple(comment: str, items: list[str]) -> str:
 def parameter_roles(spec: Spec, ctx: Context) -> dict[str, tuple[str, ...]]:
     """Role (``ROLE_NAMES``) -> the parameters that play it, from what the terms read: the
     contact term of each bearing its clearance, ball diameter and Hertz constant, the load
-    terms their loads, an expression its forcing period; in the order of the bodies and
+    terms their loads, an expression its forcing period, a shaft's ``unbalance_scale`` (the
+    factor on its ``[[shaft.unbalances]]``) the unbalance; in the order of the bodies and
     bearings, each parameter once (a role no term plays: an empty tuple)."""
     owners = spec.owner_names()
     found: dict[str, list[tuple[int, str]]] = {role: [] for role in ROLE_NAMES}
@@ -176,6 +177,8 @@ def parameter_roles(spec: Spec, ctx: Context) -> dict[str, tuple[str, ...]]:
             if seen.has(quantity):
                 order = owners.index(scope) if scope in owners else len(owners)
                 found[role].append((order, seen.parameter_name(quantity)))
+    if spec.shaft is not None and spec.shaft.unbalances and "unbalance_scale" in spec.parameters:
+        found["unbalance_force"].append((-1, "unbalance_scale"))  # the shaft's, before terms'
     return {role: tuple(dict.fromkeys(name for _, name in sorted(pairs, key=lambda p: p[0])))
             for role, pairs in found.items()}
 

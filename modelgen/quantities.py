@@ -47,6 +47,9 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity("radial_load", "N", -1.0e7, 1.0e7, r"P_r",
                  "constant radial load, acting in +x"),
         Quantity("unbalance_force", "N", 0.0, 1.0e7, r"P_u", "unbalance force amplitude"),
+        Quantity("unbalance_scale", "1", 0.0, 1.0e3, r"s_u",
+                 "factor on a shaft's unbalance forces m e ω² ([[shaft.unbalances]]; 0: a "
+                 "balanced shaft)"),
         Quantity("inner_race_diameter", "m", 0.0, 10.0, r"D_i", "inner race (groove) diameter",
                  low_inclusive=False),
         Quantity("outer_race_diameter", "m", 0.0, 10.0, r"D_o", "outer race (groove) diameter",

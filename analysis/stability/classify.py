@@ -38,7 +38,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.forcing import run_period_parameter
+from analysis.forcing import run_period_parameter, run_unbalance
 from analysis.provenance import state_at, state_names, system_of_attrs
 from analysis.signal.poincare import poincare_section
 
@@ -193,7 +193,7 @@ def default_section(ds: xr.Dataset | Mapping) -> str:
     parameter (e.g. ``mathieu``); else 'shaft' (unbalance, several bearings, or e.g.
     ``duffing``). ``ds``: a run, or its attrs."""
     attrs = ds.attrs if isinstance(ds, xr.Dataset) else ds
-    unbalanced = attrs.get("unbalance_force", 0.0) != 0.0
+    unbalanced = run_unbalance(attrs) != 0.0
     forcing = run_period_parameter(attrs)  # the forcing_period role
     case = forcing_case(_bearings_of_attrs(attrs), unbalanced, forcing is not None)
     if case == "one bearing, no unbalance" and not attrs.get("vc_hz", 0.0) > 0:
@@ -338,7 +338,7 @@ def classify_section(
         return Classification(f"periodic-{n}", f"{n} distinct point(s) on the {section} "
                               "section", section, len(points), period=n)
     ratio = None
-    two_forcings = attrs.get("unbalance_force", 0.0) > 0 and attrs.get("vc_hz", 0) > 0
+    two_forcings = run_unbalance(attrs) > 0 and attrs.get("vc_hz", 0) > 0
     if two_forcings and section == "shaft":
         ratio = graph_ratio(points, np.mod(pts.t.values * attrs["vc_hz"], 1.0))
         if ratio < GRAPH_RATIO:
@@ -391,7 +391,7 @@ def forcing_frequencies(attrs: Mapping) -> dict[str, float]:
         f"VC[{k.removeprefix('vc_hz_')}]": float(v) for k, v in attrs.items()
         if str(k).startswith("vc_hz_")}
     found: dict[str, float] = {}
-    if shaft > 0 and (float(attrs.get("unbalance_force", 0.0)) != 0.0
+    if shaft > 0 and (run_unbalance(attrs) != 0.0
                       or (_bearings_of_attrs(attrs) == 0 and not period > 0)):
         found["X"] = shaft
     found.update({k: v for k, v in vc.items() if v > 0})

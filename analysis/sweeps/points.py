@@ -40,6 +40,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import InputError, SimulationError
+from analysis.forcing import run_unbalance
 from analysis.integrate.compiled import (
     CompileError,
     Runner,
@@ -512,7 +513,7 @@ def _kernel_rows(points: list[_KernelPoint], out, rows: list[int]) -> list[dict]
     period = np.array([p.period for p in points])
     times = np.stack([(0.0 + np.arange(p.first, p.first + p.count)) * p.period
                       for p in points])
-    graph = np.array([a.get("unbalance_force", 0.0) > 0 and a.get("vc_hz", 0) > 0
+    graph = np.array([run_unbalance(a) > 0 and a.get("vc_hz", 0) > 0
                       and str(p.section) == "shaft" for a, p in zip(attrs, points,
                                                                    strict=True)])
     vc_hz = np.array([float(a.get("vc_hz", 0)) for a in attrs])

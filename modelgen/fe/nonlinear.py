@@ -10,7 +10,8 @@ T^T M T = diag(m)) the equations are
 
 with K_r, C_r, G_r the projected stiffness (shaft and linear bearings), damping and
 gyroscopic matrices (numbers baked into the generated code), ω = π/30 · ``speed_rpm`` (a
-parameter), f the unbalances (m e ω² (cos(ωt + φ), sin(ωt + φ)) at their nodes) and the body
+parameter), f the unbalances (s_u m e ω² (cos(ωt + φ), sin(ωt + φ)) at their nodes, s_u the
+parameter ``unbalance_scale`` when the spec declares it, else 1) and the body
 terms at nodes (``radial_load`` … with ``body = "node<K>"``). A ball bearing at node K sees
 the node's translation (x_K, y_K) = T_K q as its inner race's centre, so its contact,
 clearance, centrifugal, varying-compliance and defect terms act unchanged: its station map
@@ -195,9 +196,10 @@ class FlexibleEquations(Equations):
                             if red.gyroscopic[j, k] != 0))
             forces.append(elastic + viscous + omega * gyro)
         assert self.spec.shaft is not None
+        scale = self.ctx.p("unbalance_scale") if self.ctx.has("unbalance_scale") else 1
         for u in self.spec.shaft.unbalances:
             angle = omega * t + _number(u.phase)
-            amplitude = _number(u.magnitude) * omega**2
+            amplitude = scale * _number(u.magnitude) * omega**2
             self._spread(u.node, amplitude * sp.cos(angle), amplitude * sp.sin(angle), forces)
         for term in self.spec.terms:
             body = self.spec.attachment(term).get("body")
@@ -292,7 +294,8 @@ def latex_lines(spec: Spec) -> list[str]:
              r" - \sum_b T_b^\top \sum_{i=1}^{N_b} Q^{(b)}_i (\cos\theta^{(b)}_i, "
              r"\sin\theta^{(b)}_i)^\top",
              r"u = T q \quad (u:\ x, y, \alpha, \beta \text{ of every node})",
-             r"f(t) = m e\, \omega^2 (\cos(\omega t + \varphi), "
+             r"f(t) = " + (r"s_u\, " if "unbalance_scale" in spec.parameters else "")
+             + r"m e\, \omega^2 (\cos(\omega t + \varphi), "
              r"\sin(\omega t + \varphi)) \text{ at each unbalance's node}"]
     theta = sp.Symbol(r"\theta_i", real=True)
     for bearing in eq.bearings:

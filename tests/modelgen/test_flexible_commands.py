@@ -2,10 +2,10 @@
 two ball bearings) unchanged: smoke runs at tiny settings, each exit 0 with a result file
 that names the model and holds what its settings asked for.
 
-The rotor's unbalance is part of its shaft (not a parameter), so its forcing has the
-frequencies X and VC (50 and 159.5 Hz at 3000 rpm), incommensurate: a VC-periodic orbit
-here is the one-period map's fixed point from t = 0, which these smoke runs do not read as
-physics (see the report of issue 38).
+The rotor's unbalance (its shaft's, scaled by ``unbalance_scale``, default 1) gives its
+forcing the frequencies X and VC (50 and 159.5 Hz at 3000 rpm), incommensurate: a
+VC-periodic orbit here is the one-period map's fixed point from t = 0, which these smoke
+runs do not read as physics (see the report of issue 38).
 """
 
 from __future__ import annotations
