@@ -31,9 +31,9 @@ def _register() -> Any:
     from analysis.cli import waterfall  # noqa: F401  (run-ups: waterfall, orders)
     from analysis.cli import calibrate  # noqa: F401  (inference: calibrate)
     from analysis.cli import records  # noqa: F401  (measured records: record info)
+    from analysis.cli import diagnose  # noqa: F401  (measured records: bearing diagnosis)
     from analysis.cli import compare  # noqa: F401  (model against measurement)
     from analysis.cli import uncertainty  # noqa: F401  (regimes under tolerances)
-    from analysis.cli import diagnose  # noqa: F401  (measured records: bearing diagnosis)
     from analysis.cli import linear, import_ross  # noqa: F401  (campbell, unbalance, import-ross)
     # isort: on
     return app
