@@ -99,7 +99,9 @@ class ProcessExecutor:
                         continue
                     yield tasks[i], result
             except BaseException:  # Ctrl-C, an error, a consumer that stopped: the tasks
-                pool.shutdown(wait=False, cancel_futures=True)  # not started are dropped
+                # not started are dropped; the running ones end and the workers with them
+                # (they hold inherited descriptors, e.g. the store's lock, until they exit)
+                pool.shutdown(wait=True, cancel_futures=True)
                 raise
             pool.shutdown()
             for i in broken:
