@@ -6,17 +6,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
 from typer.testing import CliRunner
 
 from tests.conftest import ROOT
 from tests.docs.pages import page_commands
+from tests.measured.cwru import needs_cwru
 
 PAGE = ROOT / "docs" / "measured-signals.md"
-CWRU = ROOT.parent / "shared" / "data" / "cwru"
-needs_cwru = pytest.mark.skipif(not (CWRU / "12k_Drive_End_IR007_0_105.mat").exists(),
-                                reason=f"the CWRU records are not in {CWRU} (a checkout "
-                                       "without ../shared/data/cwru)")
 
 EXPECT = {
     "12k_Drive_End_IR007_0_105.mat --channel DE --bearing 6205-cwru -o":

@@ -18,6 +18,7 @@ from analysis.integrate.simulate import simulate
 from analysis.measured.compare import SPECTRA, compare, differentiate
 from analysis.measured.records import read_record
 from tests.conftest import ROOT
+from tests.measured.cwru import IR, needs_cwru
 
 RPM = 1797.0
 FS = 12000.0
@@ -226,15 +227,12 @@ def test_the_command_refuses_bad_input_in_one_line(self_record, run_file, tmp_pa
         assert not figure.exists()
 
 
-CWRU = ROOT.parent / "shared" / "data" / "cwru" / "12k_Drive_End_IR007_0_105.mat"
-
-
-@pytest.mark.skipif(not CWRU.exists(), reason=f"the CWRU records are not in {CWRU.parent}")
+@needs_cwru
 def test_diagnose_model_simulates_the_verdict_s_model_and_compares(tmp_path):
     """diagnose --model auto on the CWRU inner-race record: the inner-defect model at the
     record's speed, 12 kHz, the CWRU 6205's geometry and a resonance in the diagnosis's band;
     BPFI and its X sidebands shared. A folder with --model is refused in one line."""
-    done = invoke("diagnose", CWRU, "--channel", "DE", "--bearing", "6205-cwru", "--model",
+    done = invoke("diagnose", IR, "--channel", "DE", "--bearing", "6205-cwru", "--model",
                   "auto", "--json")
     assert done.exit_code == 0, done.output
     report = json.loads(done.stdout[done.stdout.index("{"):])

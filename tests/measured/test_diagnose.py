@@ -30,14 +30,8 @@ from analysis.measured import evidence as ev
 from analysis.measured.bearings import lookup
 from analysis.measured.diagnose import Job, diagnose, diagnose_folder, diagnose_signal
 from analysis.measured.records import read_record
-from tests.conftest import ROOT
+from tests.measured.cwru import BALL, CWRU, IR, OR, needs_cwru
 
-CWRU = ROOT.parent / "shared" / "data" / "cwru"
-IR = CWRU / "12k_Drive_End_IR007_0_105.mat"
-OR = CWRU / "12k_Fan_End_OR007@6_0_294.mat"
-BALL = CWRU / "12k_Drive_End_B028_0_3005.mat"
-needs_cwru = pytest.mark.skipif(not IR.exists(), reason=f"the CWRU records are not in {CWRU} "
-                                "(a checkout without ../shared/data/cwru)")
 FS = 12000.0
 SHAFT = 1797 / 60
 RACES = ("outer-race", "inner-race")

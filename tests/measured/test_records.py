@@ -23,14 +23,8 @@ from analysis.measured.records import (
     tacho_pulses,
     to_si,
 )
-from tests.conftest import ROOT
+from tests.measured.cwru import BALL, IR, OR, needs_cwru
 
-CWRU = ROOT.parent / "shared" / "data" / "cwru"
-IR = CWRU / "12k_Drive_End_IR007_0_105.mat"
-OR = CWRU / "12k_Fan_End_OR007@6_0_294.mat"
-BALL = CWRU / "12k_Drive_End_B028_0_3005.mat"
-needs_cwru = pytest.mark.skipif(not IR.exists(), reason=f"the CWRU records are not in {CWRU} "
-                                "(a checkout without ../shared/data/cwru)")
 FS = 2000.0
 N = 1000
 
