@@ -95,27 +95,9 @@ def basin_entropy(labels: np.ndarray, box: int = BOX) -> tuple[float, float, flo
     return sb, sbb, float(boundary.mean())
 
 
-def uncertain_fraction(labels: np.ndarray, epsilon: int) -> float:
-    """The fraction of ε-uncertain states of a labelled grid (``epsilon`` in cells; among
-    the states whose four neighbours at ε lie on the grid)."""
-    grid = _grid(labels)
-    e = int(epsilon)
-    ny, nx = grid.shape
-    if e < 1 or 2 * e >= min(ny, nx):
-        raise InputError(f"epsilon: must be from 1 to {(min(ny, nx) - 1) // 2} cells for "
-                         f"this grid, got {epsilon!r}")
-    core = grid[e:ny - e, e:nx - e]
-    shifted = (grid[:ny - 2 * e, e:nx - e], grid[2 * e:, e:nx - e],
-               grid[e:ny - e, :nx - 2 * e], grid[e:ny - e, 2 * e:])
-    uncertain = np.zeros(core.shape, dtype=bool)
-    for other in shifted:
-        uncertain |= other != core
-    return float(uncertain.mean())
-
-
-def uncertain_fraction_edges(labels: np.ndarray, epsilon: int) -> float:
-    """The fraction of ε-uncertain states over every state of a labelled grid, each
-    compared with those of its four neighbours at ε (cells) that lie on the grid."""
+def _uncertain(labels: np.ndarray, epsilon: int) -> tuple[np.ndarray, int]:
+    """(mask, ε): each state of a labelled grid marked when one of its four neighbours at
+    ε cells that lie on the grid has another label."""
     grid = _grid(labels)
     e = int(epsilon)
     ny, nx = grid.shape
@@ -127,6 +109,20 @@ def uncertain_fraction_edges(labels: np.ndarray, epsilon: int) -> float:
     uncertain[:-e, :] |= grid[:-e, :] != grid[e:, :]
     uncertain[:, e:] |= grid[:, e:] != grid[:, :-e]
     uncertain[:, :-e] |= grid[:, :-e] != grid[:, e:]
+    return uncertain, e
+
+
+def uncertain_fraction(labels: np.ndarray, epsilon: int) -> float:
+    """The fraction of ε-uncertain states of a labelled grid (``epsilon`` in cells; among
+    the states whose four neighbours at ε lie on the grid)."""
+    uncertain, e = _uncertain(labels, epsilon)
+    return float(uncertain[e:-e, e:-e].mean())
+
+
+def uncertain_fraction_edges(labels: np.ndarray, epsilon: int) -> float:
+    """The fraction of ε-uncertain states over every state of a labelled grid, each
+    compared with those of its four neighbours at ε (cells) that lie on the grid."""
+    uncertain, _ = _uncertain(labels, epsilon)
     return float(uncertain.mean())
 
 
