@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -91,8 +92,7 @@ def _finite(value, replaced: list[bool]):
     converted = plain(value)
     if isinstance(converted, list):
         return _finite(converted, replaced)
-    if (isinstance(converted, float) and converted != converted) or converted in (
-            float("inf"), float("-inf")):
+    if isinstance(converted, float) and not math.isfinite(converted):
         replaced[0] = True
         return None
     return converted
