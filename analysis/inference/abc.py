@@ -62,6 +62,7 @@ from analysis.inference.simulate import (
 from analysis.inference.targets import Target, TargetRow, class_matches, load_target
 from analysis.integrate.cost import (
     FILE_SECONDS,
+    KERNELS,
     CostEstimate,
     duration_text,
     estimate_cost,
@@ -558,7 +559,20 @@ class CalibrationCost:
                 f"worker(s) = {duration_text(self.host_total)}; in all "
                 f"{duration_text(self.whole_seconds)} with the start-up and probes "
                 f"({self.kernels.spent:.2g} s so far) and the file")
-        return [head, host, *self.kernels.advice()]
+        return [head, host, *self.kernels.load_lines(), *self.kernels.advice()]
+
+
+def kernel_steps(target: Target, settings: RunSettings, model: Model) -> tuple[int, int]:
+    """(RK4 steps, those of them with λ1's tangent) one parameter set takes over every row
+    of ``target``: each row's transient (state only), then its record (with the tangent,
+    ``simulate.run_engine``)."""
+    steps = tangent = 0
+    for row in target.rows:
+        _, every = settings.steps(row_system(model, row))
+        per = settings.samples_per_revolution * every
+        steps += per * (settings.transient_revolutions + settings.revolutions)
+        tangent += per * settings.revolutions
+    return steps, tangent
 
 
 def problem_cost(problem: Problem, workers: int | None = None,
@@ -566,8 +580,9 @@ def problem_cost(problem: Problem, workers: int | None = None,
     """The cost of a prepared calibration, from two timed probes at the first target row
     and the centre of the priors. The member kernels (``analysis.integrate.cost``): its
     parameter sets over every round (samples × rounds) are the members, each taking
-    ``member_steps`` RK4 steps (every row's transient and record, the tangent over the
-    record counted as one more member), with that row's step, on ``workers`` cores (None:
+    ``kernel_steps`` RK4 steps (every row's transient and record, the record's steps with
+    the tangent counted by its measured cost), with that row's step, timed on the member
+    kernels that run them (``estimate_cost`` on ``KERNELS``), on ``workers`` cores (None:
     every core, ``kernels.cpu.cores``). The host: each run (a set at a row) classified and
     its lines named (``simulate.classify_seconds``) on ``host_workers`` processes (1 for the
     serial executor, the workers of a pool). On a GPU the kernels run faster than this."""
@@ -579,9 +594,10 @@ def problem_cost(problem: Problem, workers: int | None = None,
     row = problem.target.rows[0]
     system = row_system(problem.model, row).replace(**values)
     h, _ = opts.settings.steps(system)
-    steps = member_steps(problem.target, opts.settings, problem.model)
+    steps, tangent = kernel_steps(problem.target, opts.settings, problem.model)
     kernels = estimate_cost(system, opts.samples * opts.rounds, steps, dt=h,
-                            workers=workers or cores(), what="parameter sets")
+                            workers=workers or cores(), what="parameter sets", path=KERNELS,
+                            tangent_steps=tangent)
     kernels = dataclasses.replace(kernels, coarsest_dt=accepted_dt(problem,
                                                                    kernels.coarsest_dt))
     host = classify_seconds(problem.model, row, values, opts.settings,

@@ -1,5 +1,5 @@
 """Costs said before they are paid: the RK4 steps a long command will take and about how
-long they will run, from a short timed probe of the compiled path.
+long they will run, from a timed probe of the path that will run them.
 
 One module computes the estimate; every long command (chart, basins, attractors, sweep,
 calibrate, torus, hb) calls ``estimate_cost`` with its members (grid points, initial
@@ -8,11 +8,21 @@ states, particles, harmonic-balance points) and the RK4 steps each takes, and pr
 
     seconds = steps per member x members x (measured seconds per RK4 step) / workers,
 
-the seconds per step measured on a few hundred steps of the compiled RK4 blocks of the
-command's own System (the same library ``simulate`` runs; the member kernels of charts and
-basins are of the same order). Where a coarser step (within the run plan's checks: the RK4
-stability limit and 20 steps per period of the fastest forcing) or fewer members would bring
-a long estimate down, ``advice`` says so. Nothing here prints: the command line renders.
+the seconds per step measured on the path the command's steps take (``path``): the member
+kernels (``KERNELS``: charts, no-follow sweeps, basins, attractors, calibrate, uncertainty)
+are timed by ``probe_kernel``, a block of members on one thread of the CPU build, sized to
+about ``KERNEL_PROBE_SECONDS``, the best of two; a step that carries the tangent of λ1 is
+counted by its measured cost (``tangent_step_factor``: 1.66–1.71 state steps on the
+development machine, not 2). The compiled RK4 blocks (``COMPILED``: ``simulate``, a followed
+sweep, the runs of ``hb`` and ``torus``) are timed by ``probe_step_seconds``. The compiled
+probe stood in for the kernels before and was 1.5–5× off (issue 39).
+
+The probe measures the machine as it is: ``os.getloadavg`` and the CPU share the probe got
+are recorded, and on a loaded machine the estimate says so in a line of its own (it assumes
+that load) instead of being silently off. Where a coarser step (within the run plan's
+checks: the RK4 stability limit and 20 steps per period of the fastest forcing) or fewer
+members would bring a long estimate down, ``advice`` says so. Nothing here prints: the
+command line renders.
 """
 
 from __future__ import annotations
@@ -34,6 +44,16 @@ RK4_STEPS = "RK4 steps"
 """The default unit of ``CostEstimate.steps``."""
 LONG = 60.0
 """An estimate above this many seconds comes with advice (a coarser step, fewer members)."""
+KERNELS = "kernels"
+"""``estimate_cost``'s path: the member kernels (``analysis.integrate.kernels``)."""
+COMPILED = "compiled"
+"""``estimate_cost``'s path: the compiled RK4 blocks (``analysis.integrate.compiled``)."""
+KERNEL_PROBE_SECONDS = 0.08
+"""About how long (s) each timed run of the kernel probe lasts (one thread)."""
+KERNEL_PROBE_MEMBERS = 32
+"""Members of the kernel probe's block."""
+BUSY = 0.8
+"""A probe that got less than this share of a core (CPU s / wall s) competed for it."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +89,20 @@ class CostEstimate:
     also: tuple[tuple[str, float], ...] = ()
     """The rest of the command's work, each part named with its expected seconds (files,
     figures, error-estimate solves, λ1, the host's work)."""
+    kernel_note: str = ""
+    """What the probe timed (``member kernel probed``, ``member kernel probed, tangent
+    x1.68 on 60% of the steps``); empty: the compiled RK4 blocks (``probed``)."""
+    load: float | None = None
+    """The 1-minute load average when the probe ran (None: not known)."""
+    cores: int = 0
+    """The cores this process may use (``analysis.threads.thread_count``)."""
+    busy: float | None = None
+    """The share of a core the probe got (CPU s / wall s; None: not measured)."""
+
+    def load_lines(self) -> list[str]:
+        """One line when the probe ran on a loaded machine (the load average above the
+        cores, or a probe that got less than ``BUSY`` of a core), else none."""
+        return load_lines(self.load, self.cores, self.busy)
 
     @property
     def whole_seconds(self) -> float:
@@ -126,11 +160,11 @@ class CostEstimate:
         else:
             expected = (f"expected {'at most ' if self.bound else ''}"
                         f"{duration_text(self.seconds)} on {workers} worker(s) ({each}, "
-                        "probed)")
+                        f"{self.kernel_note or 'probed'})")
         head = (f"estimate: {self.members:,} {self.what} x {steps} {unit} = "
                 f"{self.total_steps:.3g} {total}; {expected}")
         whole = [self.whole_line()] if self.spent or self.also else []
-        return [head, *self.advice(), *whole]
+        return [head, *self.load_lines(), *self.advice(), *whole]
 
     def advice(self) -> list[str]:
         """What would make a long run shorter: a coarser ``--dt`` the plan accepts, fewer
@@ -147,6 +181,39 @@ class CostEstimate:
             found.append(f"hint: {fewer:,} {self.what} instead of {self.members:,} would take "
                          f"{duration_text(self.seconds * fewer / self.members)}")
         return found
+
+
+def load_lines(load: float | None, cores: int, busy: float | None = None) -> list[str]:
+    """``['note: the machine was loaded (load 3.1 on 2 cores): the estimate assumes that
+    load']`` when the 1-minute ``load`` average was above ``cores`` or the probe got less
+    than ``BUSY`` of a core (``busy``), else ``[]``."""
+    over = load is not None and cores > 0 and load > cores
+    competed = busy is not None and busy < BUSY
+    if not (over or competed):
+        return []
+    seen = f"load {load:.1f} on {cores} core{'s' if cores != 1 else ''}" \
+        if load is not None else f"{cores} cores"
+    share = f", the probe got {busy:.0%} of a core" if competed else ""
+    return [f"note: the machine was loaded ({seen}{share}): the estimate assumes that load"]
+
+
+def machine_load() -> float | None:
+    """The 1-minute load average (``os.getloadavg``); None where the system does not say."""
+    try:
+        return float(os.getloadavg()[0])
+    except (OSError, AttributeError):
+        return None
+
+
+def with_load(estimate: CostEstimate, load: float | None = None,
+              busy: float | None = None) -> CostEstimate:
+    """``estimate`` with the machine's load seen now (``load``: given, else
+    ``machine_load()``), the cores this process may use and the probe's share of a core."""
+    from analysis.threads import thread_count
+
+    seen = machine_load() if load is None else float(load)
+    return replace(estimate, load=seen, cores=thread_count(),
+                   busy=estimate.busy if busy is None else busy)
 
 
 FILE_SECONDS = 1.0
@@ -229,39 +296,116 @@ def best_seconds(run: Callable[[], object], repeat: int = 2) -> float:
     return best
 
 
+@dataclass(frozen=True)
+class KernelProbe:
+    """A timed probe of the member kernels of a System (``probe_kernel``)."""
+
+    step_seconds: float
+    """Seconds of one RK4 step of one member (state only), one thread of the CPU build."""
+    tangent_factor: float | None = None
+    """State steps one step with its tangent costs (measured; None: not probed)."""
+    busy: float = 1.0
+    """The share of a core the timed runs got (CPU s / wall s)."""
+
+
+def probe_kernel(system: System, dt: float, *, tangent: bool = False,
+                 members: int = KERNEL_PROBE_MEMBERS, seconds: float = KERNEL_PROBE_SECONDS,
+                 steps: int | None = None, repeat: int = 2) -> KernelProbe | None:
+    """Time the member kernel of ``system`` (and, with ``tangent``, its tangent variant: one
+    tangent vector, renormalised at six sections) as the commands run it: a block of
+    ``members`` members from the System's state on one thread of the CPU build, with RK4
+    steps of ``dt`` s. ``steps`` per member (None: sized by a first run so that each timed
+    run lasts about ``seconds`` s, 120 to 200,000); the best of ``repeat`` runs each way.
+    None when the member kernel cannot be built here (no compiler, an operation its writer
+    does not know)."""
+    from analysis.integrate.compiled import CompileError
+    from analysis.integrate.kernels import Schedule, Unsupported, run_members
+
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"dt: a finite RK4 step > 0 s, got {dt!r}")
+    z = np.tile(np.asarray(system.state, dtype=float), (int(members), 1))
+
+    def schedule(count: int, with_tangent: bool):
+        every = max(1, count // 6)
+        if with_tangent:
+            return Schedule(count - 6 * every, every, 6, tangent=True, keep_sections=False)
+        return Schedule(0, count, 1, keep_sections=False)
+
+    def timed(sched) -> tuple[float, float]:
+        best, cpu = math.inf, 0.0
+        for _ in range(repeat):
+            start, used = time.perf_counter(), time.process_time()
+            run_members(system, z, None, dt, sched, threads=1)
+            wall = time.perf_counter() - start
+            if wall < best:
+                best, cpu = wall, time.process_time() - used
+        return best, cpu
+
+    try:
+        run_members(system, z[:1], None, dt, schedule(12, tangent), threads=1)  # loaded
+        if tangent:
+            run_members(system, z[:1], None, dt, schedule(12, False), threads=1)
+        if steps is None:
+            first = 120
+            size, _ = timed(schedule(first, False))
+            steps = first * seconds / max(size, 1e-6)
+        count = int(min(200_000, max(120, steps)))
+        state, cpu = timed(schedule(count, False))
+        factor, walls, cpus = None, state, cpu
+        if tangent:
+            with_tangent, cpu_t = timed(schedule(count, True))
+            factor = max(1.0, with_tangent / state)
+            walls, cpus = walls + with_tangent, cpus + cpu_t
+    except (Unsupported, CompileError):
+        return None
+    busy = min(1.0, cpus / walls) if walls > 0 else 1.0
+    return KernelProbe(state / (count * len(z)), factor, busy)
+
+
 def tangent_step_factor(system: System, dt: float, members: int = 64,
                         steps: int = 240) -> float | None:
     """How many state steps one RK4 step with its tangent (λ1, the member kernels' tangent
     variant: one Jacobian–vector product per stage) costs for ``system``, timed on one thread
-    of the CPU build: ``members`` members of ``steps`` steps each way, the faster of two runs
-    each. None when the member kernel cannot be built here (the scalar path then carries the
-    tangent's ``n`` columns: ``n + 1``). ``dt``: the RK4 step (s)."""
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels import Schedule, Unsupported, run_members
-
-    z = np.tile(np.asarray(system.state, dtype=float), (members, 1))
-    every = max(1, steps // 6)
-    kinds = (Schedule(0, steps, 1, keep_sections=False),
-             Schedule(steps - 6 * every, every, 6, tangent=True, keep_sections=False))
-    best = []
-    try:
-        for schedule in kinds:
-            run_members(system, z[:1], None, dt, schedule, threads=1)  # loaded
-            best.append(best_seconds(lambda s=schedule: run_members(system, z, None, dt, s,
-                                                                   threads=1)))
-    except (Unsupported, CompileError, InputError):
-        return None
-    return max(1.0, best[1] / best[0])
+    of the CPU build (``probe_kernel``): ``members`` members of ``steps`` steps each way, the
+    faster of two runs each. None when the member kernel cannot be built here (the scalar
+    path then carries the tangent's ``n`` columns: ``n + 1``). ``dt``: the RK4 step (s)."""
+    probe = probe_kernel(system, dt, tangent=True, members=members, steps=steps)
+    return None if probe is None else probe.tangent_factor
 
 
 def estimate_cost(system: System, members: int, steps: int, *, dt: float,
                   workers: int | None = None, what: str = "points",
-                  compiled: bool = True, bound: bool = False) -> CostEstimate:
+                  compiled: bool = True, bound: bool = False, path: str = COMPILED,
+                  tangent_steps: int = 0, load: float | None = None) -> CostEstimate:
     """The cost of ``members`` runs of ``steps`` RK4 steps of ``dt`` s each of ``system``
     (or of systems like it: the points of a grid) on ``workers`` workers (default: the
-    cores), from a timed probe of ``PROBE_STEPS`` steps (about a millisecond compiled)."""
-    seconds = probe_step_seconds(system, dt, compiled=compiled)
-    return CostEstimate(members=int(members), steps=int(steps),
-                        workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
-                        dt=float(dt), coarsest_dt=coarsest_step(system), what=what,
-                        bound=bound, spent=process_seconds())
+    cores), from a timed probe of the ``path`` that runs them: ``KERNELS``, the member
+    kernels (``probe_kernel``; ``tangent_steps`` of the ``steps`` carry λ1's tangent, each
+    counted by the measured ``tangent_factor``), or ``COMPILED``, the compiled RK4 blocks
+    (``probe_step_seconds``, ``PROBE_STEPS`` steps; ``compiled=False``: the CasADi VM).
+    Where the member kernel cannot be built the compiled probe stands in, the tangent as
+    ``n`` more states (the scalar path's columns). ``load``: the 1-minute load average to
+    report (None: read now, ``os.getloadavg``)."""
+    if path not in (KERNELS, COMPILED):
+        raise InputError(f"path: '{KERNELS}' or '{COMPILED}', got {path!r}")
+    if not 0 <= tangent_steps <= steps:
+        raise InputError(f"tangent_steps: a whole number in [0, steps = {steps}], got "
+                         f"{tangent_steps!r}")
+    seen = machine_load() if load is None else float(load)
+    probe = probe_kernel(system, dt, tangent=tangent_steps > 0) if path == KERNELS else None
+    busy, note = None, ""
+    if probe is not None:
+        factor = probe.tangent_factor or 1.0
+        seconds = probe.step_seconds * (1 + (factor - 1) * tangent_steps / max(1, steps))
+        busy, note = probe.busy, "member kernel probed"
+        if tangent_steps:
+            note += (f", tangent x{factor:.2f} on {tangent_steps / max(1, steps):.0%} of the "
+                     "steps")
+    else:  # a millisecond: too short to say the share of a core it got
+        seconds = probe_step_seconds(system, dt, compiled=compiled)
+        seconds *= 1 + system.n_state * tangent_steps / max(1, steps)
+    estimate = CostEstimate(members=int(members), steps=int(steps),
+                            workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
+                            dt=float(dt), coarsest_dt=coarsest_step(system), what=what,
+                            bound=bound, spent=process_seconds(), kernel_note=note)
+    return with_load(estimate, seen, busy)

@@ -4,6 +4,8 @@ counter moves within a block of parameter sets, and an interrupted one says what
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 import analysis.inference.abc as abc
@@ -23,17 +25,30 @@ TINY_CLI = ("--samples", "4", "--rounds", "2", "--transient-revolutions", "10",
 
 
 def test_the_estimate_is_the_probes_arithmetic(monkeypatch):
-    """Probes of 2 µs per RK4 step and 30 ms per classified run: sets × rounds members of
-    ``member_steps`` steps on 4 cores, runs = sets × rounds × rows on 2 host workers."""
-    monkeypatch.setattr(cost, "probe_step_seconds", lambda *args, **kwargs: 2e-6)
+    """Probes of the member kernel, 2 µs per RK4 step and a tangent step of 1.5 state
+    steps, and of 30 ms per classified run: sets × rounds members of ``kernel_steps`` steps
+    (the record's with the tangent at 1.5) on 4 cores, runs = sets × rounds × rows on 2
+    host workers."""
+    seen = []
+
+    def probe(system, dt, **kwargs):
+        seen.append(kwargs)
+        return cost.KernelProbe(2e-6, 1.5 if kwargs.get("tangent") else None)
+
+    monkeypatch.setattr(cost, "probe_kernel", probe)
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *args, **kwargs: math.nan)
     monkeypatch.setattr(abc, "classify_seconds", lambda *args, **kwargs: 0.03)
     est = calibrate_cost("vakharia2015", "paper-table2", PRIORS, samples=6, rounds=3,
                          settings=TINY, workers=4, host_workers=2)
     problem = prepare("vakharia2015", "paper-table2", PRIORS, samples=6, rounds=3,
                       settings=TINY)
-    steps = member_steps(problem.target, TINY, problem.model)
+    steps, tangent = abc.kernel_steps(problem.target, TINY, problem.model)
+    assert seen == [{"tangent": True}], "the member kernel's tangent variant is probed"
+    assert 2 * tangent + (steps - tangent) == member_steps(problem.target, TINY,
+                                                           problem.model)
     assert (est.kernels.members, est.kernels.steps, est.kernels.workers) == (18, steps, 4)
-    assert est.kernels.seconds == pytest.approx(18 * steps * 2e-6 / 4, rel=1e-12)
+    assert est.kernels.seconds == pytest.approx(
+        18 * ((steps - tangent) + 1.5 * tangent) * 2e-6 / 4, rel=1e-12)
     assert est.runs == 18 * 5 and est.host_total == pytest.approx(90 * 0.03 / 2, rel=1e-12)
     assert est.seconds == pytest.approx(est.kernels.seconds + est.host_total, rel=1e-12)
     head, host, *_ = est.lines()
