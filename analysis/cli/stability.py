@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 
 from analysis.cli.common import (
@@ -92,6 +91,8 @@ def unresolved_warning(value: float, ci95: float, duration: float) -> str | None
     value (the interval shrinks as 1/sqrt(duration)); None when it is resolved."""
     if not ci95 > abs(value):
         return None
+    import numpy as np
+
     if value == 0 or not np.isfinite(ci95):
         need = "a much longer run"
     else:
@@ -104,6 +105,8 @@ def unresolved_warning(value: float, ci95: float, duration: float) -> str | None
 def _running_json(running, dim: str) -> dict:
     """``{"t": [...], "exponents": [[λ1, λ2, …] per time]}`` of a running estimate (1/s
     over s), thinned evenly to at most ``RUNNING_ROWS`` rows (the last kept)."""
+    import numpy as np
+
     size = running.sizes[dim]
     keep = np.unique(np.linspace(0, size - 1, min(size, RUNNING_ROWS)).round().astype(int)) \
         if size else np.array([], dtype=int)
@@ -159,6 +162,8 @@ def floquet(
         return
     typer.echo(f"{orbit.model}, {orbit_structure(orbit)}, period {orbit.period} = "
                f"{orbit.period_s:.6g} s ({orbit.n_steps} RK4 steps): {orbit.message}")
+    import numpy as np
+
     names = getattr(orbit, "state_names", ()) or ()
     typer.echo(f"z0 = {np.array2string(orbit.z0, precision=6)}"
                + (f" ({', '.join(names)})" if names else " (m, m/s)")

@@ -7,7 +7,6 @@ import math
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 
 from analysis.cli.common import (
@@ -30,6 +29,8 @@ from analysis.errors import InputError, check_count
 
 def parse_speeds(text: str) -> list[float]:
     """``"1000:10000:10"`` (10 speeds from 1000 to 10000 rpm) or ``"1000,5000,8000"`` -> rpm."""
+    import numpy as np
+
     try:
         if ":" in text:
             start, stop, count = text.split(":")
@@ -108,6 +109,8 @@ def stiffness(
     """Static equilibrium under the constant loads (velocities 0, cage held), and the
     stiffness K = -dF/dq and damping C = -dF/dq' matrices: at cage angle 0, over one ball
     pitch and averaged over it."""
+    import numpy as np
+
     from analysis.model import as_system
     from analysis.stability.statics import (
         balls_in_contact,
