@@ -14,7 +14,8 @@ every core, each member's numbers those of the scalar step); without it (``compi
 an operation the kernel writer does not know, no compiler, a failed self-test) one by one
 through the RK4 blocks, with the same results. ``device="gpu"`` runs them in the kernel's
 CUDA build instead (the same C text, equal to the CPU build to the last bits of CUDA's libm),
-``"auto"`` there when the ensemble is wide enough (``kernels.resolve_device``).
+``"auto"`` there when the ensemble is wide enough; the device is judged once per call
+(``kernels.placement.place``: a ``Placement``, which every level below takes as it is).
 
 - ``StroboscopicMap``: the System sampled once per forcing period T, z_{j+1} = F(z_j) with
   N fixed RK4 steps of h = T/N; ``advance`` moves K rows ``[z, k]`` by whole periods.
@@ -38,9 +39,9 @@ from analysis.errors import InputError
 from analysis.integrate.checks import check_start
 from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
-from analysis.integrate.kernels.devices import resolve_device
 from analysis.integrate.kernels.members import Schedule, unbuildable
 from analysis.integrate.kernels.members import run_members as run_kernel
+from analysis.integrate.kernels.placement import Placement, place
 from analysis.integrate.kernels.source import Unsupported
 from analysis.integrate.plan import RunPlan, check_memory
 from analysis.integrate.simulate import bad_states, blow_up_limit
@@ -68,20 +69,25 @@ def run_scalar(lib: Library, p: np.ndarray, h: float, s: np.ndarray, n_out: int,
     return out
 
 
-def device_of(device: str, members: int, steps: int, compiled: bool = True) -> str:
-    """``"cpu"`` or ``"gpu"``: ``device`` (``cpu``, ``gpu`` or ``auto``) resolved for
-    ``members`` members of ``steps`` RK4 steps (``kernels.resolve_device``; ``InputError``
-    for another name or ``gpu`` without CuPy or a GPU). ``compiled=False`` (the CasADi
-    virtual machine) runs on the CPU: ``auto`` is then ``cpu``, ``gpu`` an ``InputError``."""
-    resolved = resolve_device(device, members, steps)
-    if not compiled and device == "gpu":
+def device_of(device: str | Placement, members: int, steps: int,
+              compiled: bool = True) -> Placement:
+    """The ``Placement`` of ``members`` members of ``steps`` RK4 steps on ``device``
+    (``cpu``, ``gpu`` or ``auto``: ``kernels.placement.place``, ``DeviceError`` for another
+    name or ``gpu`` without CuPy or a GPU; a ``Placement`` is kept as it is).
+    ``compiled=False`` (the CasADi virtual machine) runs on the CPU: ``auto`` is then
+    ``cpu``, ``gpu`` an ``InputError``."""
+    placed = place(device, members, steps=steps)
+    if compiled or not placed.gpu:
+        return placed
+    if placed.asked == "gpu":
         raise InputError("device: 'gpu' runs the compiled member kernel; compiled=False runs "
                          "on the CPU (device='cpu' or 'auto')")
-    return resolved if compiled else "cpu"
+    return placed.on_cpu()
 
 
 def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_out: int,
-                every: int, compiled: bool = True, device: str = "cpu") -> np.ndarray:
+                every: int, compiled: bool = True,
+                device: str | Placement = "cpu") -> np.ndarray:
     """``n_out · every`` RK4 steps of every member of ``system``'s model and balls: ``p``
     (K × n_par) and ``h`` (K, s) per member, ``s`` (K × (n + 1) rows ``[z, k]``, changed in
     place), step k from ``k·h``. Returns (K, n_out, n): each member's z after every
@@ -89,7 +95,8 @@ def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_o
 
     Compiled: all members in one call of the member kernel (``kernels.run_members``; a
     member that blows up stops there, its later states NaN, its row the first bad state)
-    on ``device`` (``device_of``): ``cpu``, the CPU build on every core; ``gpu``, the CUDA
+    on ``device`` (``device_of``; a ``Placement`` as it is): ``cpu``, the CPU build on
+    every core; ``gpu``, the CUDA
     build (``InputError`` naming the reason when the model's kernel cannot be written or
     built); ``auto``, the GPU for wide ensembles. On the CPU without a kernel
     (``compiled=False``, an operation the writer does not know, no compiler) member by
@@ -105,8 +112,8 @@ def run_members(system: System, p: np.ndarray, h: np.ndarray, s: np.ndarray, n_o
             out = run_kernel(system, s[:, :n], p, h, Schedule(0, every, n_out), k0=s[:, n],
                              device=device)
         except (Unsupported, CompileError) as exc:
-            if device == "gpu":
-                raise unbuildable(system, device, exc) from None
+            if device.gpu:
+                raise unbuildable(system, device.kind, exc) from None
             out = None
     if out is None:
         result = np.empty((k, n_out, n))
@@ -146,13 +153,13 @@ class StroboscopicMap:
     non-finite values count)."""
     compiled: bool = True
     """Run compiled C (the RK4 blocks' cache); False: the CasADi virtual machine."""
-    device: str = "cpu"
-    """Where ``advance`` runs the members: ``cpu``, ``gpu`` or ``auto`` (resolved per call
-    by its members and steps: ``device_of``)."""
+    device: str | Placement = "cpu"
+    """Where ``advance`` runs the members: a ``Placement`` (kept), or ``cpu``, ``gpu`` or
+    ``auto`` (placed per call by its members and steps: ``device_of``)."""
 
     @classmethod
     def make(cls, system: System, period: str | Period, dt: float | None = None,
-             compiled: bool = True, device: str = "cpu") -> StroboscopicMap:
+             compiled: bool = True, device: str | Placement = "cpu") -> StroboscopicMap:
         """The map of ``system`` over ``period`` (a ``Period`` or its name: ``vc``,
         ``shaft``, ``vc[left]:4``, ``ratio:p/q``, ``param:NAME``; required here, since the
         default period's rule lives in ``analysis.stability``, a layer above:
@@ -161,8 +168,11 @@ class StroboscopicMap:
         finite and > 0, resolving the fastest forcing, RK4-stable; ``InputError``
         otherwise). ``device``: ``cpu``, ``gpu`` or ``auto`` (``device_of``; checked here:
         ``InputError`` for another name, for ``gpu`` without CuPy or a GPU, or with
-        ``compiled=False``)."""
-        device_of(device, 1, 1, compiled)
+        ``compiled=False``; ``cpu`` and ``gpu`` are kept as their ``Placement``, ``auto``
+        is placed by each call's members)."""
+        placed = device_of(device, 1, 1, compiled)
+        if isinstance(device, str) and device != "auto":
+            device = placed  # judged: advance takes it as it is (auto: per call's members)
         per = period if isinstance(period, Period) else Period.parse(period)
         per.check(system.model)
         plan = RunPlan.step(system, dt)
@@ -232,7 +242,7 @@ def ensemble(system: System, states: np.ndarray | None = None,
              duration: float | None = None, *,
              parameters: Sequence[Mapping[str, float]] | None = None,
              dt: float | None = None, save_every: int = 1,
-             compiled: bool = True, device: str = "cpu") -> xr.Dataset:
+             compiled: bool = True, device: str | Placement = "cpu") -> xr.Dataset:
     """K runs of ``system`` from t = 0 (no transient), one per member.
 
     ``states`` (K, n): the members' initial states (SI units; None: the system's);
@@ -243,8 +253,9 @@ def ensemble(system: System, states: np.ndarray | None = None,
     member kernel's CPU build on every core), ``"gpu"`` (its CUDA build: CuPy and a visible
     GPU, ``pip install bearingdyn[gpu]``) or ``"auto"`` (the GPU from
     ``kernels.devices.AUTO_MIN_MEMBERS`` members and ``AUTO_MIN_STEPS`` member-steps, else
-    the CPU); any other value, or ``gpu`` without CuPy or a GPU, is an ``InputError`` of one
-    line before anything runs.
+    the CPU), judged once (``device_of``; a ``Placement`` is taken as it is); any other
+    value, or ``gpu`` without CuPy or a GPU, is an ``InputError`` of one line before
+    anything runs.
 
     Returns a Dataset over (member, t): one variable per state (units as ``simulate``'s),
     ``diverged_at`` (member; s): the time of the first saved sample that is not finite or

@@ -52,11 +52,11 @@ from analysis.integrate.kernels import (
     Schedule,
     Unsupported,
     blow_up_error,
-    resolve_device,
     run_members,
     section_step,
 )
 from analysis.integrate.kernels.members import check_kernels
+from analysis.integrate.kernels.placement import Placement, place
 from analysis.integrate.plan import RunPlan, check_times
 from analysis.integrate.simulate import (
     blow_up_limit,
@@ -396,43 +396,39 @@ def grid_balls(setting: Setting, axes: Sequence[Axis]) -> list[System]:
     return list(systems.values())
 
 
-def check_grid_kernels(setting: Setting, axes: Sequence[Axis], device: str,
+def check_grid_kernels(setting: Setting, axes: Sequence[Axis], device: str | Placement,
                        tangent: bool = False) -> None:
-    """Build (or load) the member kernels of every balls of the grid on ``device``
-    (``"cpu"`` or ``"gpu"``, resolved) before any work: ``kernels.members.check_kernels``,
-    one ``InputError`` naming the model and the reason when one cannot be built."""
+    """Build (or load) the member kernels of every balls of the grid on ``device`` (a
+    ``Placement``, or ``"cpu"`` or ``"gpu"``) before any work:
+    ``kernels.members.check_kernels``, one ``InputError`` naming the model and the reason
+    when one cannot be built."""
     check_kernels(grid_balls(setting, axes), device, tangent)
 
 
-def grid_device(setting: Setting, axes: Sequence[Axis], device: str, members: int, *,
-                tangent: bool = False, kernels: bool = True, fallback: bool = False) -> str:
-    """``"cpu"`` or ``"gpu"``: where a grid's ``members`` members run (``resolve_device``
-    with the steps of the setting's transient), judged before the estimate, any executor,
-    store or work. With ``kernels`` the member kernels of its balls (the tangent variant
-    with ``tangent``) are built and checked first (``check_grid_kernels``); a kernel that
-    cannot be built on ``--device cpu`` or ``gpu`` is one ``InputError``. With ``fallback``
-    (a chart: ``kernel_points`` runs points one by one where the cores have no build),
+def grid_device(setting: Setting, axes: Sequence[Axis], device: str | Placement,
+                members: int, *, tangent: bool = False, kernels: bool = True,
+                fallback: bool = False) -> Placement:
+    """Where a grid's ``members`` members run, judged once, before the estimate, any
+    executor, store or work: ``kernels.placement.place`` with the steps of the setting's
+    transient. With ``kernels`` the member kernels of its balls (``grid_balls``; the
+    tangent variant with ``tangent``) are built and checked too; a kernel that cannot be
+    built on ``device`` ``cpu`` or ``gpu`` is one ``InputError``. With ``fallback`` (a
+    chart: ``kernel_points`` runs points one by one where the cores have no build),
     ``auto`` is never refused: a GPU that cannot build them leaves the grid to the cores,
-    whose builds are not judged here."""
-    resolved = resolve_device(device, members,
-                              max(1, round(setting.transient / setting.step())))
-    if not kernels or (fallback and device == "auto" and resolved == "cpu"):
-        return resolved
-    try:
-        check_grid_kernels(setting, axes, resolved, tangent)
-    except InputError:
-        if fallback and device == "auto":  # the GPU could not build them: the cores
-            return "cpu"
-        raise
-    return resolved
+    whose builds are not judged here. A ``Placement`` given is kept (only kernels it has not
+    built yet are built). The ``Placement`` returned is what the grid's points take."""
+    variant = ("tangent" if tangent else "state") if kernels else ()
+    return place(device, members, lambda: grid_balls(setting, axes), variant,
+                 max(1, round(setting.transient / setting.step())), fallback=fallback)
 
 
 def kernel_points(systems: list[System], durations: list[float], transient: float,
-                  dt: float, section: str | None, device: str = "cpu",
+                  dt: float, section: str | None, device: str | Placement = "cpu",
                   threads: int | None = None, datasets: bool = True) -> list:
     """Chart points with λ1 on the member kernels (``analysis.integrate.kernels``, the
     tangent variant): the points of each model and balls in one ``run_members`` call on
-    ``device`` (``cpu``: every core; ``gpu``; ``auto``). Each point's step is the largest
+    ``device`` (a ``Placement``, the grid's, kept; or ``cpu``: every core; ``gpu``;
+    ``auto``: placed once per model and balls). Each point's step is the largest
     h <= ``dt`` dividing its section period (``section_step``), so its section points are
     states at steps; its amplitudes are the extremes over the record's steps, λ1 and its
     interval the batch means of the last ``averaged`` section logs (renormalised once per
@@ -463,14 +459,15 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
             [p.skip + p.count for p in points], tangent=True,
             lyapunov_skip=[p.skip for p in points],
             extremes_from=[p.steps[0] for p in points], extremes_to=[p.steps[1] for p in points])
+        placed = place(device, len(points), steps=schedule.total_steps)
         try:
             out = run_members(points[0].system,
                               np.array([np.asarray(p.system.state, float) for p in points]),
                               np.array([p.system.p for p in points]),
-                              np.array([p.h for p in points]), schedule, device=device,
+                              np.array([p.h for p in points]), schedule, device=placed,
                               threads=threads)
         except (Unsupported, CompileError):
-            if resolve_device(device, len(points), schedule.total_steps) == "gpu":
+            if placed.gpu:
                 raise
             for i, _ in group:  # no CPU build: the scalar blocks, point by point
                 results[i] = _scalar_point(systems[i], durations[i], transient, dt, section)
@@ -598,7 +595,7 @@ def chart_point(setting: Setting, system: System) -> dict:
                                   setting.step(), setting.section, tangent=setting.lyapunov))
 
 
-def chart_points(setting: Setting, systems: list[System], device: str = "cpu",
+def chart_points(setting: Setting, systems: list[System], device: str | Placement = "cpu",
                  threads: int | None = None) -> list[dict | SimulationError]:
     """Chart points of one model and balls: with λ1 (``setting.lyapunov``) all in one call
     of the member kernels on ``device`` (``kernel_points``: sections on steps, see there),

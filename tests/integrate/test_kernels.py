@@ -173,7 +173,7 @@ def test_bad_inputs_and_devices():
         run_members(system, system.state[None, :], None, -1.0, Schedule(0, 1, 1))
     with pytest.raises(InputError, match="parameters"):
         run_members(system, system.state[None, :], np.zeros((1, 2)), 1e-5, Schedule(0, 1, 1))
-    with pytest.raises(InputError, match=r"--device: one of cpu, gpu, auto"):
+    with pytest.raises(InputError, match=r"^device: one of cpu, gpu, auto"):
         resolve_device("tpu", 10, 10)
     assert resolve_device("cpu", 10, 10) == "cpu"
     assert resolve_device("auto", 10, 10) == "cpu"

@@ -26,7 +26,7 @@ SETTING = Setting("vakharia2015", None, {}, transient=0.05, samples=10)
 EIGHT = replace(SETTING, n_balls=8)  # a diagram over speed: the balls given
 X, Y = Axis.parse("speed_rpm:4000:5000:2"), Axis.parse("n_balls:8:8")
 WIDE = Axis.linear("speed_rpm", 4000.0, 5000.0, 4 * devices.AUTO_MIN_MEMBERS)
-REFUSED = (r"^--device {}: the member kernel of model 'vakharia2015' with N_b 8 cannot be "
+REFUSED = (r"^device {}: the member kernel of model 'vakharia2015' with N_b 8 cannot be "
            r"built: .*operation ADD is not written as member C$")
 
 
@@ -97,5 +97,5 @@ def test_gpu_without_one_says_what_is_missing_and_how_to_install_once():
     with pytest.raises(InputError) as refused:
         members.check_kernels(grid_balls(EIGHT, [X]), "gpu")
     text = str(refused.value)
-    assert text.startswith(f"--device gpu: {devices.gpu_problem()}; ")
+    assert text.startswith(f"device gpu: {devices.gpu_problem()}; ")
     assert text.count("pip install") == 1 and "\n" not in text

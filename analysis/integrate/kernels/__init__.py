@@ -5,11 +5,18 @@ own initial state, parameters, step and start) by one ``Schedule`` (transient, s
 optional tangent for λ1) and returns a ``MemberResult``. ``source`` writes the C from the
 CasADi SX Functions (the one writer of compiled member code), ``cpu`` builds it with gcc
 and OpenMP, ``cuda`` with NVRTC through CuPy (imported lazily, only there), ``devices``
-says what is visible and which device a run takes.
+says what is visible, and ``placement`` judges once which device a run takes (``place``:
+the table of devices, the ``auto`` rule, the kernels' builds) as a ``Placement`` that
+every ensemble takes.
 """
 
 from analysis.integrate.kernels.cuda import cuda_source
-from analysis.integrate.kernels.devices import DeviceInfo, device_info, resolve_device
+from analysis.integrate.kernels.devices import (
+    DeviceError,
+    DeviceInfo,
+    device_info,
+    resolve_device,
+)
 from analysis.integrate.kernels.members import (
     MemberResult,
     Schedule,
@@ -18,7 +25,9 @@ from analysis.integrate.kernels.members import (
     run_members,
     section_step,
 )
+from analysis.integrate.kernels.placement import Placement, place
 from analysis.integrate.kernels.source import Unsupported
 
-__all__ = ["DeviceInfo", "MemberResult", "Schedule", "Unsupported", "blow_up_error", "check_fits",
-           "cuda_source", "device_info", "resolve_device", "run_members", "section_step"]
+__all__ = ["DeviceError", "DeviceInfo", "MemberResult", "Placement", "Schedule", "Unsupported",
+           "blow_up_error", "check_fits", "cuda_source", "device_info", "place",
+           "resolve_device", "run_members", "section_step"]

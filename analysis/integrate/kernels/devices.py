@@ -1,12 +1,11 @@
 """What devices the member kernels can run on, and which one a run takes.
 
 ``device_info()`` lists the CPU (cores this process may use) and, when CuPy is installed and
-a GPU visible, each GPU (name, memory, CuPy and CUDA versions). ``resolve_device`` turns the
-user's ``cpu | gpu | auto`` into ``cpu`` or ``gpu`` (``InputError`` naming ``--device`` for
-anything else, or for ``gpu`` without CuPy or a GPU). ``members.check_kernels`` builds (or
-loads from the cache) the member kernels a run will call, before any of its work: a model
-whose kernel cannot be written or built is one ``InputError`` naming the model and the
-reason.
+a GPU visible, each GPU (name, memory, CuPy and CUDA versions); ``gpu_problem`` says why no GPU
+can be used. Which device a run takes is judged once, by ``placement.place`` (the table of
+devices, the ``auto`` rule, the kernels' builds); ``resolve_device`` is its name-only form.
+A refused device is a ``DeviceError``: an ``InputError`` naming the parameter ``device``
+(``field``), whose ``text("--device")`` is the same line naming a command's option.
 """
 
 from __future__ import annotations
@@ -30,6 +29,29 @@ AUTO_MIN_STEPS = 2 * 10**8
 INSTALL_HINT = ("install the GPU extra with pip install bearingdyn[gpu] (CUDA 12; "
                 "bearingdyn[gpu-cuda13] for CUDA 13) on a machine with an NVIDIA GPU")
 """How to get a usable GPU, said once after what is missing (``gpu_problem``)."""
+
+
+class DeviceError(InputError):
+    """An ``InputError`` about the parameter ``device``: ``value`` the device named (None
+    when the name itself is refused), ``reason`` why, ``instead`` the device to use instead
+    (or None). Its message names the parameter (``device gpu: …, or use device cpu``);
+    ``text("--device")`` is the same line naming a command's option."""
+
+    field = "device"
+    """The parameter the error is about."""
+
+    def __init__(self, value: str | None, reason: str, instead: str | None = None):
+        self.value, self.reason, self.instead = value, reason, instead
+        super().__init__(self.text(self.field))
+
+    def text(self, name: str) -> str:
+        """The message with the parameter called ``name`` (``device``, ``--device``)."""
+        head = name if self.value is None else f"{name} {self.value}"
+        tail = "" if self.instead is None else f", or use {name} {self.instead}"
+        return f"{head}: {self.reason}{tail}"
+
+    def __reduce__(self):  # pickled across worker processes: rebuilt from its parts
+        return type(self), (self.value, self.reason, self.instead)
 
 
 @dataclass(frozen=True)
@@ -80,26 +102,15 @@ def device_info() -> list[DeviceInfo]:
 
 
 def resolve_device(device: str, members: int, steps: int) -> str:
-    """``"cpu"`` or ``"gpu"`` for a run of ``members`` members of ``steps`` RK4 steps each.
+    """``"cpu"`` or ``"gpu"`` for a run of ``members`` members of ``steps`` RK4 steps each:
+    the name of the row ``placement.judge`` takes (the device table and the ``auto`` rule;
+    ``DeviceError`` for another name, or for ``gpu`` without CuPy or a visible GPU). A run
+    judges its device once with ``placement.place``; this is its name-only form."""
+    from analysis.integrate.kernels.placement import judge
 
-    ``device``: ``"cpu"``; ``"gpu"`` (``InputError`` naming what is missing and
-    ``pip install bearingdyn[gpu]`` without CuPy or a visible GPU); ``"auto"``: the GPU when
-    one can be used, ``members >= AUTO_MIN_MEMBERS`` and ``members · steps >=
-    AUTO_MIN_STEPS``, else the CPU (the rule of issue 33's measurements: a GPU pays for
-    wide ensembles, few long trajectories belong on the cores)."""
-    if device not in DEVICES:
-        raise InputError(f"--device: one of {', '.join(DEVICES)}, got {device!r}")
-    if device == "cpu":
-        return "cpu"
-    problem = gpu_problem()
-    if device == "gpu":
-        if problem is not None:
-            raise no_gpu_error(problem)
-        return "gpu"
-    wide = members >= AUTO_MIN_MEMBERS and members * steps >= AUTO_MIN_STEPS
-    return "gpu" if problem is None and wide else "cpu"
+    return judge(device, members, steps).name
 
 
-def no_gpu_error(problem: str) -> InputError:
-    """The one line of ``--device gpu`` where no GPU can be used (``problem``: why)."""
-    return InputError(f"--device gpu: {problem}; {INSTALL_HINT}, or use --device cpu")
+def no_gpu_error(problem: str) -> DeviceError:
+    """The one line of ``device gpu`` where no GPU can be used (``problem``: why)."""
+    return DeviceError("gpu", f"{problem}; {INSTALL_HINT}", instead="cpu")

@@ -24,11 +24,11 @@ from functools import cache
 
 import numpy as np
 
-import analysis.integrate.kernels.devices as devices
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import test_state
 from analysis.integrate.kernels.cpu import cores, cpu_library
-from analysis.integrate.kernels.devices import resolve_device
+from analysis.integrate.kernels.devices import DeviceError
+from analysis.integrate.kernels.placement import Placement, on_gpu, place
 from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.model import System
 
@@ -173,7 +173,7 @@ class MemberResult:
     high: np.ndarray
     """(M, n) largest value, likewise."""
     device: str
-    """``"cpu"`` or ``"gpu"``."""
+    """``"cpu"`` or ``"gpu"`` (``Placement.kind``)."""
 
 
 def _per_member(name: str, value: np.ndarray | float, m: int, positive: bool) -> np.ndarray:
@@ -195,11 +195,12 @@ def _bytes_per_member(schedule: Schedule, n: int, n_par: int) -> int:
     return 8 * (n + 1 + n_par + 3 + kept + (k if schedule.tangent else 0) + 3 * n + 1)
 
 
-def check_fits(device: str, members: int, schedule: Schedule, n: int,
+def check_fits(device: str | Placement, members: int, schedule: Schedule, n: int,
                n_par: int = 0) -> None:
     """``InputError`` before anything is allocated when the results of ``members``
     members do not fit the host's budget (``HOST_BUDGET``; the device streams blocks, so
-    only the kept results count), or when one member does not fit the GPU's free memory."""
+    only the kept results count), or when one member does not fit the GPU's free memory
+    (``device``: a ``Placement``, or a resolved name ``"cpu"`` or ``"gpu"``)."""
     per = _bytes_per_member(schedule, n, n_par)
     kept = members * per
     if kept > HOST_BUDGET:
@@ -207,7 +208,7 @@ def check_fits(device: str, members: int, schedule: Schedule, n: int,
                          f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
                          f"{HOST_BUDGET / 2**30:g} GiB: give fewer initial states or grid points, "
                          "or record fewer sections per member")
-    if device == "gpu":
+    if on_gpu(device):
         from analysis.integrate.kernels.cuda import free_memory
 
         free, _ = free_memory()
@@ -216,12 +217,12 @@ def check_fits(device: str, members: int, schedule: Schedule, n: int,
                              f"{free} bytes free: record fewer sections per member")
 
 
-def _block_size(device: str, members: int, per: int, block: int | None) -> int:
+def _block_size(placed: Placement, members: int, per: int, block: int | None) -> int:
     if block is not None:
         if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
             raise InputError(f"block: a whole number >= 1, got {block!r}")
         return int(block)
-    if device == "cpu":
+    if not placed.gpu:
         return min(members, CPU_BLOCK)
     from analysis.integrate.kernels.cuda import free_memory
 
@@ -229,21 +230,26 @@ def _block_size(device: str, members: int, per: int, block: int | None) -> int:
     return max(1, min(members, int(GPU_BLOCK_SHARE * free) // per))
 
 
-def _kernel(system: System, tangent: bool, device: str):
-    """The loaded build: a ``cpu.CpuLibrary`` or ``cuda.CudaKernel``, self-tested."""
-    if device == "gpu":
-        from analysis.integrate.kernels.cuda import cuda_kernel
-
-        _self_test_gpu(system.model, system.structure, tangent)
-        return cuda_kernel(system.model, system.structure, tangent)
+def cpu_kernel(system: System, tangent: bool):
+    """The CPU build of ``system``'s member kernel (``cpu.CpuLibrary``), self-tested (the
+    kernel builder of ``placement.TABLE["cpu"]``)."""
     _self_test(system.model, system.structure, tangent)
     return cpu_library(system.model, system.structure, tangent)
+
+
+def gpu_kernel(system: System, tangent: bool):
+    """The CUDA build of ``system``'s member kernel (``cuda.CudaKernel``), self-tested
+    against the CPU build (the kernel builder of ``placement.TABLE["gpu"]``)."""
+    from analysis.integrate.kernels.cuda import cuda_kernel
+
+    _self_test_gpu(system.model, system.structure, tangent)
+    return cuda_kernel(system.model, system.structure, tangent)
 
 
 def run_members(system: System, states: np.ndarray, parameters: np.ndarray | None,
                 h: np.ndarray | float, schedule: Schedule, *,
                 t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
-                device: str = "cpu", block: int | None = None,
+                device: str | Placement = "cpu", block: int | None = None,
                 progress: Callable[[int, int], None] | None = None,
                 threads: int | None = None) -> MemberResult:
     """Run M members of ``system``'s model and balls by ``schedule``.
@@ -253,13 +259,14 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     full parameter vector (``Model.parameter_vector``; speed in rpm), or None for
     ``system.p`` for all; ``h`` (s; one or per member): the RK4 step; ``t0`` (s) and ``k0``
     (step counters, whole numbers; one or per member): step k runs from ``t0 + k·h``, the
-    first from k0. ``device``: ``cpu``, ``gpu`` or ``auto`` (``devices.resolve_device``);
+    first from k0. ``device``: a ``Placement`` (``placement.place``, judged once by the
+    run that calls), or ``cpu``, ``gpu`` or ``auto``, placed here for these members;
     ``block``: members per call (default: ``CPU_BLOCK`` on the CPU, half the GPU's free
     memory on the GPU); ``progress(done, total)`` after each block (members: on the CPU
 without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, at least
 ``CHUNK_PER_THREAD`` members per thread, sized from the chunks before); ``threads``:
     CPU threads (None: ``cpu.cores()``, every core; a worker process of a pool of W takes
-    cores / W).
+    cores / W; None: the placement's, else every core).
 
     Each member's blow-up limit is ``simulate.blow_up_limit`` of its parameters. Bad input
     raises ``InputError`` before anything runs; a model whose kernel cannot be written or
@@ -282,20 +289,22 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
     k0s = _per_member("k0", k0, m, positive=False)
     if np.any(k0s != np.round(k0s)):
         raise InputError("k0: whole numbers")
-    device = resolve_device(device, m, schedule.total_steps)
-    check_fits(device, m, schedule, n, n_par)
+    placed = device if isinstance(device, Placement) else \
+        place(device, m, steps=schedule.total_steps)
+    threads = threads or placed.threads
+    check_fits(placed, m, schedule, n, n_par)
     limits = _limits(system, p, parameters is None)
-    kern = _kernel(system, schedule.tangent, device)
+    kern = placed.row.kernel(system, schedule.tangent)
     counts = schedule.per_member(m)
     k = schedule.max_sections
     sections = np.full((m, k, n), np.nan) if schedule.keep_sections else None
     logs = np.full((m, k), np.nan) if schedule.tangent else None
     final, low, high = np.empty((m, n)), np.empty((m, n)), np.empty((m, n))
     diverged = np.empty(m, dtype=np.int64)
-    size = _block_size(device, m, _bytes_per_member(schedule, n, n_par), block)
+    size = _block_size(placed, m, _bytes_per_member(schedule, n, n_par), block)
     z0, p = np.ascontiguousarray(z0), np.ascontiguousarray(p)
     width = min(threads or cores(), m)
-    chunks = _Chunks(size, width if progress is not None and device == "cpu"
+    chunks = _Chunks(size, width if progress is not None and not placed.gpu
                      and block is None else None)
     start = 0
     while start < m:
@@ -307,7 +316,7 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
                 np.empty((count, n)), np.empty(count, dtype=np.int64),
                 np.empty((count, n)), np.empty((count, n))]
         ins = [np.ascontiguousarray(a[part]) for a in (z0, k0s, p, hs, t0s, limits, *counts)]
-        if device == "gpu":
+        if placed.gpu:
             kern.run(count, ins, k, schedule.keep_sections, outs)
         else:
             kern.run(count, min(threads or cores(), count), ins, k, schedule.keep_sections,
@@ -327,7 +336,7 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
         used = (np.arange(k)[None, :] >= skip[:, None]) & (np.arange(k)[None, :] < n_sec[:, None])
         with np.errstate(invalid="ignore"):
             lambda1 = np.where(used, logs, 0.0).sum(axis=1) / (n_sec - skip) / (every * hs)
-    return MemberResult(sections, logs, lambda1, diverged, final, low, high, device)
+    return MemberResult(sections, logs, lambda1, diverged, final, low, high, placed.kind)
 
 
 class _Chunks:
@@ -485,45 +494,22 @@ def _self_test_gpu(model, structure: tuple[int, ...], tangent: bool) -> None:
                            "CPU build (NVRTC options: see kernels/cuda.py)")
 
 
-def check_kernels(systems: Iterable[System], device: str, tangent: bool = False) -> None:
+def check_kernels(systems: Iterable[System], device: str | Placement,
+                  tangent: bool = False) -> None:
     """Build, or load from the cache, and self-test the member kernel (the state variant,
     or the tangent variant with ``tangent``) of each model and balls among ``systems``
-    (``System``s) on ``device`` (``"cpu"`` or ``"gpu"``, as ``resolve_device`` gives it),
-    before a run's work: what the run then calls is loaded at once. ``InputError``, one line
-    naming ``--device``, the model and its balls and the reason, when the kernel cannot be
-    written (``source.Unsupported``: an operation the writer does not emit), built or
-    loaded (``compiled.CompileError``: no compiler, a failed compilation, a self-test;
-    NVRTC's ``CompileException`` on a GPU), or when no GPU can be used."""
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels.source import Unsupported
-
-    errors: tuple[type[Exception], ...] = (Unsupported, CompileError)
-    if device == "gpu":
-        problem = devices.gpu_problem()
-        if problem is not None:
-            raise devices.no_gpu_error(problem)
-        try:
-            from cupy.cuda.compiler import CompileException  # NVRTC's refusal
-        except ImportError:  # a stand-in for CuPy (tests/integrate/fake_cupy.py)
-            pass
-        else:
-            errors += (CompileException,)
-    seen = set()
-    for system in systems:
-        key = (id(system.model), system.structure)
-        if key in seen:
-            continue
-        seen.add(key)
-        try:
-            _kernel(system, tangent, device)
-        except errors as exc:
-            raise unbuildable(system, device, exc) from None
+    (``System``s) on ``device`` (a ``Placement``, or ``"cpu"`` or ``"gpu"``), before a run's
+    work: ``placement.place`` with these systems (a run that places its device itself
+    builds them there). ``DeviceError``, one line naming ``device``, the model and its balls
+    and the reason, when the kernel cannot be written, built or loaded, or when no GPU can
+    be used."""
+    place(device, 1, list(systems), "tangent" if tangent else "state")
 
 
-def unbuildable(system: System, device: str, exc: Exception) -> InputError:
+def unbuildable(system: System, device: str, exc: Exception) -> DeviceError:
     """The one line of a member kernel of ``system`` that cannot be written or built on
     ``device`` (``exc``: why; a compiler's lines joined by ``;``)."""
     reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
     balls = ", ".join(str(n) for n in system.structure)
-    return InputError(f"--device {device}: the member kernel of model '{system.model.name}' "
-                      f"with N_b {balls} cannot be built: {reason}")
+    return DeviceError(str(device), f"the member kernel of model '{system.model.name}' with "
+                                    f"N_b {balls} cannot be built: {reason}")

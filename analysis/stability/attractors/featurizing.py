@@ -51,6 +51,7 @@ from scipy.spatial import cKDTree
 
 from analysis.errors import InputError
 from analysis.integrate.ensemble import StroboscopicMap
+from analysis.integrate.kernels.placement import Placement, on_gpu, place
 from analysis.stability.attractors.mapper import DIVERGED, Found, Scale
 
 MAPPERS = ("auto", "recurrence", "features")
@@ -108,16 +109,17 @@ class FeatureOptions:
                              f"({2 * self.max_period}), got {self.sections}")
 
 
-def choose(mapper: str, device: str, members: int) -> str:
+def choose(mapper: str, device: str | Placement, members: int) -> str:
     """``recurrence`` or ``features``: ``mapper`` itself, or for ``auto`` the featurizing
-    mapper when ``members`` >= ``FEATURES_FROM`` or ``device`` (already resolved) is
-    ``gpu``. ``InputError`` for an unknown name, or for the recurrence mapper on a GPU (it
-    walks each trajectory on the host)."""
+    mapper when ``members`` >= ``FEATURES_FROM`` or ``device`` (a ``Placement``, or a
+    resolved name) is a GPU. ``InputError`` for an unknown name, or for the recurrence
+    mapper on a GPU (it walks each trajectory on the host)."""
     if mapper not in MAPPERS:
         raise InputError(f"mapper: must be one of {', '.join(MAPPERS)}, got {mapper!r}")
+    gpu = on_gpu(device)
     if mapper == "auto":
-        return "features" if device == "gpu" or members >= FEATURES_FROM else "recurrence"
-    if mapper == "recurrence" and device == "gpu":
+        return "features" if gpu or members >= FEATURES_FROM else "recurrence"
+    if mapper == "recurrence" and gpu:
         raise InputError("mapper: the recurrence mapper runs on the CPU; use --mapper "
                          "features (or auto) with --device gpu")
     return mapper
@@ -150,10 +152,11 @@ def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
 
 
 def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
-                  device: str = "cpu",
+                  device: str | Placement = "cpu",
                   progress: Callable[[int, int], None] | None = None) -> Record:
     """The fixed-time run of ``states`` (M, n; t = 0) on the member kernel
-    (``analysis.integrate.kernels.run_members`` on ``device``; on the CPU ``progress``
+    (``analysis.integrate.kernels.run_members`` on ``device``, a ``Placement`` taken as it
+    is; on the CPU ``progress``
     moves every ~0.5 s of work, ``members.PROGRESS_SECONDS``)."""
     from analysis.integrate.kernels import run_members
 
@@ -187,33 +190,35 @@ def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOption
     return Record(sections, bad, s[:, :-1].copy(), int(s[0, -1]) if len(s) else 0)
 
 
-def resolve(device: str, members: int, smap: StroboscopicMap, options: FeatureOptions) -> str:
-    """``cpu`` or ``gpu`` for a featurizing run of ``members`` states
-    (``kernels.resolve_device``: ``InputError`` for an unknown name or a missing GPU)."""
-    from analysis.integrate.kernels import resolve_device
+def resolve(device: str | Placement, members: int, smap: StroboscopicMap,
+            options: FeatureOptions) -> Placement:
+    """The ``Placement`` of a featurizing run of ``members`` states
+    (``kernels.placement.place``, the study's one judgement of its device: ``DeviceError``
+    for an unknown name or a missing GPU; a ``Placement`` is kept)."""
+    return place(device, members, steps=(options.transient + options.sections) * smap.steps)
 
-    return resolve_device(device, members, (options.transient + options.sections) * smap.steps)
 
-
-def recorder(smap: StroboscopicMap, device: str, block: int,
+def recorder(smap: StroboscopicMap, device: str | Placement, block: int,
              options: FeatureOptions) -> Recorder:
-    """The recorder of a resolved ``device``, checked before any work: ``block`` members'
-    results must fit (``kernels.check_fits``, ``InputError``) and the model's member kernel
-    must build (a one-step run). On the CPU a model whose kernel cannot be written or built
-    falls back to ``map_record``; on the GPU that is an ``InputError`` with the reason."""
+    """The recorder of a placed ``device`` (a ``Placement``, or ``cpu`` or ``gpu``), checked
+    before any work: ``block`` members' results must fit (``kernels.check_fits``,
+    ``InputError``) and the model's member kernel must build (a one-step run). On the CPU a
+    model whose kernel cannot be written or built falls back to ``map_record``; on the GPU
+    that is an ``InputError`` with the reason (``members.unbuildable``)."""
     from analysis.integrate.compiled import CompileError
     from analysis.integrate.kernels import Schedule, Unsupported, check_fits, run_members
+    from analysis.integrate.kernels.members import unbuildable
 
     system = smap.system
+    device = place(device, block)  # a Placement as it is; a name placed once, here
     check_fits(device, block, schedule_of(smap, options), system.n_state,
                len(system.model.parameter_names))
     try:
         run_members(system, system.state[None, :], None, smap.dt, Schedule(0, 1, 1),
                     device=device)
     except (Unsupported, CompileError) as exc:
-        if device == "gpu":
-            raise InputError(f"--device gpu: the member kernel of model "
-                             f"'{system.model.name}' cannot be built: {exc}") from None
+        if device.gpu:
+            raise unbuildable(system, device.kind, exc) from None
         return map_record
     return lambda smap, states, options, progress=None: kernel_record(smap, states, options,
                                                                         device, progress)

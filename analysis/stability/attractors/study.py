@@ -36,6 +36,7 @@ import numpy as np
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.ensemble import StroboscopicMap
 from analysis.integrate.flow import Period
+from analysis.integrate.kernels.placement import Placement
 from analysis.integrate.simulate import simulate
 from analysis.model import System
 from analysis.stability.attractors.featurizing import (
@@ -271,14 +272,15 @@ class AttractorStudy:
     """The attractors of ``system``'s map over ``period`` (None: the model's default,
     ``stability.periodic.default_period``), with RK4 steps of at most ``dt`` s (None: the
     spec's). ``mapper``: ``recurrence`` or ``features`` (``featurizing.choose`` resolves
-    ``auto``), the latter with ``feature_options`` on ``device`` (``cpu`` or ``gpu``,
-    resolved: ``analysis.integrate.kernels.resolve_device``)."""
+    ``auto``), the latter with ``feature_options`` on ``device`` (a ``Placement``, judged
+    once: ``featurizing.resolve`` in ``make_study``; or ``cpu`` or ``gpu``)."""
 
     def __init__(self, system: System, period: str | Period | None = None,
                  dt: float | None = None, options: MapperOptions | None = None,
                  label_options: LabelOptions | None = None, scale: Scale | None = None,
                  compiled: bool = True, mapper: str = "recurrence",
-                 feature_options: FeatureOptions | None = None, device: str = "cpu"):
+                 feature_options: FeatureOptions | None = None,
+                 device: str | Placement = "cpu"):
         self.system = system
         self.dt = dt
         """The largest RK4 step asked for, s (None: the spec's); the map's own is
@@ -294,14 +296,20 @@ class AttractorStudy:
             raise InputError(f"mapper: must be recurrence or features, got {mapper!r}")
         self.mapper_kind = mapper
         self.feature_options = feature_options or FeatureOptions()
-        self.device = device
+        self.placement: str | Placement = device
+        """Where the featurizing mapper's members run (every block takes it as it is)."""
         self._record: Recorder | None = None
+
+    @property
+    def device(self) -> str:
+        """The device's name, ``cpu`` or ``gpu`` (the results' attr ``device``)."""
+        return str(self.placement)
 
     def prepare(self, block: int) -> None:
         """Check, before any work, that blocks of ``block`` states fit the device and that
         the member kernel builds (``featurizing.recorder``; featurizing mapper only)."""
         if self.mapper_kind == "features":
-            self._record = recorder(self.map, self.device, block, self.feature_options)
+            self._record = recorder(self.map, self.placement, block, self.feature_options)
 
     def check_memory(self, members: int, block: int) -> None:
         """``check_memory`` of ``members`` states in blocks of ``block`` by this mapper."""
@@ -442,12 +450,14 @@ class AttractorStudy:
 def make_study(system: System, members: int, *, period: str | Period | None = None,
                dt: float | None = None, options: MapperOptions | None = None,
                label_options: LabelOptions | None = None, mapper: str = "auto",
-               device: str = "auto", feature_options: FeatureOptions | None = None,
+               device: str | Placement = "auto",
+               feature_options: FeatureOptions | None = None,
                block: int | None = None, scale: Scale | None = None,
                compiled: bool = True) -> AttractorStudy:
     """An ``AttractorStudy`` for ``members`` initial states in blocks of ``block`` (None:
-    its ``default_block``), its device resolved (``featurizing.resolve``: ``cpu``, ``gpu``
-    or ``auto``) and its mapper chosen (``featurizing.choose``: ``auto``, ``recurrence``
+    its ``default_block``), its device judged once (``featurizing.resolve``: ``cpu``,
+    ``gpu`` or ``auto``, or a ``Placement`` kept; the study's ``placement``, which its
+    blocks take) and its mapper chosen (``featurizing.choose``: ``auto``, ``recurrence``
     or ``features``), every input checked before any work (``InputError``): the period,
     step, memory, and for the featurizing mapper the device's room and the kernel's
     build."""
@@ -456,7 +466,7 @@ def make_study(system: System, members: int, *, period: str | Period | None = No
     resolved = resolve(device, members, study.map, study.feature_options)
     kind = choose(mapper, resolved, members)
     if kind == "features":
-        study.mapper_kind, study.device = kind, resolved
+        study.mapper_kind, study.placement = kind, resolved
     size = study.default_block if block is None else Blocks(block).size
     study.check_memory(members, size)
     study.prepare(min(size, members))
