@@ -2,17 +2,21 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
+import sys
 import tempfile
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
-
-import xarray as xr
+from typing import TYPE_CHECKING, Any
 
 from analysis.errors import InputError, Interrupt, WriteError
 from modelgen.locations import broken_link
+
+if TYPE_CHECKING:  # xarray is imported where a file is read or written (issue 39)
+    import xarray as xr
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff",
                    ".webp")
@@ -190,8 +194,73 @@ def remove_stale_temporaries(path: str | Path) -> list[Path]:
 
 def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     """Write ``ds`` to netCDF-4 at ``path`` atomically."""
-    return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"),
-                        size=ds.nbytes)
+    return atomic_write(path, lambda tmp: _to_netcdf(ds, tmp), size=ds.nbytes)
+
+
+def _to_netcdf(ds: xr.Dataset, path: Path) -> None:
+    """``ds.to_netcdf(path, engine="h5netcdf")``, without the import of ``dask.distributed``
+    that xarray's dask-scheduler probe costs where dask is installed (issue 39: about 0.5
+    CPU-s, a small write's cost doubled). The file is the same, byte for byte."""
+    with _scheduler_probe_without_distributed():
+        ds.to_netcdf(path, engine="h5netcdf")
+
+
+_PROBES = (("xarray.backends.locks", "get_dask_scheduler"),
+           ("xarray.backends.writers", "get_dask_scheduler"),
+           ("xarray.backends.locks", "_get_scheduler"),  # xarray before 2025: the old name
+           ("xarray.backends.api", "_get_scheduler"))
+"""Where xarray keeps its dask-scheduler probe (the function and the names it is imported
+under), in the versions bearingdyn supports."""
+_PROBE_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _scheduler_probe_without_distributed() -> Iterator[None]:
+    """Within: xarray's dask-scheduler probe answers without importing ``distributed`` when
+    nothing in this process has imported it (no dask cluster can then run here).
+
+    xarray asks which dask scheduler runs before it writes a netCDF file, to pick the kind
+    of lock that orders the writes and whether to close the file between dask's writes (for
+    data held in dask chunks under a multiprocessing or distributed scheduler only). Its
+    probe imports ``distributed`` (about 0.35 s) to look for a client, although a client
+    exists only once ``distributed`` is imported. Without ``distributed`` imported the answer
+    is None where nothing has imported dask either (no dask computation can run here: the
+    answer xarray gives where dask is not installed) and ``"threaded"`` (xarray's own) where
+    dask is imported with no scheduler configured; anything else (``distributed`` imported,
+    a configured scheduler, a dask collection asked about) goes to xarray's probe. Either
+    answer picks a threading lock and no closing between writes, as xarray's would for data
+    held in memory: the file is the same. One writer at a time patches the probe."""
+    import xarray.backends.locks  # noqa: F401  (the probe's module, with its importers)
+
+    with _PROBE_LOCK:
+        found = [(sys.modules[module], name) for module, name in _PROBES
+                 if module in sys.modules and callable(getattr(sys.modules[module], name, None))]
+        originals = [getattr(module, name) for module, name in found]
+        try:
+            for (module, name), original in zip(found, originals, strict=True):
+                setattr(module, name, _cheap_probe(original))
+            yield
+        finally:
+            for (module, name), original in zip(found, originals, strict=True):
+                setattr(module, name, original)
+
+
+def _cheap_probe(original: Callable[..., str | None]) -> Callable[..., str | None]:
+    """xarray's dask-scheduler probe ``original``, answered without importing
+    ``distributed`` where that cannot change the answer
+    (``_scheduler_probe_without_distributed``)."""
+
+    def probe(get=None, collection=None) -> str | None:
+        if "distributed" in sys.modules or get is not None or collection is not None:
+            return original(get, collection)
+        dask = sys.modules.get("dask")
+        if dask is None:
+            return None
+        if dask.config.get("scheduler", None) is not None or dask.config.get("get", None):
+            return original(get, collection)
+        return "threaded"
+
+    return probe
 
 
 def open_result(path: str | Path) -> xr.Dataset:
@@ -201,6 +270,8 @@ def open_result(path: str | Path) -> xr.Dataset:
     if path.is_dir():
         raise InputError(f"result file: '{path}' is a folder, not a result file")
     check_readable(path)
+    import xarray as xr
+
     try:
         with xr.open_dataset(path, engine=_engine(path)) as ds:
             return ds.load()
@@ -227,5 +298,7 @@ def check_readable(path: Path) -> None:
 def read_attrs(path: str | Path) -> dict[str, Any]:
     """The attrs of the result file at ``path``, read without its data."""
     check_readable(Path(path))
+    import xarray as xr
+
     with xr.open_dataset(path, engine=_engine(Path(path))) as ds:
         return dict(ds.attrs)
