@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from analysis.integrate.cost import FILE_SECONDS, CostEstimate
+from analysis.integrate.cost import FILE_SECONDS, CostEstimate, best_seconds, with_load
 from analysis.model import System
 
 NEWTON_ITERATIONS = 6
@@ -85,14 +85,16 @@ def command_parts(system: System, request, solves: int, extra: float = 0.0
 def probe_newton_seconds(equations) -> float:
     """Seconds of one Newton iteration of ``equations`` (a ``HarmonicSystem`` or
     ``TorusSystem``): a residual and Jacobian evaluation and a dense solve, at zero
-    coefficients, after an untimed evaluation (the function built)."""
+    coefficients, after an untimed evaluation (the function built); the faster of two."""
     x = np.zeros(equations.size)
     p = np.asarray(equations.system.p, dtype=float)
     equations.evaluate(x, p)
-    start = time.perf_counter()
-    r, jac, _ = equations.evaluate(x, p)
-    np.linalg.solve(jac + np.eye(len(r)), r)
-    return time.perf_counter() - start
+
+    def iteration() -> None:
+        r, jac, _ = equations.evaluate(x, p)
+        np.linalg.solve(jac + np.eye(len(r)), r)
+
+    return best_seconds(iteration)
 
 
 def probe_shaft_step_seconds(shaft_map) -> float:
@@ -136,10 +138,10 @@ def _newton_estimate(seconds: float, request, what: str) -> CostEstimate:
     from analysis.integrate.cost import process_seconds
 
     branch = request.param is not None
-    return CostEstimate(members=request.max_points if branch else 1,
-                        steps=BRANCH_ITERATIONS if branch else NEWTON_ITERATIONS, workers=1,
-                        step_seconds=seconds, dt=math.nan, what=what, bound=branch,
-                        unit=NEWTON, spent=process_seconds())
+    return with_load(CostEstimate(members=request.max_points if branch else 1,
+                                  steps=BRANCH_ITERATIONS if branch else NEWTON_ITERATIONS,
+                                  workers=1, step_seconds=seconds, dt=math.nan, what=what,
+                                  bound=branch, unit=NEWTON, spent=process_seconds()))
 
 
 def circle_cost(system: System, request, convergence: bool = True) -> CostEstimate:
@@ -162,11 +164,11 @@ def circle_cost(system: System, request, convergence: bool = True) -> CostEstima
     per_circle = points if branch else points * (3 if convergence else 1)
     from analysis.integrate.cost import process_seconds
 
-    estimate = CostEstimate(members=request.max_points if branch else 1,
-                            steps=per_circle * steps * CIRCLE_EVALUATIONS, workers=1,
-                            step_seconds=seconds, dt=period / steps,
-                            what="circles" if branch else "circle", bound=branch,
-                            spent=process_seconds())
+    estimate = with_load(CostEstimate(members=request.max_points if branch else 1,
+                                      steps=per_circle * steps * CIRCLE_EVALUATIONS,
+                                      workers=1, step_seconds=seconds, dt=period / steps,
+                                      what="circles" if branch else "circle", bound=branch,
+                                      spent=process_seconds()))
     revolutions = 6 * points * period  # the integrated amplitude: 2N and 4N phases
     return estimate.with_parts(
         ("the integrated amplitude and the run's errors",

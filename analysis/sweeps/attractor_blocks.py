@@ -34,7 +34,7 @@ import xarray as xr
 
 from analysis import errors
 from analysis.errors import InputError
-from analysis.integrate.cost import CostEstimate, estimate_cost
+from analysis.integrate.cost import COMPILED, KERNELS, CostEstimate, estimate_cost
 from analysis.io import save_dataset
 from analysis.model import System, load_model
 from analysis.stability.attractors.continuation import MATCH_DISTANCE
@@ -249,7 +249,10 @@ def study_cost(system: System, members: int, *, workers: int | None = None,
     the recurrence mapper at most ``max_periods`` (most stop far earlier: a bound), and,
     given the ``sides`` of the states' box or grid, an expectation from a timed probe that
     maps a few states drawn in them (``recurrence_probe``). Takes the settings of the
-    ``*_to_file`` functions (others, such as ``seed``, ignored)."""
+    ``*_to_file`` functions (others, such as ``seed``, ignored). Both mappers step their
+    states on the member kernels (``featurizing``, ``StroboscopicMap.advance``): the probe
+    times those (``estimate_cost`` on ``KERNELS``; the compiled blocks where the study's map
+    is not compiled)."""
     study = check_study(system, members, period, dt, options, None, block, mapper, device,
                         feature_options)
     if study.mapper_kind == "features":
@@ -257,7 +260,9 @@ def study_cost(system: System, members: int, *, workers: int | None = None,
     else:
         periods, bound = study.options.max_periods, True
     cost = estimate_cost(study.system, members, periods * study.map.steps, dt=study.map.dt,
-                         workers=workers, what="initial states", bound=bound)
+                         workers=workers, what="initial states", bound=bound,
+                         path=KERNELS if study.map.compiled else COMPILED,
+                         compiled=study.map.compiled)
     per_state = cost.steps * cost.step_seconds
     if bound and sides and (1 + sum(PROBE_BLOCKS)) * per_state <= PROBE_LIMIT:
         expected, note = recurrence_probe(study, Box(tuple(sides)), members,

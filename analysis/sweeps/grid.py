@@ -23,12 +23,13 @@ import xarray as xr
 from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_seconds
 from analysis.integrate.cost import (
+    COMPILED,
     FILE_SECONDS,
+    KERNELS,
     CostEstimate,
     coarsest_step,
     estimate_cost,
     process_seconds,
-    tangent_step_factor,
 )
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import simulate
@@ -291,15 +292,22 @@ over the grid in its order)."""
 
 
 def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
-              members_per_point: int = 1, lyapunov: bool | None = None) -> CostEstimate:
+              members_per_point: int = 1, lyapunov: bool | None = None,
+              path: str | None = None) -> CostEstimate:
     """The cost of a grid's points (``analysis.integrate.cost``), said before they run: the
     mean RK4 steps of up to ``GRID_COST_SAMPLES`` points evenly spread over the grid (a
     point records ``samples`` periods of its own section: a speed axis spans a factor of
-    ten), ``members_per_point`` runs a point (initial states, directions), λ1 (``lyapunov``;
-    None: the setting's) by the measured cost of a step with its tangent
-    (``tangent_step_factor``; ``n + 1`` state steps where the member kernel cannot be built).
-    The step per second is probed at the corner with the longest record; the coarser
-    ``--dt`` offered is one every corner accepts. Call after ``check_grid``."""
+    ten), ``members_per_point`` runs a point (initial states, directions), timed on the
+    ``path`` that runs them: None, the member kernels with λ1 (``lyapunov``; None: the
+    setting's: a chart's points, ``points.kernel_points``) and the compiled blocks without
+    (``points.one_pass``, a followed sweep); ``KERNELS`` for a sweep without following. On
+    the kernels the steps of the record and of the tangent's transient
+    (``lyapunov.default_lengths``) carry λ1's tangent, each counted by its measured cost
+    (``estimate_cost``; ``n + 1`` state steps where the member kernel cannot be built). The
+    step per second is probed at the corner with the longest record; the coarser ``--dt``
+    offered is one every corner accepts. Call after ``check_grid``."""
+    from analysis.stability.lyapunov import default_lengths
+
     names = [a.name for a in axes]
     corners = [setting.system_at(**dict(zip(names, values, strict=True)))
                for values in itertools.product(*((a.values[0], a.values[-1]) for a in axes))]
@@ -312,12 +320,16 @@ def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
         n: a.values[i] for n, a, i in zip(names, axes, np.unravel_index(int(k), shape),
                                           strict=True)})) for k in picked]
     steps = math.ceil(float(np.mean(seconds)) / dt)
-    est = estimate_cost(system, total * members_per_point, steps, dt=dt, workers=workers)
-    factor = 1.0
+    tangent = 0
     if setting.lyapunov if lyapunov is None else lyapunov:
-        factor = tangent_step_factor(system, dt) or float(system.n_state + 1)
+        before = min(default_lengths(system.model)[2], setting.transient)
+        tangent = min(steps, math.ceil((float(np.mean(seconds)) - setting.transient + before)
+                                       / dt))
+    route = path or (KERNELS if tangent else COMPILED)
+    est = estimate_cost(system, total * members_per_point, steps, dt=dt, workers=workers,
+                        path=route, tangent_steps=tangent)
     steps_fine = [c for c in (coarsest_step(corner) for corner in corners) if c is not None]
-    return replace(est, step_seconds=est.step_seconds * factor, average=len(picked) > 1,
+    return replace(est, average=len(picked) > 1,
                    coarsest_dt=min(steps_fine) if len(steps_fine) == len(corners) else None,
                    spent=process_seconds()).with_parts(("the file", FILE_SECONDS))
 

@@ -455,21 +455,23 @@ def classify_seconds(study: Study) -> float:
 
 def study_cost(study: Study, workers: int | None = None, host_workers: int = 1):
     """The cost said before any work (``inference.abc.CalibrationCost``: the member
-    kernels' RK4 steps timed by ``analysis.integrate.cost``, and the host's classification
-    of each run, probed): every draw at every value, each taking its transient and twice
-    its record (the tangent counted as one more member), at the first value's step."""
+    kernels' RK4 steps timed on the member kernels by ``analysis.integrate.cost``, and the
+    host's classification of each run, probed): every draw at every value, each taking its
+    transient and its record, the record's steps with λ1's tangent counted by its measured
+    cost (``simulate.run_engine``), at the first value's step."""
     from analysis.inference.abc import CalibrationCost
-    from analysis.integrate.cost import estimate_cost, process_seconds
+    from analysis.integrate.cost import KERNELS, estimate_cost, process_seconds
     from analysis.integrate.kernels.cpu import cores
 
     centre = {d.name: d.centre for d in study.dists}
     system = study.system(study.values[0]).replace(**centre)
     settings = study.settings
     h, every = settings.steps(system)
-    steps = settings.samples_per_revolution * every * (settings.transient_revolutions +
-                                                       2 * settings.revolutions)
+    per = settings.samples_per_revolution * every
+    record = per * settings.revolutions
+    steps = per * settings.transient_revolutions + record
     kernels = estimate_cost(system, study.runs, steps, dt=h, workers=workers or cores(),
-                            what="draws x values")
+                            what="draws x values", path=KERNELS, tangent_steps=record)
     host = classify_seconds(study)
     kernels = dataclasses.replace(kernels, spent=process_seconds())
     return CalibrationCost(kernels, study.runs, host, host_workers)

@@ -1,0 +1,112 @@
+"""Costs that hold (issue 39, item 3): the estimate probes the member kernel and variant
+that will run (``probe_kernel``), counts a tangent step by its measured factor, and says
+when the machine it probed was loaded."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from analysis.errors import InputError
+from analysis.integrate import cost
+from analysis.integrate.cost import (
+    COMPILED,
+    KERNELS,
+    CostEstimate,
+    KernelProbe,
+    estimate_cost,
+    load_lines,
+    probe_kernel,
+)
+from analysis.model import System
+
+LOADED = "note: the machine was loaded"
+
+
+@pytest.fixture(scope="module")
+def system() -> System:
+    return System.make("vakharia2015", 8, speed_rpm=5000)
+
+
+def test_the_kernel_probe_times_a_step_and_its_tangent(system):
+    probe = probe_kernel(system, 1e-5, tangent=True, members=8, seconds=0.01)
+    assert probe is not None, "the CPU build of the member kernel is there in the tests"
+    assert math.isfinite(probe.step_seconds) and 0 < probe.step_seconds < 1e-3
+    assert probe.tangent_factor is not None and math.isfinite(probe.tangent_factor)
+    assert probe.tangent_factor >= 1.0
+    assert 0 < probe.busy <= 1.0
+    state_only = probe_kernel(system, 1e-5, members=8, steps=200)
+    assert state_only is not None and state_only.tangent_factor is None
+
+
+def test_the_probe_refuses_a_step_that_is_not_one(system):
+    with pytest.raises(InputError, match=r"^dt: "):
+        probe_kernel(system, 0.0)
+
+
+def test_the_tangent_steps_are_counted_by_the_measured_factor(monkeypatch, system):
+    asked = []
+
+    def probe(sys, dt, *, tangent=False, **kwargs):
+        asked.append(tangent)
+        return KernelProbe(2e-7, 1.7 if tangent else None)
+
+    monkeypatch.setattr(cost, "probe_kernel", probe)
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *a, **k: math.nan)
+    plain = estimate_cost(system, 10, 1000, dt=1e-5, workers=2, path=KERNELS, load=0.0)
+    half = estimate_cost(system, 10, 1000, dt=1e-5, workers=2, path=KERNELS,
+                         tangent_steps=500, load=0.0)
+    assert asked == [False, True], "the tangent variant is probed only where it runs"
+    assert plain.step_seconds == pytest.approx(2e-7)
+    assert half.step_seconds == pytest.approx(2e-7 * (500 + 1.7 * 500) / 1000)
+    assert half.seconds > plain.seconds
+    assert "member kernel probed, tangent x1.70 on 50% of the steps" in half.lines()[0]
+
+
+def test_the_compiled_path_probes_the_compiled_blocks(monkeypatch, system):
+    def no_kernel(*args, **kwargs):
+        raise AssertionError("the member kernel was probed for the compiled path")
+
+    monkeypatch.setattr(cost, "probe_kernel", no_kernel)
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *a, **k: 1e-6)
+    est = estimate_cost(system, 10, 1000, dt=1e-5, workers=2, path=COMPILED, load=0.0)
+    assert est.step_seconds == 1e-6 and "us per step, probed)" in est.lines()[0]
+
+
+def test_without_a_kernel_build_the_tangent_is_n_more_states(monkeypatch, system):
+    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: None)
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *a, **k: 1e-6)
+    est = estimate_cost(system, 10, 1000, dt=1e-5, path=KERNELS, tangent_steps=1000,
+                        load=0.0)
+    assert est.step_seconds == pytest.approx(1e-6 * (1 + system.n_state))
+
+
+def test_a_loaded_machine_is_said_in_one_line(monkeypatch, system):
+    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: KernelProbe(2e-7, None, 1.0))
+    loaded = estimate_cost(system, 10, 1000, dt=1e-5, path=KERNELS, load=1e6)
+    notes = [line for line in loaded.lines() if line.startswith(LOADED)]
+    assert notes == [f"{LOADED} (load 1000000.0 on {loaded.cores} core"
+                     f"{'s' if loaded.cores != 1 else ''}): the estimate assumes that load"]
+    assert loaded.load == 1e6 and loaded.cores >= 1
+    idle = estimate_cost(system, 10, 1000, dt=1e-5, path=KERNELS, load=0.0)
+    assert not [line for line in idle.lines() if line.startswith(LOADED)]
+
+
+def test_a_probe_that_got_part_of_a_core_says_so():
+    assert load_lines(0.5, 2, 1.0) == []
+    assert load_lines(None, 2, None) == []
+    assert load_lines(1.5, 2, 0.4) == [
+        f"{LOADED} (load 1.5 on 2 cores, the probe got 40% of a core): the estimate "
+        "assumes that load"]
+    est = CostEstimate(members=1, steps=10, workers=1, step_seconds=1.0, dt=1.0, load=3.1,
+                       cores=2)
+    assert est.lines()[1] == (f"{LOADED} (load 3.1 on 2 cores): the estimate assumes "
+                              "that load")
+
+
+@pytest.mark.parametrize(("field", "kwargs"), [("path", {"path": "gpu"}),
+                                               ("tangent_steps", {"tangent_steps": 2000})])
+def test_bad_arguments_name_their_parameter(system, field, kwargs):
+    with pytest.raises(InputError, match=rf"^{field}: "):
+        estimate_cost(system, 10, 1000, dt=1e-5, **kwargs)
