@@ -41,7 +41,7 @@ from analysis.integrate.compiled import CompileError, Library, block_plan, libra
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
 from analysis.integrate.kernels.members import Schedule, unbuildable
 from analysis.integrate.kernels.members import run_members as run_kernel
-from analysis.integrate.kernels.placement import Placement, place
+from analysis.integrate.kernels.placement import CPU, Placement, place
 from analysis.integrate.kernels.source import Unsupported
 from analysis.integrate.plan import RunPlan, check_memory
 from analysis.integrate.simulate import bad_states, blow_up_limit
@@ -153,13 +153,14 @@ class StroboscopicMap:
     non-finite values count)."""
     compiled: bool = True
     """Run compiled C (the RK4 blocks' cache); False: the CasADi virtual machine."""
-    device: str | Placement = "cpu"
-    """Where ``advance`` runs the members: a ``Placement`` (kept), or ``cpu``, ``gpu`` or
-    ``auto`` (placed per call by its members and steps: ``device_of``)."""
+    device: str | Placement = CPU
+    """Where ``advance`` runs the members: a ``Placement`` (kept; default: the cores,
+    ``placement.CPU``), or ``auto`` (placed per call by its members and steps:
+    ``device_of``)."""
 
     @classmethod
     def make(cls, system: System, period: str | Period, dt: float | None = None,
-             compiled: bool = True, device: str | Placement = "cpu") -> StroboscopicMap:
+             compiled: bool = True, device: str | Placement = CPU) -> StroboscopicMap:
         """The map of ``system`` over ``period`` (a ``Period`` or its name: ``vc``,
         ``shaft``, ``vc[left]:4``, ``ratio:p/q``, ``param:NAME``; required here, since the
         default period's rule lives in ``analysis.stability``, a layer above:

@@ -179,6 +179,11 @@ class Placement:
         return hash(self.kind)
 
 
+CPU = Placement(TABLE["cpu"], "cpu", 1, 1)
+"""The cores, for a run that names no device (the default of ``StroboscopicMap``): they are
+always there, so nothing is judged."""
+
+
 def on_gpu(device: str | Placement) -> bool:
     """Whether ``device`` (a ``Placement``, or a resolved name) is a GPU."""
     return device.gpu if isinstance(device, Placement) else device == "gpu"
@@ -262,5 +267,5 @@ def place(device: str | Placement, members: int,
     return replace(placed, variants=variants)
 
 
-__all__ = ["TABLE", "VARIANTS", "Device", "DeviceError", "Placement", "auto_row", "build",
+__all__ = ["CPU", "TABLE", "VARIANTS", "Device", "DeviceError", "Placement", "auto_row", "build",
            "judge", "on_gpu", "place"]

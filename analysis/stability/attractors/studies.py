@@ -146,7 +146,7 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                                 period=period, dt=dt, options=options,
                                 label_options=label_options, match_distance=match_distance,
                                 progress=progress, blocks=Blocks(block, runner),
-                                mapper=mapper, device=device,
+                                mapper=mapper, device=study.placement,  # judged once
                                 feature_options=feature_options)
     ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed,
                               match_distance)

@@ -464,9 +464,7 @@ def make_study(system: System, members: int, *, period: str | Period | None = No
     study = AttractorStudy(system, period, dt, options, label_options, scale, compiled,
                            feature_options=feature_options)
     resolved = resolve(device, members, study.map, study.feature_options)
-    kind = choose(mapper, resolved, members)
-    if kind == "features":
-        study.mapper_kind, study.placement = kind, resolved
+    study.mapper_kind, study.placement = choose(mapper, resolved, members), resolved
     size = study.default_block if block is None else Blocks(block).size
     study.check_memory(members, size)
     study.prepare(min(size, members))
