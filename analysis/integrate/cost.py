@@ -100,11 +100,14 @@ class CostEstimate:
     """The cores this process may use (``analysis.threads.thread_count``)."""
     busy: float | None = None
     """The share of a core the probe got (CPU s / wall s; None: not measured)."""
+    shared: float = 1.0
+    """How much slower each of the workers runs than the probe did when they share the
+    loaded cores (``contention``; included in ``step_seconds``)."""
 
     def load_lines(self) -> list[str]:
         """One line when the probe ran on a loaded machine (the load average above the
         cores, or a probe that got less than ``BUSY`` of a core), else none."""
-        return load_lines(self.load, self.cores, self.busy)
+        return load_lines(self.load, self.cores, self.busy, self.shared)
 
     @property
     def whole_seconds(self) -> float:
@@ -187,10 +190,12 @@ class CostEstimate:
         return found
 
 
-def load_lines(load: float | None, cores: int, busy: float | None = None) -> list[str]:
+def load_lines(load: float | None, cores: int, busy: float | None = None,
+               shared: float = 1.0) -> list[str]:
     """``['note: the machine was loaded (load 3.1 on 2 cores): the estimate assumes that
     load']`` when the 1-minute ``load`` average was above ``cores`` or the probe got less
-    than ``BUSY`` of a core (``busy``), else ``[]``."""
+    than ``BUSY`` of a core (``busy``), else ``[]``; ``shared``: the workers' slowdown
+    against the probe's (``contention``), said when above 1."""
     over = load is not None and cores > 0 and load > cores
     competed = busy is not None and busy < BUSY
     if not (over or competed):
@@ -198,7 +203,22 @@ def load_lines(load: float | None, cores: int, busy: float | None = None) -> lis
     seen = f"load {load:.1f} on {cores} core{'s' if cores != 1 else ''}" \
         if load is not None else f"{cores} cores"
     share = f", the probe got {busy:.0%} of a core" if competed else ""
-    return [f"note: the machine was loaded ({seen}{share}): the estimate assumes that load"]
+    workers = f", its workers sharing it at {1 / shared:.0%} of the probe's speed" \
+        if shared > 1.005 else ""
+    return [f"note: the machine was loaded ({seen}{share}): the estimate assumes that "
+            f"load{workers}"]
+
+
+def contention(busy: float | None, cores: int, workers: int) -> float:
+    """How much slower each of ``workers`` threads runs than a one-thread probe that got
+    ``busy`` of a core, on ``cores`` cores shared fairly with the same other work: the
+    probe's share ``busy = C / (R + 1)`` gives R other runnable threads, each worker then
+    gets ``min(1, C / (R + W))``. 1 when the probe was not competing (``busy`` at least
+    ``BUSY`` or unknown)."""
+    if busy is None or busy >= BUSY or cores < 1 or busy <= 0:
+        return 1.0
+    others = cores / busy - 1
+    return max(1.0, busy / min(1.0, cores / (others + max(1, workers))))
 
 
 def machine_load() -> float | None:
@@ -408,8 +428,12 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
     else:  # a millisecond: too short to say the share of a core it got
         seconds = probe_step_seconds(system, dt, compiled=compiled)
         seconds *= 1 + system.n_state * tangent_steps / max(1, steps)
-    estimate = CostEstimate(members=int(members), steps=int(steps),
-                            workers=int(workers or os.cpu_count() or 1), step_seconds=seconds,
-                            dt=float(dt), coarsest_dt=coarsest_step(system), what=what,
-                            bound=bound, spent=process_seconds(), kernel_note=note)
+    from analysis.threads import thread_count
+
+    count = int(workers or os.cpu_count() or 1)
+    shared = contention(busy, thread_count(), min(count, int(members)))
+    estimate = CostEstimate(members=int(members), steps=int(steps), workers=count,
+                            step_seconds=seconds * shared, dt=float(dt),
+                            coarsest_dt=coarsest_step(system), what=what, bound=bound,
+                            spent=process_seconds(), kernel_note=note, shared=shared)
     return with_load(estimate, seen, busy)

@@ -110,3 +110,28 @@ def test_a_probe_that_got_part_of_a_core_says_so():
 def test_bad_arguments_name_their_parameter(system, field, kwargs):
     with pytest.raises(InputError, match=rf"^{field}: "):
         estimate_cost(system, 10, 1000, dt=1e-5, **kwargs)
+
+
+def test_workers_that_share_a_loaded_machine_run_slower_than_its_probe():
+    """A probe that got half of one of 2 cores saw 3 other runnable threads: 2 workers then
+    get 2/5 of a core each, 1.25 times slower than the probe; an unloaded probe (or one
+    worker) none."""
+    assert cost.contention(0.5, 2, 2) == pytest.approx(1.25)
+    assert cost.contention(0.5, 2, 1) == pytest.approx(1.0)
+    assert cost.contention(1.0, 2, 2) == 1.0 and cost.contention(None, 2, 2) == 1.0
+    assert load_lines(3.0, 2, 0.5, 1.25) == [
+        f"{LOADED} (load 3.0 on 2 cores, the probe got 50% of a core): the estimate assumes "
+        "that load, its workers sharing it at 80% of the probe's speed"]
+
+
+def test_the_estimate_counts_the_workers_sharing_a_loaded_machine(monkeypatch, system):
+    from analysis.threads import available_cores
+
+    if available_cores() < 2:
+        pytest.skip("two cores to share")
+    monkeypatch.setenv("BEARINGDYN_THREADS", "2")
+    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: KernelProbe(2e-7, None, 0.5))
+    est = estimate_cost(system, 10, 1000, dt=1e-5, workers=2, path=KERNELS, load=4.0)
+    assert est.shared == pytest.approx(1.25) and est.cores == 2
+    assert est.step_seconds == pytest.approx(2.5e-7)
+    assert est.load_lines()[0].endswith("its workers sharing it at 80% of the probe's speed")
