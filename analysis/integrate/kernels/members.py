@@ -246,6 +246,12 @@ def gpu_kernel(system: System, tangent: bool):
     return cuda_kernel(system.model, system.structure, tangent)
 
 
+def _kernel(system: System, tangent: bool, device: str | Placement):
+    """``cpu_kernel`` or ``gpu_kernel`` by ``device`` (kept for
+    ``benchmarks/bench_ensemble.py``'s first-use timing; runs take ``Placement.row.kernel``)."""
+    return (gpu_kernel if on_gpu(device) else cpu_kernel)(system, tangent)
+
+
 def run_members(system: System, states: np.ndarray, parameters: np.ndarray | None,
                 h: np.ndarray | float, schedule: Schedule, *,
                 t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
