@@ -271,8 +271,8 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
     memory on the GPU); ``progress(done, total)`` after each block (members: on the CPU
 without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, at least
 ``CHUNK_PER_THREAD`` members per thread, sized from the chunks before); ``threads``:
-    CPU threads (None: ``cpu.cores()``, every core; a worker process of a pool of W takes
-    cores / W; None: the placement's, else every core).
+    CPU threads (None: the placement's ``threads``, else ``cpu.cores()``, every core; a
+    worker process of a pool of W takes cores / W).
 
     Each member's blow-up limit is ``simulate.blow_up_limit`` of its parameters. Bad input
     raises ``InputError`` before anything runs; a model whose kernel cannot be written or
