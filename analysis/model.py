@@ -35,7 +35,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 import generated
-from analysis.errors import InputError, StaleModelError
+from analysis.errors import InputError, StaleModelError, check_count
 from modelgen.locations import (
     MANIFEST,
     MODELS_ENV,
@@ -385,15 +385,12 @@ class Model:
         else:
             counts = [n_balls]
         for b, n in zip(bearings, counts, strict=True):
-            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or \
-                    not b.fewest <= n <= b.most:
-                label = "n_balls" if len(bearings) == 1 else f"n_balls[{b.name}]"
-                why = (f"at most {b.most} balls fit the geometry"
-                       if balls_that_fit(self.defaults, b.name) is not None else
-                       "the model gives no ball and pitch diameters, so whether they fit "
-                       "cannot be checked")
-                raise InputError(f"{label}: must be an integer in [{b.fewest}, {b.most}] "
-                                 f"({why}), got {n!r}")
+            label = "n_balls" if len(bearings) == 1 else f"n_balls[{b.name}]"
+            why = (f"at most {b.most} balls fit the geometry"
+                   if balls_that_fit(self.defaults, b.name) is not None else
+                   "the model gives no ball and pitch diameters, so whether they fit "
+                   "cannot be checked")
+            check_count(label, n, b.fewest, b.most, f" ({why})")
         return Balls.of(self, counts)
 
     def structure_attrs(self, structure: Structure) -> dict[str, int]:

@@ -30,21 +30,17 @@ def thread_count() -> int:
     may run on. A value that is not a whole number in [1, available cores] is an
     ``InputError`` naming the variable (it was silently ignored, and 100000 was reported as
     100000 cores). The command line checks it before any command starts."""
-    from analysis.errors import InputError
+    from analysis.errors import InputError, check_count
 
     given = os.environ.get(THREADS_VARIABLE, "").strip()
     available = available_cores()
     if not given:
         return available
     try:
-        count = int(given)
-    except ValueError:
-        count = None
-    if count is None or not 1 <= count <= available:
-        raise InputError(f"{THREADS_VARIABLE}: must be a whole number in [1, {available}] "
-                         f"(the cores this process may use), got {given!r}; unset it to "
-                         f"use every core")
-    return count
+        return check_count(THREADS_VARIABLE, given, 1, available,
+                           " (the cores this process may use)", text=True)
+    except InputError as err:
+        raise InputError(f"{err}; unset it to use every core") from None
 
 BLAS_THREADS = 1
 """BLAS threads of the dense solves and eigenvalue problems (``blas_threads``)."""

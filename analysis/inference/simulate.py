@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.inference.targets import Target, TargetRow
 from analysis.integrate.kernels import Schedule, run_members
 from analysis.integrate.plan import RunPlan
@@ -61,10 +61,7 @@ class RunSettings:
                                  ("revolutions", self.revolutions, least),
                                  ("samples_per_revolution", self.samples_per_revolution, 8),
                                  ("max_peaks", self.max_peaks, 1)):
-            if isinstance(value, bool) or not isinstance(value, int) or \
-                    not low <= value <= 100_000:
-                raise InputError(f"{name}: must be a whole number in [{low}, 100000], "
-                                 f"got {value!r}")
+            check_count(name, value, low, 100_000)
         if self.revolutions % BLOCKS:
             raise InputError(f"revolutions: must be a multiple of {BLOCKS} (λ1's batches), "
                              f"got {self.revolutions}")

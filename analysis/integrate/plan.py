@@ -31,7 +31,7 @@ from typing import Literal
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
 from analysis.integrate.speed_profile import SpeedProfile
 from analysis.model import System
@@ -154,9 +154,7 @@ class RunPlan:
                 raise InputError(f"rtol: must be in (0, 1), got {rtol!r}")
             if not (math.isfinite(atol) and 0 <= atol < 1):
                 raise InputError(f"atol: must be in [0, 1), got {atol!r}")
-        if isinstance(save_every, bool) or not (isinstance(save_every, int)
-                                                 and save_every >= 1):
-            raise InputError(f"save_every: must be an integer >= 1, got {save_every!r}")
+        check_count("save_every", save_every, 1)
         check_resolution(system, dt, duration, warn=warn)
         plan = cls(system, dt, duration, transient, method, save_every,
                    None if t0 is None else float(t0), rtol, atol, profile)

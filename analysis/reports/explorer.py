@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.errors import BearingdynError, InputError
+from analysis.errors import BearingdynError, InputError, check_count
 from analysis.io import atomic_write, open_result
 from analysis.provenance import displacement_names, plain, provenance
 from analysis.stability.classify import NATURE_COLORS
@@ -169,8 +169,7 @@ def _escape(text: str) -> str:
 def check_spectrum_bins(spectrum_bins: int) -> None:
     """``InputError`` unless ``spectrum_bins`` (bins kept per spectrum) is a whole number
     >= 16."""
-    if not (isinstance(spectrum_bins, int) and spectrum_bins >= 16):
-        raise InputError(f"spectrum_bins: must be an integer >= 16, got {spectrum_bins!r}")
+    check_count("spectrum_bins", spectrum_bins, 16)
 
 
 def load_chart(chart_file: str | Path) -> xr.Dataset:

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.provenance import noise_attrs, state_names
 
 SNR_RANGE_DB = (-60.0, 200.0)
@@ -40,8 +40,7 @@ def add_noise(ds: xr.Dataset, snr_db: float, seed: int,
     ``numpy.random.default_rng(seed)``. attrs gain ``noise_snr_db``, ``noise_seed`` and
     ``noise_variables``; a run that already has noise is refused (say it once)."""
     snr = check_snr(snr_db)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"--noise-seed: must be an integer >= 0, got {seed!r}")
+    check_count("--noise-seed", seed, 0)
     if "noise_seed" in ds.attrs:
         raise InputError(f"--noise: this run already has noise (SNR "
                          f"{ds.attrs.get('noise_snr_db')} dB, seed {ds.attrs['noise_seed']})")

@@ -33,7 +33,7 @@ import scipy.interpolate
 import scipy.signal
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.speed_profile import SpeedProfile, profile_of
 from analysis.provenance import displacement_names, vc_frequencies
 from analysis.signal.spectrum import FAULT_NAMES, fault_frequencies, frequency_names
@@ -139,9 +139,7 @@ def check_samples_per_rev(ds: xr.Dataset, samples_per_rev: int | None = None
     integer >= 4, and the grid of at least 16 and at most ``MAX_ANGLE_SAMPLES`` samples."""
     samples_per_rev = default_samples_per_rev(ds) if samples_per_rev is None \
         else samples_per_rev
-    if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, (int, np.integer)) \
-            or samples_per_rev < 4:
-        raise InputError(f"--samples-per-rev: must be an integer >= 4, got {samples_per_rev!r}")
+    check_count("--samples-per-rev", samples_per_rev, 4)
     phi = shaft_angle(ds)
     turns = (phi[-1] - phi[0]) / (2 * math.pi)
     count = math.floor((phi[-1] - phi[0]) / (2 * math.pi / samples_per_rev) * (1 + 1e-12)) + 1

@@ -31,7 +31,7 @@ import scipy.fft
 import scipy.signal
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.forcing import run_period_parameter
 from analysis.integrate.speed_profile import refuse_profile
 from analysis.provenance import displacement_names, vc_frequencies
@@ -442,9 +442,7 @@ def find_peaks(ds: xr.Dataset, var: str | None = None, max_peaks: int = 8,
     if vocabulary not in ("shaft", "fault"):
         raise InputError(f"vocabulary: must be 'shaft' or 'fault', got {vocabulary!r}")
     var = displacement_names(ds)[0] if var is None else var
-    if isinstance(max_peaks, bool) or not isinstance(max_peaks, (int, np.integer)) \
-            or max_peaks < 1:
-        raise InputError(f"max_peaks: must be an integer >= 1, got {max_peaks!r}")
+    check_count("max_peaks", max_peaks, 1)
     if not 0 < min_relative_height <= 1:
         raise InputError(f"min_relative_height: must be in (0, 1], got {min_relative_height!r}")
     base_hz, vcs, base = label_frequencies(ds.attrs)

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError, SimulationError
+from analysis.errors import InputError, SimulationError, check_count
 from analysis.integrate.checks import MAX_STEPS, check_seconds
 from analysis.integrate.compiled import compiled_function
 from analysis.integrate.plan import RunPlan
@@ -85,14 +85,11 @@ def _check_lengths(dt: float, renorm_every: int, transient: float, duration: flo
 
 def _check_options(n: int, n_exponents, renorm_every, duration: float,
                    tangent_transient: float) -> int:
-    if isinstance(n_exponents, bool) or not isinstance(n_exponents, (int, np.integer)) or \
-            not 1 <= n_exponents <= n:
-        raise InputError(f"n_exponents: must be an integer in [1, {n}], got {n_exponents!r}")
-    if not (isinstance(renorm_every, int) and renorm_every >= 1):
-        raise InputError(f"renorm_every: must be an integer >= 1, got {renorm_every!r}")
+    n_exponents = check_count("n_exponents", n_exponents, 1, n)
+    check_count("renorm_every", renorm_every, 1)
     check_seconds("duration", duration)
     check_seconds("tangent_transient", tangent_transient, zero=True)
-    return int(n_exponents)
+    return n_exponents
 
 
 def lyapunov(

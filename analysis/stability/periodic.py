@@ -26,7 +26,7 @@ from typing import Literal
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.forcing import period_parameter
 from analysis.integrate.flow import (
     Period,
@@ -284,8 +284,7 @@ def shoot(
     The RK4 step is at most ``dt`` (s; default: the spec's), adjusted so a whole number of
     steps fits the period. ``tol`` bounds the scaled residual |Φ_T(z0) − z0| / scale.
     """
-    if not (isinstance(segments, int) and 1 <= segments <= 64):
-        raise InputError(f"segments: must be an integer in [1, 64], got {segments!r}")
+    segments = check_count("segments", segments, 1, 64)
     system, per = _prepare(as_system(system, n_balls, **parameters), period)
     model, s, values = system.model, system.structure, dict(system.parameters)
     n = model.n_state

@@ -42,7 +42,7 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError, SimulationError
+from analysis.errors import InputError, SimulationError, check_count
 from analysis.model import BallCounts, Model, System, as_system
 from analysis.provenance import run_attrs
 
@@ -203,8 +203,7 @@ def coefficients(target: System | Model | str, n_balls: BallCounts = None,
     ``damping_mean`` (row, column), ``residual`` and ``singular`` (cage_angle); attrs: the
     run provenance (model, spec, versions, every parameter, balls) and ``cage_pitch``.
     """
-    if isinstance(n_angles, bool) or not isinstance(n_angles, int) or not 1 <= n_angles <= 3600:
-        raise InputError(f"n_angles: must be an integer in [1, 3600], got {n_angles!r}")
+    check_count("n_angles", n_angles, 1, 3600)
     system = as_system(target, n_balls, **parameters)
     fun, coordinates = _force_function(system)
     pitch = cage_pitch(system.structure)

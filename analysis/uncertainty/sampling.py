@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import qmc
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.uncertainty.distributions import Dist
 
 MAX_SAMPLES = 1 << 20
@@ -53,11 +53,7 @@ class Design:
 
 def check_samples(samples: int) -> int:
     """``samples`` as a whole number in [1, ``MAX_SAMPLES``] (``InputError`` else)."""
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or \
-            not 1 <= samples <= MAX_SAMPLES:
-        raise InputError(f"--samples: must be a whole number in [1, {MAX_SAMPLES}], "
-                         f"got {samples!r}")
-    return int(samples)
+    return check_count("--samples", samples, 1, MAX_SAMPLES)
 
 
 def unit_design(p: int, samples: int, seed: int) -> np.ndarray:
@@ -79,10 +75,8 @@ def unit_design(p: int, samples: int, seed: int) -> np.ndarray:
 def draw(dists: Sequence[Dist], samples: int, seed: int = 0) -> Design:
     """The Saltelli design of ``samples`` base points for ``dists``, seeded."""
     samples = check_samples(samples)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or \
-            not 0 <= seed < 2**32:
-        raise InputError(f"--seed: must be a whole number in [0, {2**32 - 1}], got {seed!r}")
-    unit = unit_design(len(dists), samples, int(seed))
+    seed = check_count("--seed", seed, 0, 2**32 - 1)
+    unit = unit_design(len(dists), samples, seed)
     values = np.column_stack([d.ppf(unit[:, j]) for j, d in enumerate(dists)])
     if not np.all(np.isfinite(values)):
         raise InputError("--dist: a draw is not finite")

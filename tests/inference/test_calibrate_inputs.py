@@ -49,7 +49,7 @@ BAD_TARGETS = [
     ('[[rows]]\nn_balls = 7\npresent = { x = ["BPFO"] }\n', "rows[0].present.x"),
     ('[[rows]]\nn_balls = 7\nmajor = { z = "X" }\n', "rows[0].major: must be a coordinate"),
     ('[[rows]]\nn_balls = { left = 7 }\nclass = "chaotic"\n', "has no bearing 'left'"),
-    ('[[rows]]\nn_balls = 40\nclass = "chaotic"\n', "rows[0].n_balls: must be an integer"),
+    ('[[rows]]\nn_balls = 40\nclass = "chaotic"\n', "rows[0].n_balls: must be a whole number"),
     ('name = "empty"\n', "an empty target"),
     (ROW + 'rotor_weight = 3.0\n', "rows[0].rotor_weight: not a parameter"),
 ]

@@ -60,7 +60,7 @@ def test_a_step_only_plan_refuses_an_unstable_step(rotor):
     (dict(duration=0.1, dt=-1.0, method="euler"), r"^dt: must be a finite number > 0 s"),
     (dict(duration=0.1, method="euler", save_every=0), r"^method: must be 'rk4' or"),
     (dict(duration=0.1, save_every=0, dt=1.0), r"^dt: must be <= duration"),
-    (dict(duration=0.1, save_every=0, dt=0.05), r"^save_every: must be an integer >= 1"),
+    (dict(duration=0.1, save_every=0, dt=0.05), r"^save_every: must be a whole number >= 1"),
     (dict(duration=0.1, dt=0.05), r"^dt: must resolve the fastest forcing"),
     (dict(duration=0.1, dt=8e-4), r"^dt: must be in \(0, .*\] s for RK4"),
     (dict(duration=1e4, dt=1e-5, save_every=1, in_memory=True), r"^save_every: the run "),

@@ -334,6 +334,6 @@ def test_a_pit_on_ball_seven_needs_seven_balls(user_cache):
     path.write_text(tomli_w.dumps(data))
     model = load_model(str(path))
     assert model.module.BEARINGS[0][4] == (7, model.module.BEARINGS[0][4][1])
-    with pytest.raises(InputError, match=r"must be an integer in \[7, \d+\]"):
+    with pytest.raises(InputError, match=r"must be a whole number in \[7, \d+\]"):
         as_system(model, 6)
     assert as_system(model, 7).structure == (7,)

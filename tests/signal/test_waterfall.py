@@ -166,7 +166,7 @@ def test_bad_inputs_one_line_exit_2_nothing_written(cli, tmp_path):
     for args, words in ((["--window", "5"], "--window: must be in"),
                         (["--var", "q"], "--var: no state variable 'q'"),
                         (["--orders", "--samples-per-rev", "2"],
-                         "--samples-per-rev: must be an integer >= 4")):
+                         "--samples-per-rev: must be a whole number >= 4")):
         res = cli("waterfall", "up.nc", "-o", "wf.png", *args, cwd=tmp_path)
         assert res.returncode == 2, res.stderr
         assert res.stderr.strip().count("\n") == 0 and words in res.stderr

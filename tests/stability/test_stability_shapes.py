@@ -87,7 +87,7 @@ def test_rotor_housing_exponents_sum_to_the_mean_divergence():
 
 
 def test_n_exponents_is_checked_against_the_state_size():
-    with pytest.raises(InputError, match=r"n_exponents: must be an integer in \[1, 2\]"):
+    with pytest.raises(InputError, match=r"n_exponents: must be a whole number in \[1, 2\]"):
         lyapunov("mathieu", duration=10.0, transient=0.0, n_exponents=3)
     one = lyapunov("mathieu", duration=10.0, transient=0.0, n_exponents=1)
     assert one.sizes["index"] == 1

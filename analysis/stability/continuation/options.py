@@ -14,7 +14,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 MAX_BRANCH_POINTS = 100_000
 """Most points one branch or curve may have."""
@@ -106,10 +106,7 @@ class ContinuationOptions:
                              f"got {self.ds!r}")
         if not self.tol < 1:
             raise InputError(f"tol: must be in (0, 1), got {self.tol!r}")
-        if isinstance(self.max_points, bool) or not isinstance(self.max_points, int) or \
-                not 2 <= self.max_points <= MAX_BRANCH_POINTS:
-            raise InputError(f"max_points: must be a whole number in [2, {MAX_BRANCH_POINTS}], "
-                             f"got {self.max_points!r}")
+        check_count("max_points", self.max_points, 2, MAX_BRANCH_POINTS)
         if not isinstance(self.guards, StepGuards):
             raise InputError(f"guards: must be a StepGuards, got {self.guards!r}")
         if self.tangent is not None and self.tangent not in TANGENTS:
