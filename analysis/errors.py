@@ -1,12 +1,37 @@
 """Errors the user can act on. The CLI prints their message (exit code 2), no traceback."""
 
+from __future__ import annotations
+
 
 class BearingdynError(Exception):
     """Base class of every error bearingdyn reports to the user."""
 
 
 class InputError(BearingdynError, ValueError):
-    """A value given by the user is outside what the model or method allows."""
+    """A value given by the user is outside what the model or method allows.
+
+    ``field``: the parameter the message names first (``"harmonics"``), when the raiser
+    says so; the message then begins ``"<field>: "``. The command line shows the option of
+    that parameter instead (``--harmonics: …``) without reading the message text back."""
+
+    field: str | None = None
+
+    def __init__(self, message: str, field: str | None = None) -> None:
+        super().__init__(message)
+        if field is not None:
+            if not message.startswith(f"{field}:"):
+                raise ValueError(f"an InputError naming field {field!r} must begin with it: "
+                                 f"{message!r}")
+            self.field = field
+
+    def __reduce__(self):  # pickled across worker processes with its field
+        return (type(self), (str(self), self.field))
+
+    def renamed(self, name: str) -> InputError:
+        """The same error naming ``name`` (an option, ``--harmonics``) instead of its
+        field."""
+        assert self.field is not None
+        return InputError(name + str(self)[len(self.field):])
 
 
 class StaleModelError(BearingdynError):
@@ -62,5 +87,6 @@ def check_count(field: str, value: object, low: int = 1, high: int | None = None
     whole = not isinstance(number, bool) and hasattr(number, "__index__")
     if not whole or number < low or (high is not None and number > high):
         bounds = f">= {low}" if high is None else f"in [{low}, {high}]"
-        raise InputError(f"{field}: must be a whole number {bounds}{note}, got {value!r}")
+        raise InputError(f"{field}: must be a whole number {bounds}{note}, got {value!r}",
+                         field=field)
     return int(number)
