@@ -10,12 +10,15 @@ states, particles, harmonic-balance points) and the RK4 steps each takes, and pr
 
 the seconds per step measured on the path the command's steps take (``path``): the member
 kernels (``KERNELS``: charts, no-follow sweeps, basins, attractors, calibrate, uncertainty)
-are timed by ``probe_kernel``, a block of members on one thread of the CPU build, sized to
+are timed by ``probe_kernel``, a block of members on as many threads of the CPU build as the
+command has workers (so that a loaded machine's share is measured, not guessed), sized to
 about ``KERNEL_PROBE_SECONDS``, the best of two; a step that carries the tangent of λ1 is
 counted by its measured cost (``tangent_step_factor``: 1.66–1.71 state steps on the
 development machine, not 2). The compiled RK4 blocks (``COMPILED``: ``simulate``, a followed
-sweep, the runs of ``hb`` and ``torus``) are timed by ``probe_step_seconds``. The compiled
-probe stood in for the kernels before and was 1.5–5× off (issue 39).
+sweep, the runs of ``hb`` and ``torus``) are timed by ``probe_step_seconds``, sized to about
+``COMPILED_PROBE_SECONDS``. The compiled probe of 400 steps (a millisecond: on a loaded
+machine a burst of a whole core) stood in for the kernels before and was 1.5–5× off
+(issue 39).
 
 The probe measures the machine as it is: ``os.getloadavg`` and the CPU share the probe got
 are recorded, and on a loaded machine the estimate says so in a line of its own (it assumes
@@ -39,7 +42,9 @@ from analysis.errors import InputError
 from analysis.model import System
 
 PROBE_STEPS = 400
-"""RK4 steps of the timed probe (after one untimed warm-up block)."""
+"""RK4 steps of the compiled probe's first timed run (after one untimed warm-up block)."""
+COMPILED_PROBE_SECONDS = 0.04
+"""About how long (s) each timed run of the compiled probe lasts."""
 RK4_STEPS = "RK4 steps"
 """The default unit of ``CostEstimate.steps``."""
 LONG = 60.0
@@ -100,14 +105,13 @@ class CostEstimate:
     """The cores this process may use (``analysis.threads.thread_count``)."""
     busy: float | None = None
     """The share of a core the probe got (CPU s / wall s; None: not measured)."""
-    shared: float = 1.0
-    """How much slower each of the workers runs than the probe did when they share the
-    loaded cores (``contention``; included in ``step_seconds``)."""
+    probe_threads: int = 1
+    """Threads the probe ran on at once (the workers', ``probe_kernel``)."""
 
     def load_lines(self) -> list[str]:
         """One line when the probe ran on a loaded machine (the load average above the
         cores, or a probe that got less than ``BUSY`` of a core), else none."""
-        return load_lines(self.load, self.cores, self.busy, self.shared)
+        return load_lines(self.load, self.cores, self.busy, self.probe_threads)
 
     @property
     def whole_seconds(self) -> float:
@@ -191,34 +195,21 @@ class CostEstimate:
 
 
 def load_lines(load: float | None, cores: int, busy: float | None = None,
-               shared: float = 1.0) -> list[str]:
+               threads: int = 1) -> list[str]:
     """``['note: the machine was loaded (load 3.1 on 2 cores): the estimate assumes that
-    load']`` when the 1-minute ``load`` average was above ``cores`` or the probe got less
-    than ``BUSY`` of a core (``busy``), else ``[]``; ``shared``: the workers' slowdown
-    against the probe's (``contention``), said when above 1."""
+    load']`` when the 1-minute ``load`` average was above ``cores`` or the probe's
+    ``threads`` got less than ``BUSY`` of a core each (``busy``), else ``[]``."""
     over = load is not None and cores > 0 and load > cores
     competed = busy is not None and busy < BUSY
     if not (over or competed):
         return []
     seen = f"load {load:.1f} on {cores} core{'s' if cores != 1 else ''}" \
         if load is not None else f"{cores} cores"
-    share = f", the probe got {busy:.0%} of a core" if competed else ""
-    workers = f", its workers sharing it at {1 / shared:.0%} of the probe's speed" \
-        if shared > 1.005 else ""
-    return [f"note: the machine was loaded ({seen}{share}): the estimate assumes that "
-            f"load{workers}"]
-
-
-def contention(busy: float | None, cores: int, workers: int) -> float:
-    """How much slower each of ``workers`` threads runs than a one-thread probe that got
-    ``busy`` of a core, on ``cores`` cores shared fairly with the same other work: the
-    probe's share ``busy = C / (R + 1)`` gives R other runnable threads, each worker then
-    gets ``min(1, C / (R + W))``. 1 when the probe was not competing (``busy`` at least
-    ``BUSY`` or unknown)."""
-    if busy is None or busy >= BUSY or cores < 1 or busy <= 0:
-        return 1.0
-    others = cores / busy - 1
-    return max(1.0, busy / min(1.0, cores / (others + max(1, workers))))
+    share = ""
+    if competed:
+        share = (f", the probe got {busy:.0%} of a core" if threads == 1 else
+                 f", the probe's {threads} threads got {busy:.0%} of a core each")
+    return [f"note: the machine was loaded ({seen}{share}): the estimate assumes that load"]
 
 
 def machine_load() -> float | None:
@@ -297,17 +288,23 @@ def coarsest_step(system: System) -> float | None:
 
 
 def probe_step_seconds(system: System, dt: float, steps: int = PROBE_STEPS,
-                       compiled: bool = True) -> float:
+                       compiled: bool = True,
+                       seconds: float = COMPILED_PROBE_SECONDS) -> float:
     """Seconds one RK4 step of ``system`` takes on the compiled path (``compiled=False``: the
-    CasADi VM), measured on ``steps`` steps from its initial state after an untimed warm-up
-    (which also builds or loads the library)."""
+    CasADi VM), measured from its initial state after an untimed warm-up (which also builds
+    or loads the library): ``steps`` steps, then, when they took less than ``seconds`` s,
+    the best of two runs sized to about ``seconds`` (at most 2,000,000 steps)."""
     from analysis.integrate.compiled import library, run_rk4
 
     lib = library(system.model, system.structure, compiled)
     p = np.asarray(system.p, dtype=float)
     z0 = np.asarray(system.state, dtype=float)
     run_rk4(lib, p, z0, dt, 8)  # warm-up: the library loaded, the buffers made
-    return best_seconds(lambda: run_rk4(lib, p, z0, dt, steps)) / steps
+    first = best_seconds(lambda: run_rk4(lib, p, z0, dt, steps), repeat=1)
+    if first >= seconds:
+        return first / steps
+    count = int(min(2_000_000, max(steps, steps * seconds / max(first, 1e-6))))
+    return best_seconds(lambda: run_rk4(lib, p, z0, dt, count)) / count
 
 
 def best_seconds(run: Callable[[], object], repeat: int = 2) -> float:
@@ -325,29 +322,37 @@ class KernelProbe:
     """A timed probe of the member kernels of a System (``probe_kernel``)."""
 
     step_seconds: float
-    """Seconds of one RK4 step of one member (state only), one thread of the CPU build."""
+    """Seconds of one RK4 step of one member (state only) on one of the ``threads``
+    threads of the CPU build, all of them running: members x steps x this / threads is
+    the wall time of a run."""
     tangent_factor: float | None = None
     """State steps one step with its tangent costs (measured; None: not probed)."""
     busy: float = 1.0
-    """The share of a core the timed runs got (CPU s / wall s)."""
+    """The share of a core each thread of the timed runs got (CPU s / wall s / threads)."""
+    threads: int = 1
+    """Threads the timed runs ran on at once."""
 
 
 def probe_kernel(system: System, dt: float, *, tangent: bool = False,
                  members: int = KERNEL_PROBE_MEMBERS, seconds: float = KERNEL_PROBE_SECONDS,
-                 steps: int | None = None, repeat: int = 2) -> KernelProbe | None:
+                 steps: int | None = None, repeat: int = 2,
+                 threads: int = 1) -> KernelProbe | None:
     """Time the member kernel of ``system`` (and, with ``tangent``, its tangent variant: one
-    tangent vector, renormalised at six sections) as the commands run it: a block of
-    ``members`` members from the System's state on one thread of the CPU build, with RK4
-    steps of ``dt`` s. ``steps`` per member (None: sized by a first run so that each timed
-    run lasts about ``seconds`` s, 120 to 200,000); the best of ``repeat`` runs each way.
-    None when the member kernel cannot be built here (no compiler, an operation its writer
-    does not know)."""
+    tangent vector, renormalised at six sections) as the commands run it: ``members``
+    members per thread from the System's state on ``threads`` threads of the CPU build at
+    once (the command's workers: on a loaded machine they share what it gives, which one
+    thread alone does not show: a process got 0.69 of a core with one thread and with
+    two), with RK4 steps of ``dt`` s. ``steps`` per member (None: sized by a first run so
+    that each timed run lasts about ``seconds`` s, 120 to 200,000); the best of ``repeat``
+    runs each way. None when the member kernel cannot be built here (no compiler, an
+    operation its writer does not know)."""
     from analysis.integrate.compiled import CompileError
     from analysis.integrate.kernels import Schedule, Unsupported, run_members
 
     if not (math.isfinite(dt) and dt > 0):
         raise InputError(f"dt: a finite RK4 step > 0 s, got {dt!r}")
-    z = np.tile(np.asarray(system.state, dtype=float), (int(members), 1))
+    threads = max(1, int(threads))
+    z = np.tile(np.asarray(system.state, dtype=float), (int(members) * threads, 1))
 
     def schedule(count: int, with_tangent: bool):
         every = max(1, count // 6)
@@ -359,7 +364,7 @@ def probe_kernel(system: System, dt: float, *, tangent: bool = False,
         best, cpu = math.inf, 0.0
         for _ in range(repeat):
             start, used = time.perf_counter(), time.process_time()
-            run_members(system, z, None, dt, sched, threads=1)
+            run_members(system, z, None, dt, sched, threads=threads)
             wall = time.perf_counter() - start
             if wall < best:
                 best, cpu = wall, time.process_time() - used
@@ -382,8 +387,8 @@ def probe_kernel(system: System, dt: float, *, tangent: bool = False,
             walls, cpus = walls + with_tangent, cpus + cpu_t
     except (Unsupported, CompileError):
         return None
-    busy = min(1.0, cpus / walls) if walls > 0 else 1.0
-    return KernelProbe(state / (count * len(z)), factor, busy)
+    busy = min(1.0, cpus / walls / threads) if walls > 0 else 1.0
+    return KernelProbe(state * threads / (count * len(z)), factor, busy, threads)
 
 
 def tangent_step_factor(system: System, dt: float, members: int = 64,
@@ -404,9 +409,10 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
     """The cost of ``members`` runs of ``steps`` RK4 steps of ``dt`` s each of ``system``
     (or of systems like it: the points of a grid) on ``workers`` workers (default: the
     cores), from a timed probe of the ``path`` that runs them: ``KERNELS``, the member
-    kernels (``probe_kernel``; ``tangent_steps`` of the ``steps`` carry λ1's tangent, each
-    counted by the measured ``tangent_factor``), or ``COMPILED``, the compiled RK4 blocks
-    (``probe_step_seconds``, ``PROBE_STEPS`` steps; ``compiled=False``: the CasADi VM).
+    kernels (``probe_kernel`` on as many threads as the workers, the cores at most;
+    ``tangent_steps`` of the ``steps`` carry λ1's tangent, each counted by the measured
+    ``tangent_factor``), or ``COMPILED``, the compiled RK4 blocks (``probe_step_seconds``;
+    ``compiled=False``: the CasADi VM).
     Where the member kernel cannot be built the compiled probe stands in, the tangent as
     ``n`` more states (the scalar path's columns). ``load``: the 1-minute load average to
     report (None: read now, ``os.getloadavg``)."""
@@ -415,8 +421,13 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
     if not 0 <= tangent_steps <= steps:
         raise InputError(f"tangent_steps: a whole number in [0, steps = {steps}], got "
                          f"{tangent_steps!r}")
+    from analysis.threads import thread_count
+
     seen = machine_load() if load is None else float(load)
-    probe = probe_kernel(system, dt, tangent=tangent_steps > 0) if path == KERNELS else None
+    count = int(workers or os.cpu_count() or 1)
+    threads = max(1, min(count, thread_count(), int(members)))
+    probe = probe_kernel(system, dt, tangent=tangent_steps > 0, threads=threads) \
+        if path == KERNELS else None
     busy, note = None, ""
     if probe is not None:
         factor = probe.tangent_factor or 1.0
@@ -428,12 +439,9 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
     else:  # a millisecond: too short to say the share of a core it got
         seconds = probe_step_seconds(system, dt, compiled=compiled)
         seconds *= 1 + system.n_state * tangent_steps / max(1, steps)
-    from analysis.threads import thread_count
-
-    count = int(workers or os.cpu_count() or 1)
-    shared = contention(busy, thread_count(), min(count, int(members)))
     estimate = CostEstimate(members=int(members), steps=int(steps), workers=count,
-                            step_seconds=seconds * shared, dt=float(dt),
+                            step_seconds=seconds, dt=float(dt),
                             coarsest_dt=coarsest_step(system), what=what, bound=bound,
-                            spent=process_seconds(), kernel_note=note, shared=shared)
+                            spent=process_seconds(), kernel_note=note,
+                            probe_threads=threads if probe is not None else 1)
     return with_load(estimate, seen, busy)

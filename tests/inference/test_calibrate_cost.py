@@ -32,7 +32,7 @@ def test_the_estimate_is_the_probes_arithmetic(monkeypatch):
     seen = []
 
     def probe(system, dt, **kwargs):
-        seen.append(kwargs)
+        seen.append(kwargs.get("tangent"))
         return cost.KernelProbe(2e-6, 1.5 if kwargs.get("tangent") else None)
 
     monkeypatch.setattr(cost, "probe_kernel", probe)
@@ -43,7 +43,7 @@ def test_the_estimate_is_the_probes_arithmetic(monkeypatch):
     problem = prepare("vakharia2015", "paper-table2", PRIORS, samples=6, rounds=3,
                       settings=TINY)
     steps, tangent = abc.kernel_steps(problem.target, TINY, problem.model)
-    assert seen == [{"tangent": True}], "the member kernel's tangent variant is probed"
+    assert seen == [True], "the member kernel's tangent variant is probed"
     assert 2 * tangent + (steps - tangent) == member_steps(problem.target, TINY,
                                                            problem.model)
     assert (est.kernels.members, est.kernels.steps, est.kernels.workers) == (18, steps, 4)

@@ -112,26 +112,29 @@ def test_bad_arguments_name_their_parameter(system, field, kwargs):
         estimate_cost(system, 10, 1000, dt=1e-5, **kwargs)
 
 
-def test_workers_that_share_a_loaded_machine_run_slower_than_its_probe():
-    """A probe that got half of one of 2 cores saw 3 other runnable threads: 2 workers then
-    get 2/5 of a core each, 1.25 times slower than the probe; an unloaded probe (or one
-    worker) none."""
-    assert cost.contention(0.5, 2, 2) == pytest.approx(1.25)
-    assert cost.contention(0.5, 2, 1) == pytest.approx(1.0)
-    assert cost.contention(1.0, 2, 2) == 1.0 and cost.contention(None, 2, 2) == 1.0
-    assert load_lines(3.0, 2, 0.5, 1.25) == [
-        f"{LOADED} (load 3.0 on 2 cores, the probe got 50% of a core): the estimate assumes "
-        "that load, its workers sharing it at 80% of the probe's speed"]
+def test_the_probe_runs_on_the_threads_of_the_workers(monkeypatch, system):
+    """The kernel probe runs as many threads as the command has workers (the cores at most,
+    the members at most): on a loaded machine they share what it gives."""
+    from analysis.threads import thread_count
+
+    asked = []
+
+    def probe(sys, dt, *, threads=1, **kwargs):
+        asked.append(threads)
+        return KernelProbe(2e-7, None, 0.4, threads)
+
+    monkeypatch.setattr(cost, "probe_kernel", probe)
+    est = estimate_cost(system, 10, 1000, dt=1e-5, workers=64, path=KERNELS, load=0.0)
+    one = estimate_cost(system, 1, 1000, dt=1e-5, workers=64, path=KERNELS, load=0.0)
+    assert asked == [min(10, thread_count()), 1]
+    assert est.probe_threads == asked[0] and one.probe_threads == 1
+    line = est.load_lines()[0]
+    assert line.endswith("of a core each): the estimate assumes that load") \
+        if asked[0] > 1 else "the probe got 40% of a core" in line
 
 
-def test_the_estimate_counts_the_workers_sharing_a_loaded_machine(monkeypatch, system):
-    from analysis.threads import available_cores
-
-    if available_cores() < 2:
-        pytest.skip("two cores to share")
-    monkeypatch.setenv("BEARINGDYN_THREADS", "2")
-    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: KernelProbe(2e-7, None, 0.5))
-    est = estimate_cost(system, 10, 1000, dt=1e-5, workers=2, path=KERNELS, load=4.0)
-    assert est.shared == pytest.approx(1.25) and est.cores == 2
-    assert est.step_seconds == pytest.approx(2.5e-7)
-    assert est.load_lines()[0].endswith("its workers sharing it at 80% of the probe's speed")
+def test_a_threaded_probe_gives_the_seconds_of_a_step_per_thread(system):
+    probe = probe_kernel(system, 1e-5, members=4, steps=300, threads=2)
+    assert probe is not None and probe.threads == 2
+    assert math.isfinite(probe.step_seconds) and 0 < probe.step_seconds < 1e-3
+    assert 0 < probe.busy <= 1.0
