@@ -37,8 +37,10 @@ from analysis.model import System
 
 NEWTON_ITERATIONS = 6
 """Newton iterations expected of one HB response from a simulation's guess."""
-BRANCH_ITERATIONS = 3
-"""Newton iterations expected per point of a branch (predictor, then corrector)."""
+BRANCH_ITERATIONS = 5
+"""Newton iterations expected per point of a branch (predictor, then corrector; 4.7
+solves a point measured on a Duffing branch of H = 60 through two folds, 100 points; 3
+said half of that)."""
 CIRCLE_EVALUATIONS = 4
 """Shaft-map evaluations expected per circle solve (the first residual, about three Newton
 steps: measured 2 iterations at vakharia2015 N_b = 10, 5000 rpm, N = 65)."""
@@ -135,9 +137,28 @@ def hb_cost(system: System, request, torus: bool = False) -> CostEstimate:
     seconds = probe_newton_seconds(equations)
     estimate = _newton_estimate(seconds, request, what)
     errors = NEWTON_ITERATIONS * seconds * (DOUBLED_ITERATION[torus] + 2.0)
+    hill = []
+    if not torus and request.param is not None and request.stability["stability"]:
+        hill = [("Hill's stability of each point",
+                 estimate.members * probe_hill_seconds(equations))]
     return estimate.with_parts(
-        ("the two error-estimate solves (2H, 2x samples)", errors),
+        ("the two error-estimate solves (2H, 2x samples)", errors), *hill,
         *command_parts(system, request, 3))
+
+
+def probe_hill_seconds(equations) -> float:
+    """Seconds of Hill's multipliers (``hill.hill_stability``: the eigenproblem each
+    point of a periodic branch solves, 1.8 s of a 17 s branch of 100 points at H = 60) of
+    the Jacobian of ``equations`` (a ``HarmonicSystem``) at zero coefficients, in
+    ``blas_threads()`` as the branch's."""
+    from analysis.frequency.periodic.hill import hill_stability
+    from analysis.threads import blas_threads
+
+    p = np.asarray(equations.system.p, dtype=float)
+    _, jac, _ = equations.evaluate(np.zeros(equations.size), p)
+    with blas_threads():
+        return best_seconds(lambda: hill_stability(jac, equations.n, equations.harmonics,
+                                                   equations.period_s(p)), repeat=1)
 
 
 def _newton_estimate(seconds: float, request, what: str) -> CostEstimate:
