@@ -16,7 +16,7 @@ from dataclasses import replace
 import pytest
 
 from analysis.errors import InputError
-from analysis.integrate.kernels import cpu, devices, members, source
+from analysis.integrate.kernels import cpu, devices, members, placement, source
 from analysis.sweeps.chart import chart_device, stability_chart
 from analysis.sweeps.diagram import bifurcation_diagram
 from analysis.sweeps.grid import Axis, Setting
@@ -77,7 +77,7 @@ def test_a_gpu_that_cannot_build_is_refused_or_left_to_the_cores(unwritable, mon
     monkeypatch.setattr(devices, "gpu_problem", lambda: None)
     setting = replace(SETTING, transient=1.0)  # wide and long: auto picks the GPU
     steps = round(setting.transient / setting.step())
-    assert devices.resolve_device("auto", len(WIDE.values), steps) == "gpu"
+    assert placement.resolve_device("auto", len(WIDE.values), steps) == "gpu"
     with pytest.raises(InputError, match=REFUSED.format("gpu")):
         chart_device(setting, WIDE, Y, "gpu")
     assert chart_device(setting, WIDE, Y, "auto") == "cpu"

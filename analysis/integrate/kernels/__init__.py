@@ -11,12 +11,7 @@ every ensemble takes.
 """
 
 from analysis.integrate.kernels.cuda import cuda_source
-from analysis.integrate.kernels.devices import (
-    DeviceError,
-    DeviceInfo,
-    device_info,
-    resolve_device,
-)
+from analysis.integrate.kernels.devices import DeviceError, DeviceInfo, device_info
 from analysis.integrate.kernels.members import (
     MemberResult,
     Schedule,
@@ -25,7 +20,7 @@ from analysis.integrate.kernels.members import (
     run_members,
     section_step,
 )
-from analysis.integrate.kernels.placement import Placement, place
+from analysis.integrate.kernels.placement import Placement, place, resolve_device
 from analysis.integrate.kernels.source import Unsupported
 
 __all__ = ["DeviceError", "DeviceInfo", "MemberResult", "Placement", "Schedule", "Unsupported",

@@ -3,7 +3,8 @@
 ``device_info()`` lists the CPU (cores this process may use) and, when CuPy is installed and
 a GPU visible, each GPU (name, memory, CuPy and CUDA versions); ``gpu_problem`` says why no GPU
 can be used. Which device a run takes is judged once, by ``placement.place`` (the table of
-devices, the ``auto`` rule, the kernels' builds); ``resolve_device`` is its name-only form.
+devices, the ``auto`` rule, the kernels' builds; ``placement.resolve_device`` is its
+name-only form).
 A refused device is a ``DeviceError``: an ``InputError`` naming the parameter ``device``
 (``field``), whose ``text("--device")`` is the same line naming a command's option.
 """
@@ -99,16 +100,6 @@ def device_info() -> list[DeviceInfo]:
                               cupy_version=cupy.__version__,
                               cuda_version=f"{version // 1000}.{version % 1000 // 10}"))
     return out
-
-
-def resolve_device(device: str, members: int, steps: int) -> str:
-    """``"cpu"`` or ``"gpu"`` for a run of ``members`` members of ``steps`` RK4 steps each:
-    the name of the row ``placement.judge`` takes (the device table and the ``auto`` rule;
-    ``DeviceError`` for another name, or for ``gpu`` without CuPy or a visible GPU). A run
-    judges its device once with ``placement.place``; this is its name-only form."""
-    from analysis.integrate.kernels.placement import judge
-
-    return judge(device, members, steps).name
 
 
 def no_gpu_error(problem: str) -> DeviceError:

@@ -18,20 +18,29 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 
 from analysis.errors import InputError, SimulationError
-from analysis.integrate.compiled import test_state
-from analysis.integrate.kernels.cpu import cores, cpu_library
-from analysis.integrate.kernels.devices import DeviceError
+from analysis.integrate.kernels.builds import GPU_SELF_TEST_TOL as GPU_SELF_TEST_TOL
+from analysis.integrate.kernels.builds import SELF_TEST_TOL as SELF_TEST_TOL
+from analysis.integrate.kernels.builds import (
+    cpu_kernel,
+    gpu_kernel,
+    self_test,
+    self_test_gpu,
+)
+from analysis.integrate.kernels.builds import unbuildable as unbuildable
+from analysis.integrate.kernels.cpu import cores
 from analysis.integrate.kernels.placement import Placement, on_gpu, place
+from analysis.integrate.kernels.schedule import Schedule
 from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.model import System
 
+_self_test, _self_test_gpu = self_test, self_test_gpu
+"""The self-tests (``builds``), under the names whose caches tests and benchmarks clear."""
 HOST_BUDGET = 8 * 2**30
 """Bytes of results a call may hold in host memory (as ``plan.MEMORY_BUDGET``)."""
 CPU_BLOCK = 1 << 16
@@ -44,13 +53,6 @@ CHUNK_PER_THREAD = 4
 """Least members per thread in such a sub-chunk (OpenMP still fills every core)."""
 GPU_BLOCK_SHARE = 0.5
 """Share of the GPU's free memory one block of members may take."""
-SELF_TEST_TOL = 1e-12
-"""Relative agreement of the tangent variant with its stage RK4 in CasADi (self-test)."""
-GPU_SELF_TEST_TOL = 1e-10
-"""Relative agreement of the CUDA build with the CPU build over the self-test's steps (CUDA's
-libm differs from glibc's in the last bits)."""
-
-
 def section_step(period_s: float, dt: float) -> tuple[float, int]:
     """(h, N): the largest RK4 step h <= ``dt`` (s) that divides the section period
     ``period_s`` (s) into N whole steps, N = ceil(T/dt − 1e-9), h = T/N: sections then fall
@@ -64,88 +66,6 @@ def section_step(period_s: float, dt: float) -> tuple[float, int]:
     if abs(period_s / dt - steps) <= 1e-9:  # already whole steps: keep dt itself (bit for
         return float(dt), steps             # bit the run of h = dt; T/N may round off it)
     return period_s / steps, steps
-
-
-@dataclass(frozen=True)
-class Schedule:
-    """What every member runs and records (steps are RK4 steps of the member's h). The four
-    counts are whole numbers, one for every member or one per member (1-D sequences of
-    length M: a chart's points differ in section period and record length)."""
-
-    transient_steps: int | Sequence[int]
-    """RK4 steps before the first recorded section interval (>= 0)."""
-    steps_per_section: int | Sequence[int]
-    """RK4 steps between recorded sections (>= 1); section j is the state after
-    ``transient_steps + (j + 1)·steps_per_section`` steps."""
-    n_sections: int | Sequence[int]
-    """K sections recorded per member (>= 1)."""
-    tangent: bool = False
-    """Also carry one tangent vector (from e1 at the end of the transient), renormalised at
-    each section."""
-    lyapunov_skip: int | Sequence[int] = 0
-    """Sections whose logs are not averaged into λ1 (< n_sections); the extremes are taken
-    from the end of these sections on (the record)."""
-    keep_sections: bool = True
-    """False: only reduced results leave the device (no (M, K, n) sections)."""
-    extremes_from: int | Sequence[int] | None = None
-    """First step of the extremes (``low``, ``high``); None: ``transient_steps +
-    lyapunov_skip · steps_per_section``."""
-    extremes_to: int | Sequence[int] | None = None
-    """Last step of the extremes; None: the last section's. A member runs on to it when it
-    is later (a record that ends between sections)."""
-
-    def __post_init__(self) -> None:
-        for name, low in (("transient_steps", 0), ("steps_per_section", 1),
-                          ("n_sections", 1), ("lyapunov_skip", 0)):
-            self.counts(name, low)
-        for name in ("extremes_from", "extremes_to"):
-            if getattr(self, name) is not None:
-                self.counts(name, 0)
-        if np.any(self.counts("lyapunov_skip") >= self.counts("n_sections")):
-            raise InputError(f"lyapunov_skip: fewer than n_sections ({self.n_sections}), got "
-                             f"{self.lyapunov_skip}")
-
-    def counts(self, name: str, low: int = 0) -> np.ndarray:
-        """The field ``name`` as int64 (0-d or 1-d), checked: whole numbers >= ``low``."""
-        value = getattr(self, name)
-        arr = np.asarray(value)
-        if arr.ndim > 1 or arr.size == 0 or arr.dtype == bool \
-                or not np.issubdtype(arr.dtype, np.number) \
-                or not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)) \
-                or np.any(arr < low):
-            raise InputError(f"{name}: a whole number >= {low} (or one per member), got "
-                             f"{value!r}")
-        return arr.astype(np.int64)
-
-    def per_member(self, m: int) -> list[np.ndarray]:
-        """transient, steps per section, sections, skip, extremes from and to: (m,) int64
-        each (``InputError`` when a per-member field's length is not m)."""
-        out = []
-        for name in ("transient_steps", "steps_per_section", "n_sections", "lyapunov_skip",
-                     "extremes_from", "extremes_to"):
-            if getattr(self, name) is None:
-                tr, ev, ns, skip = out[:4]
-                arr = tr + skip * ev if name == "extremes_from" else tr + ev * ns
-            else:
-                arr = self.counts(name)
-            if arr.ndim == 1 and len(arr) != m:
-                raise InputError(f"{name}: one number or one per member ({m}), got {len(arr)}")
-            out.append(np.ascontiguousarray(np.broadcast_to(arr, (m,)), dtype=np.int64))
-        return out
-
-    @property
-    def total_steps(self) -> int:
-        """RK4 steps of the longest member that does not blow up."""
-        last = self.counts("transient_steps") + self.counts("steps_per_section") \
-            * self.counts("n_sections")
-        if self.extremes_to is not None:
-            last = np.maximum(last, self.counts("extremes_to"))
-        return int(np.max(last))
-
-    @property
-    def max_sections(self) -> int:
-        """K: the most sections of a member (the second axis of the results)."""
-        return int(np.max(self.counts("n_sections")))
 
 
 @dataclass
@@ -228,22 +148,6 @@ def _block_size(placed: Placement, members: int, per: int, block: int | None) ->
 
     free, _ = free_memory()
     return max(1, min(members, int(GPU_BLOCK_SHARE * free) // per))
-
-
-def cpu_kernel(system: System, tangent: bool):
-    """The CPU build of ``system``'s member kernel (``cpu.CpuLibrary``), self-tested (the
-    kernel builder of ``placement.TABLE["cpu"]``)."""
-    _self_test(system.model, system.structure, tangent)
-    return cpu_library(system.model, system.structure, tangent)
-
-
-def gpu_kernel(system: System, tangent: bool):
-    """The CUDA build of ``system``'s member kernel (``cuda.CudaKernel``), self-tested
-    against the CPU build (the kernel builder of ``placement.TABLE["gpu"]``)."""
-    from analysis.integrate.kernels.cuda import cuda_kernel
-
-    _self_test_gpu(system.model, system.structure, tangent)
-    return cuda_kernel(system.model, system.structure, tangent)
 
 
 def _kernel(system: System, tangent: bool, device: str | Placement):
@@ -389,117 +293,6 @@ def _limits(system: System, p: np.ndarray, shared: bool) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(values, dtype=float)[np.ravel(inverse)])
 
 
-def _reference_stage(model, structure: tuple[int, ...]):
-    """``(t, z, p, v) -> (f, Jv)`` straight from the model's rhs (sin and cos at every
-    stage's own time): the self-test's reference for the tangent variant's stages."""
-    import casadi as ca
-
-    rhs = model.functions(structure).rhs
-    n, n_par = rhs.size1_in(1), rhs.size1_in(2)
-    t, z, p, v = ca.SX.sym("t"), ca.SX.sym("z", n), ca.SX.sym("p", n_par), ca.SX.sym("v", n)
-    f = rhs(t, z, p)
-    return ca.Function("reference_stage", [t, z, p, v], [f, ca.jtimes(f, z, v)])
-
-
-@cache
-def _self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
-    """Check the CPU build against CasADi on a few steps of two members (different states,
-    counters, parameters, steps and start times): the state variant bit for bit against
-    the step it is written from, the tangent variant to ``SELF_TEST_TOL`` against the
-    stage RK4 of the model's rhs and ``jtimes`` evaluated by CasADi. ``CompileError`` when
-    it disagrees. Once per process."""
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels.source import state_functions
-
-    step, constants = state_functions(model, structure)
-    n = model.n_state
-    z0, k0s, p, hs, t0s, _ = _self_test_inputs(model, n)
-    sched = Schedule(1, 2, 2).per_member(2)
-    outs = [np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, n)),
-            np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
-    lib = cpu_library(model, structure, tangent)
-    lib.run(2, 1, [z0, k0s, p, hs, t0s, np.full(2, np.inf), *sched], 2, True, outs)
-    stage = _reference_stage(model, structure) if tangent else None
-    for j in range(2):
-        c = constants(p[j], hs[j], t0s[j])
-        s = np.append(z0[j], k0s[j])
-        s = np.asarray(step(s, p[j], hs[j], t0s[j], c)).ravel()  # the transient step
-        want, logs = [], []
-        if not tangent:
-            for _ in range(4):
-                s = np.asarray(step(s, p[j], hs[j], t0s[j], c)).ravel()
-                want.append(s[:n])
-            ok = np.array_equal(np.array(want[1::2]), outs[0][j])
-        else:
-            fn = stage
-            z, k, v = s[:n], s[n], np.eye(n)[0]
-            h, half = hs[j], hs[j] / 2
-            for i in range(4):
-                t = t0s[j] + k * h
-                a = [np.asarray(x).ravel() for x in fn(t, z, p[j], v)]
-                b = [np.asarray(x).ravel() for x in fn(t + half, z + half * a[0], p[j],
-                                                       v + half * a[1])]
-                c3 = [np.asarray(x).ravel() for x in fn(t + half, z + half * b[0], p[j],
-                                                        v + half * b[1])]
-                e = [np.asarray(x).ravel() for x in fn(t + h, z + h * c3[0], p[j],
-                                                       v + h * c3[1])]
-                z = z + h / 6 * (a[0] + 2 * b[0] + 2 * c3[0] + e[0])
-                v = v + h / 6 * (a[1] + 2 * b[1] + 2 * c3[1] + e[1])
-                k += 1
-                if i % 2 == 1:
-                    norm = np.linalg.norm(v)
-                    logs.append(np.log(norm))
-                    v = v / norm
-                    want.append(z)
-            scale = np.abs(np.array(want)).max(axis=0) + 1e-300
-            ok = np.all(np.abs(np.array(want) - outs[0][j]) <= SELF_TEST_TOL * scale) \
-                and np.allclose(logs, outs[1][j], rtol=SELF_TEST_TOL, atol=1e-14)
-        if not ok:
-            raise CompileError(f"the member kernel of {model.name} does not reproduce "
-                               "CasADi (check BEARINGDYN_CFLAGS: no fast-math)")
-
-
-def _self_test_inputs(model, n: int) -> list[np.ndarray]:
-    """The self-test's two members: z0, k0, p, h, t0, limit."""
-    p0 = model.parameter_vector(model.defaults)
-    h0 = float(model.simulation_defaults["dt"])
-    return [np.stack([test_state(n) * (1 + 0.1 * j) for j in range(2)]),
-            np.array([3.0, 4.0]), np.stack([p0 * (1 + 0.01 * j) for j in range(2)]),
-            h0 * np.array([1.0, 1.05]), np.array([0.0, 0.1]), np.full(2, np.inf)]
-
-
-@cache
-def _self_test_gpu(model, structure: tuple[int, ...], tangent: bool) -> None:
-    """The CUDA build against the CPU build (itself checked against CasADi) on the
-    self-test's members over 20 steps: sections and logs to ``GPU_SELF_TEST_TOL``.
-    ``CompileError`` when they disagree. Once per process."""
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels.cuda import cuda_kernel
-
-    _self_test(model, structure, tangent)
-    n = model.n_state
-    inputs = [np.ascontiguousarray(a) for a in _self_test_inputs(model, n)]
-    inputs += Schedule(2, 6, 3).per_member(2)
-    results = []
-    for device in ("cpu", "gpu"):
-        outs = [np.empty((2, 3, n)), np.empty((2, 3)), np.empty((2, n)),
-                np.empty(2, dtype=np.int64), np.empty((2, n)), np.empty((2, n))]
-        if device == "cpu":
-            cpu_library(model, structure, tangent).run(2, 1, inputs, 3, True, outs)
-        else:
-            cuda_kernel(model, structure, tangent).run(2, inputs, 3, True, outs)
-        results.append(outs)
-    (cpu, gpu) = results
-    scale = np.abs(cpu[0]).max(axis=(0, 1)) + 1e-300
-    ok = np.all(np.abs(gpu[0] - cpu[0]) <= GPU_SELF_TEST_TOL * scale) \
-        and np.array_equal(gpu[3], cpu[3])
-    if tangent:
-        ok = ok and np.allclose(gpu[1], cpu[1], rtol=GPU_SELF_TEST_TOL, atol=1e-12)
-    if not ok:
-        raise CompileError(f"the CUDA member kernel of {model.name} does not reproduce the "
-                           "CPU build (NVRTC options: see kernels/cuda.py)")
-
-
 def check_kernels(systems: Iterable[System], device: str | Placement,
                   tangent: bool = False) -> None:
     """Build, or load from the cache, and self-test the member kernel (the state variant,
@@ -512,10 +305,3 @@ def check_kernels(systems: Iterable[System], device: str | Placement,
     place(device, 1, list(systems), "tangent" if tangent else "state")
 
 
-def unbuildable(system: System, device: str, exc: Exception) -> DeviceError:
-    """The one line of a member kernel of ``system`` that cannot be written or built on
-    ``device`` (``exc``: why; a compiler's lines joined by ``;``)."""
-    reason = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-    balls = ", ".join(str(n) for n in system.structure)
-    return DeviceError(str(device), f"the member kernel of model '{system.model.name}' with "
-                                    f"N_b {balls} cannot be built: {reason}")

@@ -28,6 +28,13 @@ from typing import Any
 
 from analysis.errors import InputError
 from analysis.integrate.kernels import devices
+from analysis.integrate.kernels.builds import (
+    cpu_errors,
+    cpu_kernel,
+    gpu_errors,
+    gpu_kernel,
+    unbuildable,
+)
 from analysis.integrate.kernels.devices import (
     AUTO_MIN_MEMBERS,
     AUTO_MIN_STEPS,
@@ -70,36 +77,9 @@ def _gpu_problem() -> str | None:
     return devices.gpu_problem()  # looked up at each call (tests stand a GPU in)
 
 
-def _cpu_kernel(system: System, tangent: bool) -> Any:
-    from analysis.integrate.kernels.members import cpu_kernel
-
-    return cpu_kernel(system, tangent)
-
-
-def _gpu_kernel(system: System, tangent: bool) -> Any:
-    from analysis.integrate.kernels.members import gpu_kernel
-
-    return gpu_kernel(system, tangent)
-
-
-def _cpu_errors() -> tuple[type[Exception], ...]:
-    from analysis.integrate.compiled import CompileError
-    from analysis.integrate.kernels.source import Unsupported
-
-    return (Unsupported, CompileError)
-
-
-def _gpu_errors() -> tuple[type[Exception], ...]:
-    try:
-        from cupy.cuda.compiler import CompileException  # NVRTC's refusal
-    except ImportError:  # no CuPy, or its stand-in (tests/integrate/fake_cupy.py)
-        return _cpu_errors()
-    return (*_cpu_errors(), CompileException)
-
-
 TABLE: dict[str, Device] = {
-    "cpu": Device("cpu", False, _always, "", _cpu_kernel, _cpu_errors),
-    "gpu": Device("gpu", True, _gpu_problem, INSTALL_HINT, _gpu_kernel, _gpu_errors),
+    "cpu": Device("cpu", False, _always, "", cpu_kernel, cpu_errors),
+    "gpu": Device("gpu", True, _gpu_problem, INSTALL_HINT, gpu_kernel, gpu_errors),
 }
 """The devices the member kernels run on, by name (``devices.DEVICES`` lists these names
 and ``auto``)."""
@@ -130,6 +110,14 @@ def judge(device: str, members: int, steps: int) -> Device:
         hint = f"; {row.hint}" if row.hint else ""
         raise DeviceError(row.name, f"{problem}{hint}", instead="cpu")
     return row
+
+
+def resolve_device(device: str, members: int, steps: int) -> str:
+    """``"cpu"`` or ``"gpu"`` for a run of ``members`` members of ``steps`` RK4 steps each:
+    the name of the row ``judge`` takes (``DeviceError`` for another name, or for ``gpu``
+    without CuPy or a visible GPU). A run judges its device once with ``place``; this is
+    its name-only form."""
+    return judge(device, members, steps).name
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,8 +201,6 @@ def build(row: Device, systems: Iterable[System], variants: Iterable[str]) -> No
     model and its balls and the reason, when a kernel cannot be written
     (``source.Unsupported``) or built or loaded (``compiled.CompileError``: no compiler, a
     failed compilation, a self-test; NVRTC's ``CompileException`` on a GPU)."""
-    from analysis.integrate.kernels.members import unbuildable
-
     errors = row.build_errors()
     seen = set()
     for system in systems:
@@ -268,4 +254,4 @@ def place(device: str | Placement, members: int,
 
 
 __all__ = ["CPU", "TABLE", "VARIANTS", "Device", "DeviceError", "Placement", "auto_row", "build",
-           "judge", "on_gpu", "place"]
+           "judge", "on_gpu", "place", "resolve_device"]
