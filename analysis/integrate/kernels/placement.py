@@ -16,8 +16,11 @@ A refused device is a ``devices.DeviceError`` (an ``InputError`` naming the para
 still compare names take it as they took the name; code here asks ``placement.gpu``.
 
 Adding a device is a row of ``TABLE`` (its name, whether it is a GPU, its availability
-check, its install hint, its kernel builder and the errors of a failed build) and its name
-in ``devices.DEVICES`` (``tests/integrate/test_placement.py`` checks they agree).
+check, its install hint, its kernel builder and the errors of a failed build, both in
+``builds``) and its name in ``devices.DEVICES`` (``tests/integrate/test_placement.py``
+checks they agree). A row with ``gpu=False`` runs through the CPU build's call
+(``kernel.run(count, threads, …)``), one with ``gpu=True`` through the CUDA build's
+(``kernel.run(count, …)``, blocks sized by ``cuda.free_memory``): ``members.run_members``.
 """
 
 from __future__ import annotations
