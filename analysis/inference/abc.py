@@ -64,6 +64,7 @@ from analysis.integrate.cost import (
     FILE_SECONDS,
     KERNELS,
     CostEstimate,
+    busiest_share,
     duration_text,
     estimate_cost,
     process_seconds,
@@ -583,9 +584,12 @@ def problem_cost(problem: Problem, workers: int | None = None,
     ``kernel_steps`` RK4 steps (every row's transient and record, the record's steps with
     the tangent counted by its measured cost), with that row's step, timed on the member
     kernels that run them (``estimate_cost`` on ``KERNELS``), on ``workers`` cores (None:
-    every core, ``kernels.cpu.cores``). The host: each run (a set at a row) classified and
-    its lines named (``simulate.classify_seconds``) on ``host_workers`` processes (1 for the
-    serial executor, the workers of a pool). On a GPU the kernels run faster than this."""
+    every core, ``kernels.cpu.cores``; a pool of ``host_workers`` processes runs blocks of
+    ``block`` sets, each on cores / ``host_workers`` threads, and a round's blocks that do
+    not deal evenly to them leave a worker idle: ``cost.busiest_share``). The host: each
+    run (a set at a row) classified and its lines named (``simulate.classify_seconds``) on
+    ``host_workers`` processes (1 for the serial executor, the workers of a pool). On a
+    GPU the kernels run faster than this."""
     from analysis.integrate.kernels.cpu import cores
 
     opts = problem.options
@@ -595,9 +599,15 @@ def problem_cost(problem: Problem, workers: int | None = None,
     system = row_system(problem.model, row).replace(**values)
     h, _ = opts.settings.steps(system)
     steps, tangent = kernel_steps(problem.target, opts.settings, problem.model)
+    balance = 1.0
+    if workers is None and host_workers > 1:
+        threads = max(1, cores() // host_workers)
+        workers = threads * min(host_workers, -(-opts.samples // opts.block))
+        balance = busiest_share(opts.samples, opts.block, host_workers)
     kernels = estimate_cost(system, opts.samples * opts.rounds, steps, dt=h,
                             workers=workers or cores(), what="parameter sets", path=KERNELS,
                             tangent_steps=tangent)
+    kernels = dataclasses.replace(kernels, balance=balance)
     kernels = dataclasses.replace(kernels, coarsest_dt=accepted_dt(problem,
                                                                    kernels.coarsest_dt))
     host = classify_seconds(problem.model, row, values, opts.settings,

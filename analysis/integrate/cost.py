@@ -107,6 +107,9 @@ class CostEstimate:
     """The share of a core the probe got (CPU s / wall s; None: not measured)."""
     probe_threads: int = 1
     """Threads the probe ran on at once (the workers', ``probe_kernel``)."""
+    balance: float = 1.0
+    """The busiest worker's members over an even share (>= 1: blocks of members that do not
+    deal evenly to the workers, ``busiest_share``); the steps take that much longer."""
 
     def load_lines(self) -> list[str]:
         """One line when the probe ran on a loaded machine (the load average above the
@@ -140,8 +143,10 @@ class CostEstimate:
 
     @property
     def bound_seconds(self) -> float:
-        """Wall time (s) of every member running all its ``steps``."""
-        return self.total_steps * self.step_seconds / max(1, min(self.workers, self.members))
+        """Wall time (s) of every member running all its ``steps`` (the busiest worker's:
+        ``balance``)."""
+        return (self.total_steps * self.step_seconds * self.balance
+                / max(1, min(self.workers, self.members)))
 
     @property
     def seconds(self) -> float:
@@ -162,7 +167,9 @@ class CostEstimate:
         else:
             unit, total = self.unit, self.unit.split()[-1]
             each = f"{self.step_seconds:.3g} s per {total.removesuffix('s')}"
-        workers = min(self.workers, self.members)
+        workers: int | str = min(self.workers, self.members)
+        if self.balance > 1.005:
+            workers = f"{workers} (blocks uneven over them: x{self.balance:.2f})"
         if self.bound and self.expected_seconds is not None:
             expected = (f"expected {duration_text(self.seconds)} on {workers} worker(s) "
                         f"({self.probe_note}); the steps alone at most "
@@ -192,6 +199,20 @@ class CostEstimate:
             found.append(f"hint: {fewer:,} {self.what} instead of {self.members:,} would take "
                          f"{duration_text(self.seconds * fewer / self.members)}")
         return found
+
+
+def busiest_share(members: int, block: int, workers: int) -> float:
+    """How much longer than an even share the busiest of ``workers`` runs when ``members``
+    go in blocks of ``block`` (the last one smaller), each block to the first free worker
+    (an executor's queue, blocks of equal cost per member): its members over an even
+    share of the workers that get a block; 1 for one worker."""
+    if workers <= 1 or members <= 0:
+        return 1.0
+    block = max(1, int(block))
+    loads = [0] * int(workers)
+    for start in range(0, int(members), block):
+        loads[loads.index(min(loads))] += min(block, int(members) - start)
+    return max(loads) * min(int(workers), -(-int(members) // block)) / members
 
 
 def load_lines(load: float | None, cores: int, busy: float | None = None,
@@ -385,7 +406,7 @@ def probe_kernel(system: System, dt: float, *, tangent: bool = False,
             with_tangent, cpu_t = timed(schedule(count, True))
             factor = max(1.0, with_tangent / state)
             walls, cpus = walls + with_tangent, cpus + cpu_t
-    except (Unsupported, CompileError):
+    except (Unsupported, CompileError, InputError):  # no build, or a block it refuses
         return None
     busy = min(1.0, cpus / walls / threads) if walls > 0 else 1.0
     return KernelProbe(state * threads / (count * len(z)), factor, busy, threads)
@@ -436,7 +457,7 @@ def estimate_cost(system: System, members: int, steps: int, *, dt: float,
         if tangent_steps:
             note += (f", tangent x{factor:.2f} on {tangent_steps / max(1, steps):.0%} of the "
                      "steps")
-    else:  # a millisecond: too short to say the share of a core it got
+    else:  # one thread: the compiled path runs one trajectory a worker
         seconds = probe_step_seconds(system, dt, compiled=compiled)
         seconds *= 1 + system.n_state * tangent_steps / max(1, steps)
     estimate = CostEstimate(members=int(members), steps=int(steps), workers=count,

@@ -138,3 +138,28 @@ def test_a_threaded_probe_gives_the_seconds_of_a_step_per_thread(system):
     assert probe is not None and probe.threads == 2
     assert math.isfinite(probe.step_seconds) and 0 < probe.step_seconds < 1e-3
     assert 0 < probe.busy <= 1.0
+
+
+def test_blocks_that_do_not_deal_evenly_leave_a_worker_idle():
+    """96 sets in blocks of 64 on 2 workers: one runs 64, the other 32 (4/3 of an even
+    share); 128 deal evenly; one worker is never uneven."""
+    assert cost.busiest_share(96, 64, 2) == pytest.approx(4 / 3)
+    assert cost.busiest_share(96, 64, 4) == pytest.approx(4 / 3), "two blocks: two workers"
+    assert cost.busiest_share(128, 64, 2) == 1.0
+    assert cost.busiest_share(96, 64, 1) == 1.0
+    est = CostEstimate(members=96, steps=1000, workers=2, step_seconds=1e-6, dt=1e-5,
+                       balance=4 / 3)
+    assert est.seconds == pytest.approx(96 * 1000 * 1e-6 / 2 * 4 / 3)
+    assert "on 2 (blocks uneven over them: x1.33) worker(s)" in est.lines()[0]
+
+
+def test_a_calibration_on_a_pool_counts_its_blocks(monkeypatch):
+    from analysis.inference import abc
+    from analysis.integrate.kernels.cpu import cores
+
+    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: KernelProbe(2e-7, 1.5))
+    monkeypatch.setattr(abc, "classify_seconds", lambda *args, **kwargs: 0.01)
+    est = abc.calibrate_cost("vakharia2015", "paper-table2", ["damping:100:1000:log"],
+                             samples=96, rounds=1, block=64, host_workers=2)
+    assert est.kernels.balance == pytest.approx(4 / 3)
+    assert est.kernels.workers == max(1, cores() // 2) * 2
