@@ -17,6 +17,7 @@ DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1, forcing_a
 
 def test_hb_estimate_is_the_probe_times_the_iterations(monkeypatch):
     monkeypatch.setattr(cost, "probe_newton_seconds", lambda equations: 0.25)
+    monkeypatch.setattr(cost, "probe_hill_seconds", lambda equations: 0.5)
     system = System.make("duffing", **DUFFING)
     one = cost.hb_cost(system, Request(7, period="shaft"))
     assert (one.members, one.steps, one.unit) == (1, cost.NEWTON_ITERATIONS, cost.NEWTON)
@@ -29,7 +30,10 @@ def test_hb_estimate_is_the_probe_times_the_iterations(monkeypatch):
                                           stop=16.0, max_points=40))
     assert branch.members == 40 and branch.bound
     assert branch.seconds == pytest.approx(40 * cost.BRANCH_ITERATIONS * 0.25)
-    assert "40 responses x up to 3 Newton iterations" in branch.lines()[0]
+    assert dict(branch.also)["Hill's stability of each point"] == pytest.approx(40 * 0.5)
+    assert "Hill's stability of each point" not in dict(one.also), "one response: no branch"
+    assert (f"40 responses x up to {cost.BRANCH_ITERATIONS} Newton iterations"
+            in branch.lines()[0])
 
 
 def test_circle_estimate_is_points_steps_and_evaluations(monkeypatch):
@@ -71,7 +75,8 @@ def test_hb_prints_its_probed_estimate_first(cli, tmp_path):
     assert out.returncode == 0, out.stderr
     lines = [line for line in out.stderr.splitlines()  # a loaded machine adds a note
              if not line.startswith("note: the machine was loaded")]
-    assert lines[0].startswith("estimate: 12 responses x up to 3 Newton iterations = 36 "
+    assert lines[0].startswith(f"estimate: 12 responses x up to {cost.BRANCH_ITERATIONS} "
+                               f"Newton iterations = {12 * cost.BRANCH_ITERATIONS} "
                                "iterations; expected at most "), lines
     assert "s per iteration, probed)" in lines[0]
     assert lines[1].startswith("estimate: in all "), "the whole command (issue 41)"
