@@ -58,7 +58,7 @@ def reports_errors(command):
         except WriteError as exc:  # not the user's input: the disk or the file system
             _fail(exc, f"error: {exc}", 1)
         except (BearingdynError, SpecError) as exc:
-            _fail(exc, f"error: {exc}", 2)
+            _fail(exc, f"error: {as_option(exc)}", 2)
         except KeyboardInterrupt as exc:
             _fail(exc, "interrupted (nothing half-written was left)", 130)
         except BrokenPipeError:  # the reader of stdout went away (`| head`): end quietly
@@ -415,6 +415,20 @@ DsMaxOption = Annotated[float, typer.Option(
 def progress_lines(quiet: bool, err: bool = True):
     """The progress callback of ``--quiet`` (None) or one line per message (stderr)."""
     return None if quiet else (lambda text: typer.echo(text, err=err))
+
+
+def as_option(exc: Exception) -> Exception:
+    """``exc``, or where it is an ``InputError`` whose ``field`` is a parameter of the
+    running command, the same error naming that parameter's option (``device gpu: …`` ->
+    ``--device gpu: …``): the field is the error's own, no message text is read back."""
+    field = getattr(exc, "field", None)
+    context = click.globals.get_current_context(silent=True)
+    if not isinstance(exc, InputError) or field is None or context is None:
+        return exc
+    for param in context.command.params:
+        if param.name == field and param.param_type_name == "option":
+            return exc.renamed(max(param.opts, key=len))
+    return exc
 
 
 @contextlib.contextmanager

@@ -74,7 +74,8 @@ def sweep(
         raise InputError("--device: the member kernels run the values of a --no-follow sweep "
                          "(a followed sweep is one trajectory); add --no-follow")
     if device is not None:  # the GPU and the kernels, before the estimate and any executor
-        grid_device(setting, [axis], device, len(axis.values) * (2 if direction == "both" else 1))
+        device = grid_device(setting, [axis], device,  # judged once: the Placement
+                             len(axis.values) * (2 if direction == "both" else 1))
     ex = executor_of(executor, workers, scheduler)
     if not quiet and direction in ("up", "down", "both"):  # the cost, said before it is
         # paid (a followed sweep: one run at a time); another direction is refused below
@@ -148,7 +149,7 @@ def chart(
     several = parse_ics(ics, ics_box, ics_seed)
     if several is not None:  # its box within the model's bounds, before the estimate
         several.check(setting.system_at(**{a.name: a.values[0] for a in axes}))
-    chart_device(setting, *axes, device)  # the GPU and the kernels, before the estimate
+    device = chart_device(setting, *axes, device)  # judged once, before the estimate
     ex = executor_of(executor, workers, scheduler)
     if not quiet:  # the cost, said before it is paid
         typer.echo("\n".join(grid_cost(setting, *axes, workers=workers_of(ex), members_per_point=(

@@ -54,6 +54,10 @@ class DeviceError(InputError):
     def __reduce__(self):  # pickled across worker processes: rebuilt from its parts
         return type(self), (self.value, self.reason, self.instead)
 
+    def renamed(self, name: str) -> InputError:
+        """The same line naming ``name`` (a command's option, ``--device``) throughout."""
+        return InputError(self.text(name))
+
 
 @dataclass(frozen=True)
 class DeviceInfo:
