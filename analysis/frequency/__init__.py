@@ -25,6 +25,7 @@ Every public name is importable from here: ``from analysis.frequency import
 harmonic_balance, continue_harmonic``.
 """
 
+from analysis.budgets import DENSE_MEMORY
 from analysis.frequency.circle.continuation import continue_circle
 from analysis.frequency.circle.solve import CircleResponse, circle_dataset, solve_circle
 from analysis.frequency.periodic.continuation import (
@@ -34,7 +35,6 @@ from analysis.frequency.periodic.continuation import (
 )
 from analysis.frequency.periodic.harmonic import (
     MAX_UNKNOWNS,
-    MEMORY_BUDGET,
     Basis,
     HarmonicSystem,
     check_forced,
@@ -54,7 +54,7 @@ from analysis.frequency.torus.equations import TorusBasis, TorusSystem, parse_fr
 from analysis.frequency.torus.solve import TorusResponse, solve_torus
 
 __all__ = [
-    "MAX_UNKNOWNS", "MEMORY_BUDGET", "SORTS", "Basis", "CircleResponse",
+    "DENSE_MEMORY", "MAX_UNKNOWNS", "SORTS", "Basis", "CircleResponse",
     "HarmonicBranchProblem", "HarmonicSystem", "HillResult", "PeriodicResponse", "TorusBasis",
     "TorusResponse", "TorusSystem", "check_forced", "check_harmonics", "circle_dataset",
     "continue_circle", "continue_harmonic", "continue_torus", "fast_samples", "harmonic_balance",

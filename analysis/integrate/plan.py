@@ -31,6 +31,7 @@ from typing import Literal
 
 import numpy as np
 
+from analysis.budgets import RUN_MEMORY
 from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_resolution, check_rk4_step, check_seconds
 from analysis.integrate.speed_profile import SpeedProfile
@@ -39,7 +40,6 @@ from analysis.model import System
 Method = Literal["rk4", "cvodes"]
 METHODS = ("rk4", "cvodes")
 """The integration methods: fixed-step RK4 (the paper's) and adaptive CVODES (BDF)."""
-MEMORY_BUDGET = 8 * 2**30
 """Most bytes the states a run keeps in memory may take (their float64 values, twice: the
 blocks and the assembled array)."""
 
@@ -57,12 +57,12 @@ def check_times(duration: float, transient: float, dt: float) -> None:
 
 
 def check_memory(n_state: int, n_saved: int, save_every: int) -> None:
-    """``InputError`` when the samples of a run held in memory exceed ``MEMORY_BUDGET``."""
+    """``InputError`` when the samples of a run held in memory exceed ``RUN_MEMORY``."""
     need = 2 * 8 * (n_state + 1) * (n_saved + 1)
-    if need > MEMORY_BUDGET:
+    if need > RUN_MEMORY:
         raise InputError(f"save_every: the run would keep {n_saved + 1:.3g} samples "
-                         f"({need / 2**30:.3g} GiB); at most {MEMORY_BUDGET / 2**30:g} GiB: "
-                         f"keep one sample every {math.ceil(save_every * need / MEMORY_BUDGET)} "
+                         f"({need / 2**30:.3g} GiB); at most {RUN_MEMORY / 2**30:g} GiB: "
+                         f"keep one sample every {math.ceil(save_every * need / RUN_MEMORY)} "
                          "steps or more (--save-every), or shorten the run")
 
 
@@ -135,7 +135,7 @@ class RunPlan:
              profile: SpeedProfile | None = None) -> RunPlan:
         """The plan of a whole run: every check of the module's list, in its order. None
         times are the spec's. ``in_memory``: the run keeps its samples in memory (checked
-        against ``MEMORY_BUDGET``). ``warn(message)``: how a coarse step is reported
+        against ``RUN_MEMORY``). ``warn(message)``: how a coarse step is reported
         (default: a Python warning). ``profile``: the speed the run follows (``system``
         taken at its speed at t = 0; a constant profile is that speed, no profile), checked
         last (``check_profile``)."""

@@ -58,8 +58,9 @@ import casadi as ca
 import numpy as np
 import xarray as xr
 
+from analysis.budgets import DENSE_MEMORY
 from analysis.errors import InputError, check_count
-from analysis.frequency.periodic.harmonic import MEMORY_BUDGET, blas_threads
+from analysis.frequency.periodic.harmonic import blas_threads
 from analysis.frequency.torus.equations import (
     TorusSystem,
     check_phases,
@@ -103,14 +104,14 @@ TAIL_FRACTION = 0.4
 
 def check_points(points: object, n_state: int, what: str = "points") -> int:
     """N as a whole number >= ``MIN_POINTS`` whose dense Newton matrices
-    (``CIRCLE_MATRICES`` of (n N)² doubles) fit ``MEMORY_BUDGET``; ``InputError`` (one line)
+    (``CIRCLE_MATRICES`` of (n N)² doubles) fit ``DENSE_MEMORY``; ``InputError`` (one line)
     before any work otherwise."""
     points = check_count(what, points, MIN_POINTS, text=True)
-    most = math.isqrt(MEMORY_BUDGET // (8 * CIRCLE_MATRICES)) // n_state
+    most = math.isqrt(DENSE_MEMORY // (8 * CIRCLE_MATRICES)) // n_state
     if points > most:
         raise InputError(f"{what}: {points} circle points of {n_state} states need about "
                          f"{CIRCLE_MATRICES * 8 * (n_state * points) ** 2 / 2**30:.1f} GiB of "
-                         f"dense matrices (at most {MEMORY_BUDGET / 2**30:g} GiB): at most "
+                         f"dense matrices (at most {DENSE_MEMORY / 2**30:g} GiB): at most "
                          f"{most} for this model")
     return int(points)
 

@@ -42,6 +42,7 @@ import casadi as ca
 import numpy as np
 import scipy.fft
 
+from analysis.budgets import DENSE_MEMORY
 from analysis.errors import InputError
 from analysis.integrate.flow import Period
 from analysis.model import System
@@ -51,7 +52,6 @@ MAX_UNKNOWNS = 20_000
 """Most Fourier unknowns n(2H + 1) of one solve: the dense Newton matrix and the Hill
 matrix are (n(2H + 1))² doubles each (3.2 GB at this bound)."""
 
-MEMORY_BUDGET = 2 * 2**30
 """Bytes the dense matrices of one solve may take (``check_size``): the Jacobian, its LU
 factors, the complex Hill matrix and its eigenvectors, about 6·(n(2H + 1))² doubles."""
 
@@ -68,13 +68,13 @@ def fast_samples(harmonics: int, samples: int | None = None) -> int:
 
 
 def matrix_bytes(n_state: int, harmonics: int) -> int:
-    """Bytes of the dense matrices of one solve with Hill's stability (``MEMORY_BUDGET``)."""
+    """Bytes of the dense matrices of one solve with Hill's stability (``DENSE_MEMORY``)."""
     size = n_state * (2 * harmonics + 1)
     return 6 * 8 * size * size
 
 
 def check_harmonics(harmonics: object, n_state: int, what: str = "harmonics") -> int:
-    """``harmonics`` as a whole number H >= 1 whose dense matrices fit ``MEMORY_BUDGET``
+    """``harmonics`` as a whole number H >= 1 whose dense matrices fit ``DENSE_MEMORY``
     and ``MAX_UNKNOWNS``; ``InputError`` (one line) before any work otherwise."""
     if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) \
             or harmonics < 1:
@@ -82,12 +82,12 @@ def check_harmonics(harmonics: object, n_state: int, what: str = "harmonics") ->
     harmonics = int(harmonics)
     unknowns = n_state * (2 * harmonics + 1)
     need = matrix_bytes(n_state, harmonics)
-    if unknowns > MAX_UNKNOWNS or need > MEMORY_BUDGET:
+    if unknowns > MAX_UNKNOWNS or need > DENSE_MEMORY:
         most = int(min((MAX_UNKNOWNS // n_state - 1) // 2,
-                       (math.isqrt(MEMORY_BUDGET // 48) // n_state - 1) // 2))
+                       (math.isqrt(DENSE_MEMORY // 48) // n_state - 1) // 2))
         raise InputError(f"{what}: H = {harmonics} gives {unknowns} Fourier unknowns for "
                          f"{n_state} states, whose dense matrices need about "
-                         f"{need / 2**30:.1f} GiB (at most {MEMORY_BUDGET / 2**30:g} GiB); "
+                         f"{need / 2**30:.1f} GiB (at most {DENSE_MEMORY / 2**30:g} GiB); "
                          f"at most H = {most} for this model")
     return harmonics
 

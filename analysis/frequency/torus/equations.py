@@ -55,8 +55,9 @@ import casadi as ca
 import numpy as np
 import scipy.fft
 
+from analysis.budgets import DENSE_MEMORY
 from analysis.errors import InputError, check_count
-from analysis.frequency.periodic.harmonic import MAX_UNKNOWNS, MEMORY_BUDGET
+from analysis.frequency.periodic.harmonic import MAX_UNKNOWNS
 from analysis.integrate.flow import Period
 from analysis.model import Model, System
 
@@ -127,7 +128,7 @@ def torus_bytes(n_state: int, harmonics: tuple[int, int]) -> int:
 def check_torus_harmonics(harmonics: object, n_state: int,
                           what: str = "harmonics") -> tuple[int, int]:
     """``harmonics`` as (H1, H2), whole numbers >= 1 (a pair, or ``"H1,H2"``), whose dense
-    matrices fit ``MEMORY_BUDGET`` and ``MAX_UNKNOWNS``; ``InputError`` (one line) before
+    matrices fit ``DENSE_MEMORY`` and ``MAX_UNKNOWNS``; ``InputError`` (one line) before
     any work otherwise."""
     parts = harmonics.split(",") if isinstance(harmonics, str) else harmonics
     try:
@@ -144,11 +145,11 @@ def check_torus_harmonics(harmonics: object, n_state: int,
                          f"{harmonics!r}") from None
     unknowns = torus_size(n_state, (h1, h2))
     need = torus_bytes(n_state, (h1, h2))
-    if unknowns > MAX_UNKNOWNS or need > MEMORY_BUDGET:
-        most = math.isqrt(MEMORY_BUDGET // (8 * TORUS_MATRICES)) // n_state
+    if unknowns > MAX_UNKNOWNS or need > DENSE_MEMORY:
+        most = math.isqrt(DENSE_MEMORY // (8 * TORUS_MATRICES)) // n_state
         raise InputError(f"{what}: H1,H2 = {h1},{h2} give {unknowns} Fourier unknowns for "
                          f"{n_state} states, whose dense matrices need about "
-                         f"{need / 2**30:.1f} GiB (at most {MEMORY_BUDGET / 2**30:g} GiB): "
+                         f"{need / 2**30:.1f} GiB (at most {DENSE_MEMORY / 2**30:g} GiB): "
                          f"(2H1 + 1)(2H2 + 1) must be at most {most} for this model")
     return h1, h2
 

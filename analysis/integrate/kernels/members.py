@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analysis.budgets import RUN_MEMORY
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.kernels.builds import GPU_SELF_TEST_TOL as GPU_SELF_TEST_TOL
 from analysis.integrate.kernels.builds import SELF_TEST_TOL as SELF_TEST_TOL
@@ -41,8 +42,6 @@ from analysis.model import System
 
 _self_test, _self_test_gpu = self_test, self_test_gpu
 """The self-tests (``builds``), under the names whose caches tests and benchmarks clear."""
-HOST_BUDGET = 8 * 2**30
-"""Bytes of results a call may hold in host memory (as ``plan.MEMORY_BUDGET``)."""
 CPU_BLOCK = 1 << 16
 """Members per call of the CPU build by default (progress is reported per call)."""
 PROGRESS_SECONDS = 0.5
@@ -118,15 +117,15 @@ def _bytes_per_member(schedule: Schedule, n: int, n_par: int) -> int:
 def check_fits(device: str | Placement, members: int, schedule: Schedule, n: int,
                n_par: int = 0) -> None:
     """``InputError`` before anything is allocated when the results of ``members``
-    members do not fit the host's budget (``HOST_BUDGET``; the device streams blocks, so
+    members do not fit the host's budget (``RUN_MEMORY``; the device streams blocks, so
     only the kept results count), or when one member does not fit the GPU's free memory
     (``device``: a ``Placement``, or a resolved name ``"cpu"`` or ``"gpu"``)."""
     per = _bytes_per_member(schedule, n, n_par)
     kept = members * per
-    if kept > HOST_BUDGET:
+    if kept > RUN_MEMORY:
         raise InputError(f"members: {members} members with {schedule.max_sections} sections "
                          f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
-                         f"{HOST_BUDGET / 2**30:g} GiB: give fewer initial states or grid points, "
+                         f"{RUN_MEMORY / 2**30:g} GiB: give fewer initial states or grid points, "
                          "or record fewer sections per member")
     if on_gpu(device):
         from analysis.integrate.kernels.cuda import free_memory

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.budgets import STUDY_MEMORY
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.ensemble import StroboscopicMap
 from analysis.integrate.flow import Period
@@ -65,7 +66,6 @@ from analysis.stability.attractors.mapper import (
 from analysis.stability.classify import forcing_case
 from analysis.stability.periodic import as_period
 
-MEMORY_BUDGET = 4 * 2**30
 """Most bytes a study may hold (labels, the states in flight and their cells)."""
 SCALE_PERIODS = 200
 """Periods of the settled run whose ranges set the cell size."""
@@ -100,7 +100,7 @@ def section_name(period: Period) -> str:
 def check_memory(members: int, n_state: int, options: MapperOptions,
                  features: FeatureOptions | None = None, block: int = BLOCK) -> None:
     """``InputError`` before any work when ``members`` initial states would need more than
-    ``MEMORY_BUDGET``. Recurrence mapper: their labels and states, a chunk of section points
+    ``STUDY_MEMORY``. Recurrence mapper: their labels and states, a chunk of section points
     each and, per member, up to ``revisits`` + ``record`` cells of ``n_state`` indices.
     Featurizing mapper (``features`` given): per member its state, label and periods, and
     per block of ``block`` members their recorded section points, features and cells (only
@@ -113,10 +113,10 @@ def check_memory(members: int, n_state: int, options: MapperOptions,
         per_member = 8 * (n_state + 3)
         fixed = 8 * min(block, members) * ((features.sections + 2) * n_state + 6 * n_state)
     need = members * per_member + fixed
-    if need > MEMORY_BUDGET:
-        most = max((MEMORY_BUDGET - fixed) // per_member, 0)
+    if need > STUDY_MEMORY:
+        most = max((STUDY_MEMORY - fixed) // per_member, 0)
         raise InputError(f"samples: {members} initial states would need about "
-                         f"{need / 2**30:.3g} GiB; at most {MEMORY_BUDGET / 2**30:g} GiB "
+                         f"{need / 2**30:.3g} GiB; at most {STUDY_MEMORY / 2**30:g} GiB "
                          f"({most} states with these settings): use fewer"
                          + (" or a smaller --block" if features is not None else ""))
 
