@@ -199,15 +199,16 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
 
 def _to_netcdf(ds: xr.Dataset, path: Path) -> None:
     """``ds.to_netcdf(path, engine="h5netcdf")``, without the import of ``dask.distributed``
-    that xarray's dask-scheduler probe costs where dask is installed (issue 39: about 0.5
-    CPU-s, a small write's cost doubled). The file is the same, byte for byte."""
+    that xarray's dask-scheduler probe costs where dask is installed (issue 39: a small
+    write took 0.16-0.25 CPU-s, 0.04-0.06 without it). The file is the same, byte for
+    byte."""
     with _scheduler_probe_without_distributed():
         ds.to_netcdf(path, engine="h5netcdf")
 
 
 _PROBES = (("xarray.backends.locks", "get_dask_scheduler"),
            ("xarray.backends.writers", "get_dask_scheduler"),
-           ("xarray.backends.locks", "_get_scheduler"),  # xarray before 2025: the old name
+           ("xarray.backends.locks", "_get_scheduler"),  # older xarray: the old name
            ("xarray.backends.api", "_get_scheduler"))
 """Where xarray keeps its dask-scheduler probe (the function and the names it is imported
 under), in the versions bearingdyn supports."""
@@ -222,7 +223,7 @@ def _scheduler_probe_without_distributed() -> Iterator[None]:
     xarray asks which dask scheduler runs before it writes a netCDF file, to pick the kind
     of lock that orders the writes and whether to close the file between dask's writes (for
     data held in dask chunks under a multiprocessing or distributed scheduler only). Its
-    probe imports ``distributed`` (about 0.35 s) to look for a client, although a client
+    probe imports ``distributed`` (0.1-0.2 CPU-s) to look for a client, although a client
     exists only once ``distributed`` is imported. Without ``distributed`` imported the answer
     is None where nothing has imported dask either (no dask computation can run here: the
     answer xarray gives where dask is not installed) and ``"threaded"`` (xarray's own) where
