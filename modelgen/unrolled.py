@@ -21,12 +21,11 @@ and SymPy compares and traverses such trees in exponential time.)
 from __future__ import annotations
 
 import functools
+import math
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, ClassVar
-
-import numpy as np
 
 from modelgen.lazy import sympy as sp
 
@@ -50,22 +49,33 @@ class Ops:
     pi: Any
 
 
+def _np() -> Any:
+    """NumPy, imported on first use: reading a spec (which imports this module through the
+    term classes) must not pay for it."""
+    import numpy
+
+    return numpy
+
+
 def _numpy_if_positive(u: Any, then: Any, otherwise: Any) -> Any:
+    np = _np()
     return np.where(np.asarray(u) > 0, then, otherwise)
 
 
 NUMPY = Ops(
-    sqrt=np.sqrt, log=np.log, power=np.power, minimum=np.minimum,
-    hertz15=lambda u: np.maximum(u, 0.0) ** 1.5, if_positive=_numpy_if_positive,
-    rational=lambda p, q: p / q, pi=np.pi,
+    sqrt=lambda x: _np().sqrt(x), log=lambda x: _np().log(x),
+    power=lambda x, y: _np().power(x, y), minimum=lambda x, y: _np().minimum(x, y),
+    hertz15=lambda u: _np().maximum(u, 0.0) ** 1.5, if_positive=_numpy_if_positive,
+    rational=lambda p, q: p / q, pi=math.pi,
 )
-"""Evaluate an algorithm on floats or NumPy arrays."""
+"""Evaluate an algorithm on floats or NumPy arrays (NumPy's functions, called through a
+first-use import; ``pi`` is ``math.pi``, the same double as ``numpy.pi``)."""
 
 
 def numpy_call(algorithm: Callable[..., Any], *args: Any) -> Any:
     """``algorithm`` on NumPy values; the discarded side of ``if_positive`` may divide 0 by 0
     where it is not used, which is not worth a warning."""
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with _np().errstate(invalid="ignore", divide="ignore"):
         return algorithm(*args, NUMPY)
 
 
