@@ -27,6 +27,7 @@ from analysis.integrate.cost import (
     FILE_SECONDS,
     KERNELS,
     CostEstimate,
+    best_seconds,
     coarsest_step,
     estimate_cost,
     process_seconds,
@@ -293,7 +294,8 @@ over the grid in its order)."""
 
 def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
               members_per_point: int = 1, lyapunov: bool | None = None,
-              path: str | None = None) -> CostEstimate:
+              path: str | None = None,
+              point: Callable[[System], object] | None = None) -> CostEstimate:
     """The cost of a grid's points (``analysis.integrate.cost``), said before they run: the
     mean RK4 steps of up to ``GRID_COST_SAMPLES`` points evenly spread over the grid (a
     point records ``samples`` periods of its own section: a speed axis spans a factor of
@@ -305,7 +307,11 @@ def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
     (``lyapunov.default_lengths``) carry λ1's tangent, each counted by its measured cost
     (``estimate_cost``; ``n + 1`` state steps where the member kernel cannot be built). The
     step per second is probed at the corner with the longest record; the coarser ``--dt``
-    offered is one every corner accepts. Call after ``check_grid``."""
+    offered is one every corner accepts. ``point``: the command's whole work of one point
+    (a followed sweep's ``diagram.safe_diagram_point``), timed at that corner (the faster
+    of two calls): what it takes beyond its probed steps is a point's host work (sections,
+    the 1X phasor, the run's checks: as much as its RK4 steps on a followed sweep), scaled
+    to the mean record. Call after ``check_grid``."""
     from analysis.stability.lyapunov import default_lengths
 
     names = [a.name for a in axes]
@@ -329,9 +335,17 @@ def grid_cost(setting: Setting, *axes: Axis, workers: int | None = None,
     est = estimate_cost(system, total * members_per_point, steps, dt=dt, workers=workers,
                         path=route, tangent_steps=tangent)
     steps_fine = [c for c in (coarsest_step(corner) for corner in corners) if c is not None]
+    parts = []
+    if point is not None:
+        whole = best_seconds(lambda: point(system))
+        longest = math.ceil(setting.seconds(system) / dt)
+        host = max(0.0, whole - longest * est.step_seconds) * steps / longest  # the mean
+        runs = total * members_per_point
+        parts.append(("the host's work of the points (probed)",
+                      host * runs / max(1, min(est.workers, runs))))
     return replace(est, average=len(picked) > 1,
                    coarsest_dt=min(steps_fine) if len(steps_fine) == len(corners) else None,
-                   spent=process_seconds()).with_parts(("the file", FILE_SECONDS))
+                   spent=process_seconds()).with_parts(*parts, ("the file", FILE_SECONDS))
 
 
 def _check_section_at(setting: Setting, name: str, value: float) -> None:

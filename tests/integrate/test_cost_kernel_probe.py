@@ -163,3 +163,25 @@ def test_a_calibration_on_a_pool_counts_its_blocks(monkeypatch):
                              samples=96, rounds=1, block=64, host_workers=2)
     assert est.kernels.balance == pytest.approx(4 / 3)
     assert est.kernels.workers == max(1, cores() // 2) * 2
+
+
+def test_a_grid_counts_the_host_work_of_its_points(monkeypatch):
+    """A followed sweep's whole point, timed at the longest corner, beyond its probed steps
+    is each point's host work, scaled to the mean record, over the workers."""
+    from analysis.sweeps import grid
+    from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
+
+    monkeypatch.setattr(cost, "probe_step_seconds", lambda *a, **k: 1e-6)
+    monkeypatch.setattr(grid, "best_seconds", lambda run: 2.0)
+    setting = Setting("vakharia2015", 8, {}, 0.05, 10, lyapunov=False)
+    axis = Axis.parse("speed_rpm:3000:9000:4")
+    check_grid(setting, axis)
+    est = grid_cost(setting, axis, workers=2, point=lambda system: None)
+    longest = math.ceil(setting.seconds(setting.system_at(speed_rpm=3000.0)) / setting.step())
+    host = (2.0 - longest * 1e-6) * est.steps / longest
+    assert dict(est.also)["the host's work of the points (probed)"] == pytest.approx(
+        host * 4 / 2)
+    assert est.whole_seconds == pytest.approx(est.spent + est.seconds + host * 2
+                                              + cost.FILE_SECONDS)
+    plain = grid_cost(setting, axis, workers=2)
+    assert "the host's work of the points (probed)" not in dict(plain.also)
