@@ -28,11 +28,16 @@ Nothing here prints: the command line renders ``CostEstimate.lines()``.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
-from analysis.integrate.cost import FILE_SECONDS, CostEstimate, best_seconds, with_load
+from analysis.integrate.cost import (
+    FILE_SECONDS,
+    CostEstimate,
+    best_seconds,
+    steady_seconds,
+    with_load,
+)
 from analysis.model import System
 
 NEWTON_ITERATIONS = 6
@@ -87,10 +92,10 @@ def command_parts(system: System, request, solves: int, extra: float = 0.0
 def probe_newton_seconds(equations) -> float:
     """Seconds of one Newton iteration of ``equations`` (a ``HarmonicSystem`` or
     ``TorusSystem``): a residual and Jacobian evaluation and a dense solve, at zero
-    coefficients, after an untimed evaluation (the function built); the faster of two. The
-    solve runs in ``blas_threads()`` as the solver's do: on a loaded machine OpenBLAS's
-    own threads spin (a 164 × 164 solve took 0.24 s instead of 1 ms, and ``hb`` said 45 s
-    for a 6.5 s command)."""
+    coefficients, after an untimed evaluation (the function built); the mean of as many as
+    fill ``steady_seconds``' 0.05 s. The solve runs in ``blas_threads()`` as the solver's
+    do: on a loaded machine OpenBLAS's own threads spin (a 164 × 164 solve took 0.24 s
+    instead of 1 ms, and ``hb`` said 45 s for a 6.5 s command)."""
     from analysis.threads import blas_threads
 
     x = np.zeros(equations.size)
@@ -102,18 +107,19 @@ def probe_newton_seconds(equations) -> float:
         np.linalg.solve(jac + np.eye(len(r)), r)
 
     with blas_threads():
-        return best_seconds(iteration)
+        return steady_seconds(iteration)
 
 
 def probe_shaft_step_seconds(shaft_map) -> float:
     """Seconds of one RK4 step of one circle point in a ``ShaftMap`` of two points and
-    ``PROBE_STEPS`` steps (its threads as the solve's), after an untimed call."""
+    ``PROBE_STEPS`` steps (its threads as the solve's), after an untimed call: the mean of
+    as many calls as fill ``steady_seconds``' 0.05 s (one call was 5 ms: under load a
+    burst, the torus said half its time)."""
     u = np.tile(np.asarray(shaft_map.system.state, dtype=float), (shaft_map.points, 1))
     phi = np.linspace(0, math.pi, shaft_map.points)
     shaft_map(u, phi, shaft_map.system.p)
-    start = time.perf_counter()
-    shaft_map(u, phi, shaft_map.system.p)
-    return (time.perf_counter() - start) / (shaft_map.points * shaft_map.steps)
+    call = steady_seconds(lambda: shaft_map(u, phi, shaft_map.system.p))
+    return call / (shaft_map.points * shaft_map.steps)
 
 
 def hb_cost(system: System, request, torus: bool = False) -> CostEstimate:

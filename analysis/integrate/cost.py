@@ -412,6 +412,20 @@ def probe_kernel(system: System, dt: float, *, tangent: bool = False,
     return KernelProbe(state * threads / (count * len(z)), factor, busy, threads)
 
 
+def steady_seconds(run: Callable[[], object], seconds: float = 0.05,
+                   most: int = 1000) -> float:
+    """The mean wall time (s) of one call of ``run``, over as many calls (one at least,
+    ``most`` at most) as fill about ``seconds`` s: a short call timed once may get a burst of
+    a whole core on a loaded machine that the command's minutes do not."""
+    calls, start = 0, time.perf_counter()
+    while True:
+        run()
+        calls += 1
+        elapsed = time.perf_counter() - start
+        if elapsed >= seconds or calls >= most:
+            return elapsed / calls
+
+
 def tangent_step_factor(system: System, dt: float, members: int = 64,
                         steps: int = 240) -> float | None:
     """How many state steps one RK4 step with its tangent (λ1, the member kernels' tangent

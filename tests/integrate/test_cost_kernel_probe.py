@@ -185,3 +185,12 @@ def test_a_grid_counts_the_host_work_of_its_points(monkeypatch):
                                               + cost.FILE_SECONDS)
     plain = grid_cost(setting, axis, workers=2)
     assert "the host's work of the points (probed)" not in dict(plain.also)
+
+
+def test_a_steady_probe_repeats_a_short_call():
+    calls = []
+    assert cost.steady_seconds(lambda: calls.append(1), seconds=0.0) >= 0.0
+    assert len(calls) == 1, "one call at least"
+    calls.clear()
+    cost.steady_seconds(lambda: calls.append(1), seconds=1e9, most=3)
+    assert len(calls) == 3, "as many as fill the time, at most 'most'"
