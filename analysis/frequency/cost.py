@@ -18,9 +18,10 @@ The rest of the command is said beside them (``CostEstimate.also``, issue 41: `t
 the guess's settled simulations (one per solve), the two error-estimate solves of HB (at
 2H: ``DOUBLED_ITERATION`` × the probed iteration, measured 8.2× for a torus 8,4 → 16,8 and
 2.5× for a periodic H = 40 → 80, so 8 for a torus and 4 for a periodic response; at twice
-the samples: 2×), λ1 and the drift run (RK4 steps of ``lyapunov_duration`` s, the tangent
-as ``n`` more states), the invariant circle's integrated amplitude (6N revolutions), the
-figure's time run and a ``FILE_SECONDS`` per file and figure. RK4 steps are timed by
+the samples: 2×), Hill's stability of each point of a periodic branch (probed), λ1 and
+the drift run (RK4 steps of ``lyapunov_duration`` s, the tangent as ``n`` more states), the
+invariant circle's integrated amplitude (6N revolutions), the figure's time run and a
+``FILE_SECONDS`` per file and figure. RK4 steps are timed by
 ``analysis.integrate.cost.probe_step_seconds``. The CasADi builds are still left out.
 Nothing here prints: the command line renders ``CostEstimate.lines()``.
 """
