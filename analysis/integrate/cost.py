@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -201,18 +201,22 @@ class CostEstimate:
         return found
 
 
-def busiest_share(members: int, block: int, workers: int) -> float:
+def busiest_share(members: int, block: int, workers: int,
+                  sizes: Sequence[int] | None = None) -> float:
     """How much longer than an even share the busiest of ``workers`` runs when ``members``
-    go in blocks of ``block`` (the last one smaller), each block to the first free worker
-    (an executor's queue, blocks of equal cost per member): its members over an even
-    share of the workers that get a block; 1 for one worker."""
-    if workers <= 1 or members <= 0:
+    go in blocks of ``block`` (the last one smaller; or blocks of the given ``sizes``), each
+    block to the first free worker (an executor's queue, blocks of equal cost per member):
+    its members over an even share of the workers that get a block; 1 for one worker."""
+    if sizes is None:
+        step = max(1, int(block))
+        sizes = [min(step, int(members) - start) for start in range(0, int(members), step)]
+    total = sum(sizes)
+    if workers <= 1 or total <= 0:
         return 1.0
-    block = max(1, int(block))
     loads = [0] * int(workers)
-    for start in range(0, int(members), block):
-        loads[loads.index(min(loads))] += min(block, int(members) - start)
-    return max(loads) * min(int(workers), -(-int(members) // block)) / members
+    for size in sizes:
+        loads[loads.index(min(loads))] += int(size)
+    return max(loads) * min(int(workers), len(sizes)) / total
 
 
 def load_lines(load: float | None, cores: int, busy: float | None = None,

@@ -458,9 +458,11 @@ def study_cost(study: Study, workers: int | None = None, host_workers: int = 1):
     kernels' RK4 steps timed on the member kernels by ``analysis.integrate.cost``, and the
     host's classification of each run, probed): every draw at every value, each taking its
     transient and its record, the record's steps with λ1's tangent counted by its measured
-    cost (``simulate.run_engine``), at the first value's step."""
+    cost (``simulate.run_engine``), at the first value's step; on a pool of
+    ``host_workers`` processes (``workers`` None) its tasks (a value's block of draws)
+    dealt to them (``cost.busiest_share``), each on cores / ``host_workers`` threads."""
     from analysis.inference.abc import CalibrationCost
-    from analysis.integrate.cost import KERNELS, estimate_cost, process_seconds
+    from analysis.integrate.cost import KERNELS, busiest_share, estimate_cost, process_seconds
     from analysis.integrate.kernels.cpu import cores
 
     centre = {d.name: d.centre for d in study.dists}
@@ -470,10 +472,15 @@ def study_cost(study: Study, workers: int | None = None, host_workers: int = 1):
     per = settings.samples_per_revolution * every
     record = per * settings.revolutions
     steps = per * settings.transient_revolutions + record
+    balance = 1.0
+    if workers is None and host_workers > 1:  # a pool: its tasks dealt to its workers
+        sizes = [min(study.block, study.design.runs - b) for _, b in study.blocks()]
+        workers = max(1, cores() // host_workers) * min(host_workers, len(sizes))
+        balance = busiest_share(study.runs, study.block, host_workers, sizes)
     kernels = estimate_cost(system, study.runs, steps, dt=h, workers=workers or cores(),
                             what="draws x values", path=KERNELS, tangent_steps=record)
     host = classify_seconds(study)
-    kernels = dataclasses.replace(kernels, spent=process_seconds())
+    kernels = dataclasses.replace(kernels, spent=process_seconds(), balance=balance)
     return CalibrationCost(kernels, study.runs, host, host_workers)
 
 

@@ -147,6 +147,8 @@ def test_blocks_that_do_not_deal_evenly_leave_a_worker_idle():
     assert cost.busiest_share(96, 64, 4) == pytest.approx(4 / 3), "two blocks: two workers"
     assert cost.busiest_share(128, 64, 2) == 1.0
     assert cost.busiest_share(96, 64, 1) == 1.0
+    # blocks of given sizes (a study's values x blocks): 64+32 x 3 on 2 workers
+    assert cost.busiest_share(0, 0, 2, [64, 32] * 3) == pytest.approx(160 / 144)
     est = CostEstimate(members=96, steps=1000, workers=2, step_seconds=1e-6, dt=1e-5,
                        balance=4 / 3)
     assert est.seconds == pytest.approx(96 * 1000 * 1e-6 / 2 * 4 / 3)
@@ -194,3 +196,23 @@ def test_a_steady_probe_repeats_a_short_call():
     calls.clear()
     cost.steady_seconds(lambda: calls.append(1), seconds=1e9, most=3)
     assert len(calls) == 3, "as many as fill the time, at most 'most'"
+
+
+def test_an_uncertainty_study_on_a_pool_counts_its_tasks(monkeypatch):
+    """8 runs of the design in blocks of 6 (6 and 2) at one value on 2 workers: one runs 6,
+    the other 2 (1.5 of an even share); the record's steps with the tangent."""
+    from analysis.integrate.kernels.cpu import cores
+    from analysis.uncertainty import study as uncertainty
+
+    monkeypatch.setattr(cost, "probe_kernel", lambda *a, **k: KernelProbe(2e-7, 1.5))
+    monkeypatch.setattr(uncertainty, "classify_seconds", lambda study: 0.01)
+    study = uncertainty.prepare("vakharia2015", ["radial_clearance=uniform:5e-6:20e-6",
+                                                 "damping=normal:200:20"], n_balls=[8],
+                                samples=2, block=6)
+    assert study.runs == 8 and len(study.blocks()) == 2
+    est = uncertainty.study_cost(study, host_workers=2)
+    assert est.kernels.balance == pytest.approx(6 * 2 / 8)
+    assert est.kernels.workers == max(1, cores() // 2) * 2
+    assert "tangent x1.50" in est.lines()[0]
+    alone = uncertainty.study_cost(study)
+    assert alone.kernels.balance == 1.0 and alone.kernels.workers == cores()
