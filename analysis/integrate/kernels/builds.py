@@ -126,6 +126,31 @@ def self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
         if not ok:
             raise CompileError(f"the member kernel of {model.name} does not reproduce "
                                "CasADi (check BEARINGDYN_CFLAGS: no fast-math)")
+    if lib.lanes and not lanes_agree(model, structure, lib.lanes):
+        raise CompileError(f"the member kernel of {model.name} in lanes of {lib.lanes} "
+                           "does not reproduce it member by member")
+
+
+def lanes_agree(model, structure: tuple[int, ...], lanes: int) -> bool:
+    """Whether the tangent variant's blocks of ``lanes`` members (``cpu.cpu_library``
+    symbol ``_lanes``) give what its members one by one give (``_single``), bit for bit:
+    every output of three members (a spare lane) whose schedules differ, one of them
+    blowing up."""
+    n = model.n_state
+    z0, k0s, p, hs, t0s, _ = self_test_inputs(model, n)
+    z0, k0s, p, hs, t0s = (np.concatenate([a, a[:1]]) for a in (z0, k0s, p, hs, t0s))
+    limit = np.array([np.inf, np.inf, 0.0])  # the third member blows up at its first step
+    sched = [np.array([1, 2, 0]), np.array([2, 1, 3]), np.array([2, 3, 2]),
+             np.zeros(3, dtype=np.int64), np.array([0, 2, 0]), np.array([5, 4, 9])]
+    inputs = [np.ascontiguousarray(a) for a in (z0, k0s, p, hs, t0s, limit)] + \
+        [np.ascontiguousarray(a, dtype=np.int64) for a in sched]
+    results = []
+    for symbol in ("_lanes", "_single"):
+        outs = [np.empty((3, 3, n)), np.empty((3, 3)), np.empty((3, n)),
+                np.empty(3, dtype=np.int64), np.empty((3, n)), np.empty((3, n))]
+        cpu_library(model, structure, True, lanes, symbol).run(3, 1, inputs, 3, True, outs)
+        results.append(outs)
+    return all(np.array_equal(a, b, equal_nan=True) for a, b in zip(*results, strict=True))
 
 
 def self_test_inputs(model, n: int) -> list[np.ndarray]:

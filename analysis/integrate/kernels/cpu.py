@@ -13,6 +13,13 @@ variant bit for bit against the CasADi step it is written from, the tangent vari
 ``run`` calls ``bd_members_<variant>(count, threads, …)``: one member per OpenMP iteration
 (``schedule(dynamic, 1)``), ``threads`` cores (``BEARINGDYN_THREADS``, else every core of
 ``os.sched_getaffinity``).
+
+Lanes: on a host with AVX-512F (8 doubles a vector) or AVX2 (4), the tangent variant is
+built with that instruction set (``host_lanes``: its flags join the compiler command, so
+the cache key, and a host without them builds and loads its own library) and also runs
+blocks of that many members at once (``source.lanes_c``), bit for bit the member by member
+path (checked by ``builds.self_test``); elsewhere, or when the build with them fails, the
+tangent variant is today's scalar build.
 """
 
 from __future__ import annotations
@@ -40,6 +47,28 @@ from analysis.threads import thread_count
 
 OPENMP_FLAG = "-fopenmp"
 """The compiler flag of OpenMP (gcc and clang)."""
+LANE_ISAS = ((8, "avx512f", ("-mavx512f", "-mprefer-vector-width=512")),
+             (4, "avx2", ("-mavx2",)))
+"""Members per block of lanes, the /proc/cpuinfo flag of the instruction set and its
+compiler flags, best first (doubles of 512 and 256 bits). Without either the lanes lose
+(2 doubles of SSE2: 0.8 times the scalar stage), so the tangent stays scalar."""
+
+
+@cache
+def host_lanes() -> tuple[int, tuple[str, ...]]:
+    """The tangent variant's lanes on this host and their compiler flags (``LANE_ISAS``:
+    the first whose flag the kernel lists in /proc/cpuinfo), or ``(0, ())`` (no such file:
+    scalar)."""
+    try:
+        with open("/proc/cpuinfo") as handle:
+            line = next((x for x in handle if x.startswith("flags")), "")
+    except OSError:
+        return 0, ()
+    flags = set(line.split(":", 1)[-1].split())
+    for lanes, flag, options in LANE_ISAS:
+        if flag in flags:
+            return lanes, options
+    return 0, ()
 
 
 def cores() -> int:
@@ -73,6 +102,8 @@ class CpuLibrary:
 
     path: Path
     fn: Any
+    lanes: int = 0
+    """Members per block of lanes of its tangent variant (0: none)."""
 
     def run(self, count: int, threads: int, inputs: list[np.ndarray], kmax: int, keep: bool,
             outputs: list[np.ndarray]) -> None:
@@ -85,11 +116,11 @@ class CpuLibrary:
                 ctypes.c_longlong(kmax), ctypes.c_int(int(keep)), *ptr[len(inputs):])
 
 
-def build(source: str, stem: str, symbol: str) -> CpuLibrary:
+def build(source: str, stem: str, symbol: str, extra: tuple[str, ...] = ()) -> CpuLibrary:
     """The library of ``source`` from the cache (built there once, by one process at a
-    time) and its function ``symbol``; ``CompileError`` when it cannot be built or
-    loaded."""
-    command = [*compiler_command(), OPENMP_FLAG]
+    time, with ``extra`` compiler flags after the others) and its function ``symbol``;
+    ``CompileError`` when it cannot be built or loaded."""
+    command = [*compiler_command(), OPENMP_FLAG, *extra]
     path = cached_path(stem, source, command)
     # idle threads sleep instead of spinning (read by libgomp when it loads): a chart's
     # worker processes may share the cores, and a call's end waits for its longest member
@@ -107,13 +138,32 @@ def build(source: str, stem: str, symbol: str) -> CpuLibrary:
 
 
 @cache
-def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool) -> CpuLibrary:
+def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool,
+                lanes: int | None = None, symbol: str = "") -> CpuLibrary:
     """The CPU build of ``model``'s member C with these balls (the tangent variant with
     ``tangent``), memoised per process; ``CompileError`` or ``source.Unsupported`` when it
-    cannot be written or built."""
+    cannot be written or built. ``lanes``: the tangent variant's members per block of
+    lanes (None: ``host_lanes``, scalar when that build fails; 0: scalar; 4 or 8 on a host
+    without the instruction set: portable vector C, for tests); ``symbol``: a suffix of
+    the function (``"_lanes"`` or ``"_single"``: one path of a build with lanes)."""
     from analysis.integrate.kernels.source import model_source
 
     variant = "tangent" if tangent else "states"
-    source = model_source(model, structure, tangent, "cpu")
-    return build(source, library_stem(f"bd_members_{variant}", model, structure),
-                 f"bd_members_{variant}")
+    stem = library_stem(f"bd_members_{variant}", model, structure)
+
+    def built(lanes: int, flags: tuple[str, ...]) -> CpuLibrary:
+        lib = build(model_source(model, structure, tangent, "cpu", lanes), stem,
+                    f"bd_members_{variant}{symbol}", flags)
+        lib.lanes = lanes
+        return lib
+
+    host, isa = host_lanes()
+    if lanes is None and tangent and host:
+        try:
+            return built(host, isa)
+        except CompileError:  # a compiler without the instruction set: scalar
+            pass
+    lanes = lanes or 0
+    if symbol and not lanes:
+        raise ValueError(f"symbol {symbol!r}: only in a build with lanes")
+    return built(lanes, isa if lanes and lanes == host else ())

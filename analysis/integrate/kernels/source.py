@@ -141,6 +141,82 @@ def _constant(value: float) -> str:
     return repr(value)
 
 
+VECTOR_PRELUDE = """\
+typedef double bd_vd __attribute__((vector_size(8 * BD_LANES)));
+typedef long long bd_vl __attribute__((vector_size(8 * BD_LANES)));
+BD_FN bd_vd bd_vb(double x) {
+  bd_vd r;
+  for (int l = 0; l < BD_LANES; l++) r[l] = x;
+  return r;
+}
+BD_FN bd_vd bd_vsel(bd_vl m, bd_vd a, bd_vd b) {
+  return (bd_vd)((m & (bd_vl)a) | (~m & (bd_vl)b));
+}
+BD_FN bd_vd bd_vmask(bd_vl m) { return (bd_vd)(m & (bd_vl)bd_vb(1.0)); }
+BD_FN bd_vd bd_vfabs(bd_vd a) { return (bd_vd)((bd_vl)a & ~(bd_vl)bd_vb(-0.0)); }
+BD_FN bd_vd bd_vsign(bd_vd a) {
+  return bd_vsel(a < 0.0, bd_vb(-1.0), bd_vsel(a > 0.0, bd_vb(1.0), a));
+}
+#define BD_VMAP1(fn, a) ({ bd_vd r_, a_ = (a); \\
+  for (int l_ = 0; l_ < BD_LANES; l_++) r_[l_] = fn(a_[l_]); \\
+  r_; })
+#define BD_VMAP2(fn, a, b) ({ bd_vd r_, a_ = (a), b_ = (b); \\
+  for (int l_ = 0; l_ < BD_LANES; l_++) r_[l_] = fn(a_[l_], b_[l_]); \\
+  r_; })
+"""
+"""The lanes of the CPU build (GCC/clang vector extensions): ``bd_vd`` holds one double of
+``BD_LANES`` members; a comparison gives a lane mask (all bits set or clear) and a selection
+is a bitwise blend, so every lane computes what the scalar C computes, bit for bit (a NaN
+condition counts as true in ``if_else_zero``, -0.0 and NaN keep their sign under
+``sign``, as in ``bd_sign``); libm functions (and sqrt) run lane by lane."""
+VUNARY = {"NEG": "(-{0})", "TWICE": "(2.0 * {0})", "SQ": "({0} * {0})",
+          "INV": "(1.0 / {0})", "NOT": "bd_vmask({0} == 0.0)", "SIGN": "bd_vsign({0})",
+          "FABS": "bd_vfabs({0})"}
+"""``UNARY`` on lanes where it is not one libm call a lane."""
+VBINARY = {"ADD": "({0} + {1})", "SUB": "({0} - {1})", "MUL": "({0} * {1})",
+           "DIV": "({0} / {1})", "LT": "bd_vmask({0} < {1})", "LE": "bd_vmask({0} <= {1})",
+           "EQ": "bd_vmask({0} == {1})", "NE": "bd_vmask({0} != {1})",
+           "AND": "bd_vmask(({0} != 0.0) & ({1} != 0.0))",
+           "OR": "bd_vmask(({0} != 0.0) | ({1} != 0.0))",
+           "IF_ELSE_ZERO": "(bd_vd)((bd_vl){1} & ({0} != 0.0))"}
+"""``BINARY`` on lanes where it is not one libm call a lane."""
+
+
+def lanes_c(fn: ca.Function, name: str) -> str:
+    """``BD_FN void name(const bd_vd *x0, …, bd_vd *y0, …)``: ``scalar_c`` of ``fn`` on
+    ``BD_LANES`` members at once (``VECTOR_PRELUDE``; element i of an input or output is
+    the vector of its lanes), the same operations in the same order in every lane."""
+    if not fn.is_a("SXFunction"):
+        raise Unsupported(f"{fn.name()}: not an SX Function")
+    inputs = ", ".join(f"const bd_vd *BD_RESTRICT x{i}" for i in range(fn.n_in()))
+    outputs = ", ".join(f"bd_vd *BD_RESTRICT y{i}" for i in range(fn.n_out()))
+    lines = [f"BD_FN void {name}({inputs}, {outputs}) {{",
+             "  bd_vd " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+    for i in range(fn.n_instructions()):
+        op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
+            fn.instruction_input(i)
+        w = [f"w{a}" for a in arg]
+        if op == "INPUT":
+            lines.append(f"  w{out[0]} = x{arg[0]}[{arg[1]}];")
+        elif op == "OUTPUT":
+            lines.append(f"  y{out[0]}[{out[1]}] = w{arg[0]};")
+        elif op == "CONST":
+            value = _constant(float(fn.instruction_constant(i)))
+            lines.append(f"  w{out[0]} = bd_vb({value});")
+        elif op in VUNARY:
+            lines.append(f"  w{out[0]} = {VUNARY[op].format(*w)};")
+        elif op in VBINARY:
+            lines.append(f"  w{out[0]} = {VBINARY[op].format(*w)};")
+        elif op in UNARY:
+            lines.append(f"  w{out[0]} = BD_VMAP1({UNARY[op].split('(')[0]}, {w[0]});")
+        elif op in BINARY:
+            lines.append(f"  w{out[0]} = BD_VMAP2({BINARY[op].split('(')[0]}, {w[0]}, {w[1]});")
+        else:
+            raise Unsupported(f"{fn.name()}: operation {op} is not written as member C")
+    lines.append("}")
+    return "\n".join(lines)
+
+
 def blow_up_c(n: int, pairs: Sequence[tuple[int, int | None]]) -> str:
     """``bd_bad(z, limit)``: 1 when a state is not finite (``z - z == 0`` fails for inf and
     NaN, needing no header on either build) or a centre displacement
@@ -372,6 +448,173 @@ void bd_members_{variant}(bd_long count, int threads, {args_nom}) {{
 }}
 """
 
+_LANES_ROTATE = """
+BD_FN void bd_rotate_lanes(bd_vd *cs, const bd_vd *cs0, const bd_vd *rot, int j) {{
+  /* bd_rotate on the lanes */
+  for (int k = 0; k < {na}; k++) {{
+    const bd_vd c = cs0[2 * k], sn = cs0[2 * k + 1], rc = rot[4 * k + j],
+                rs = rot[4 * k + j + 1];
+    cs[2 * k] = c * rc - sn * rs; cs[2 * k + 1] = sn * rc + c * rs;
+  }}
+}}
+"""
+
+_LANES_TANGENT = """
+BD_FN void bd_block_tangent(bd_long m0, bd_long count, {args_nom}) {{
+  /* bd_member_tangent of the members m0 … m0 + BD_LANES - 1 below count, lane l of every
+     bd_vd one member: the transients member by member, then the tangent steps of all the
+     lanes at once (stage_lanes) until every lane is done; spare lanes repeat the last
+     member and write nothing */
+  double s[BD_LANES][{ns}], nx[{ns}], c[{nc}], lo[BD_LANES][{n}], hi[BD_LANES][{n}];
+  double d[{nd}] = {{0.0}}, rot[{nr}] = {{0.0}}, ang[{na1}], cs0[{ncs}] = {{0.0}};
+  double lim[BD_LANES];
+  const double *pl[BD_LANES];
+  bd_long step[BD_LANES], bad[BD_LANES], sec[BD_LANES], left[BD_LANES], end[BD_LANES],
+          from[BD_LANES], upto[BD_LANES], nsec[BD_LANES], ev[BD_LANES];
+  int on[BD_LANES];
+  bd_vd z[{n}], v[{n}], zs[{n}], vs[{n}], f[{n}], jv[{n}], az[{n}], av[{n}];
+  bd_vd pv[{npar}], dv[{nd}], rotv[{nr}], csv0[{ncs}], csv[{ncs}], hv, t0v, kv;
+  const int lanes = count - m0 < BD_LANES ? (int)(count - m0) : BD_LANES;
+  for (int l = 0; l < BD_LANES; l++) {{
+    const bd_long m = m0 + (l < lanes ? l : lanes - 1);
+    const double *pm = p + m * {npar};
+    const double hm = h[m], t0m = t0[m];
+    double *sl = s[l];
+    pl[l] = pm; lim[l] = limit[m];
+    for (int i = 0; i < {n}; i++) {{
+      sl[i] = z0[m * {n} + i]; lo[l][i] = INFINITY; hi[l][i] = -INFINITY;
+    }}
+    sl[{n}] = k0[m];
+    rk4_constants(pm, &hm, &t0m, c);
+    const bd_long tr = transient[m];
+    ev[l] = every[m]; nsec[l] = n_sec[m]; from[l] = ext_from[m]; upto[l] = ext_to[m];
+    const bd_long total = tr + ev[l] * nsec[l];
+    end[l] = total > upto[l] ? total : upto[l];
+    bd_long st = 0, bd = -1;
+    if (from[l] <= 0 && upto[l] >= 0) bd_extend(lo[l], hi[l], sl);
+    for (; st < tr; ) {{
+      rk4_steps1(sl, pm, &hm, &t0m, c, nx);
+      for (int i = 0; i < {ns}; i++) sl[i] = nx[i];
+      st++;
+      if (bd_bad(sl, lim[l])) {{ bd = st; break; }}
+      if (st >= from[l] && st <= upto[l]) bd_extend(lo[l], hi[l], sl);
+    }}
+    step[l] = st; bad[l] = bd; sec[l] = 0; left[l] = ev[l];
+    on[l] = l < lanes && bd < 0 && st < end[l];
+    stage_constants(pm, d);
+    stage_rotations(pm, &hm, rot);
+    for (int i = 0; i < {n}; i++) {{ z[i][l] = sl[i]; v[i][l] = i == 0 ? 1.0 : 0.0; }}
+    for (int i = 0; i < {npar}; i++) pv[i][l] = pm[i];
+    for (int i = 0; i < {nd}; i++) dv[i][l] = d[i];
+    for (int i = 0; i < {nr}; i++) rotv[i][l] = rot[i];
+    hv[l] = hm; t0v[l] = t0m; kv[l] = sl[{n}];
+  }}
+  const bd_vd half = hv / 2.0, sixth = hv / 6.0;
+  for (;;) {{
+    int any = 0;
+    for (int l = 0; l < BD_LANES; l++) any |= on[l];
+    if (!any) break;
+    const bd_vd t = t0v + kv * hv, th = t + half, tf = t + hv;
+    for (int l = 0; l < BD_LANES; l++) {{
+      const double tl = t[l];
+      bd_trig(cs0, &tl, pl[l], ang);
+      for (int k = 0; k < {ncs}; k++) csv0[k][l] = cs0[k];
+    }}
+    stage_lanes(&t, z, pv, v, dv, csv0, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] = f[i]; av[i] = jv[i];
+      zs[i] = z[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
+    }}
+    bd_rotate_lanes(csv, csv0, rotv, 0);  /* the angles at t + h/2 */
+    stage_lanes(&th, zs, pv, vs, dv, csv, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
+      zs[i] = z[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
+    }}
+    stage_lanes(&th, zs, pv, vs, dv, csv, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
+      zs[i] = z[i] + hv * f[i]; vs[i] = v[i] + hv * jv[i];
+    }}
+    bd_rotate_lanes(csv, csv0, rotv, 2);  /* the angles at t + h */
+    stage_lanes(&tf, zs, pv, vs, dv, csv, f, jv);
+    for (int i = 0; i < {n}; i++) {{
+      z[i] += sixth * (az[i] + f[i]); v[i] += sixth * (av[i] + jv[i]);
+    }}
+    kv += 1.0;
+    for (int l = 0; l < BD_LANES; l++) {{
+      if (!on[l]) continue;
+      const bd_long m = m0 + l;
+      double *sl = s[l];
+      for (int i = 0; i < {n}; i++) sl[i] = z[i][l];
+      sl[{n}] = kv[l];
+      step[l]++;
+      if (bd_bad(sl, lim[l])) {{ bad[l] = step[l]; on[l] = 0; continue; }}
+      if (step[l] >= from[l] && step[l] <= upto[l]) bd_extend(lo[l], hi[l], sl);
+      if (--left[l] == 0 && sec[l] < nsec[l]) {{
+        double norm = 0.0;
+        for (int i = 0; i < {n}; i++) norm += v[i][l] * v[i][l];
+        norm = sqrt(norm);
+        for (int i = 0; i < {n}; i++) v[i][l] /= norm;
+        logs[m * kmax + sec[l]] = log(norm);
+        if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec[l]) * {n} + i] = sl[i];
+        sec[l]++; left[l] = ev[l];
+      }}
+      if (step[l] >= end[l]) on[l] = 0;
+    }}
+  }}
+  for (int l = 0; l < lanes; l++) {{
+    const bd_long m = m0 + l;
+    diverged[m] = bad[l] < 0 ? -1 : (bd_long)k0[m] + bad[l];
+    for (bd_long q = sec[l] < nsec[l] ? sec[l] : nsec[l]; q < kmax; q++) {{
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
+      logs[m * kmax + q] = NAN;
+    }}
+    for (int i = 0; i < {n}; i++) {{
+      final[m * {n} + i] = s[l][i]; low[m * {n} + i] = lo[l][i]; high[m * {n} + i] = hi[l][i];
+    }}
+  }}
+}}
+"""
+"""The CPU build's tangent variant on ``BD_LANES`` members at once: ``_MEMBER_HEAD``,
+``_TANGENT_BODY`` and ``_MEMBER_TAIL`` lane by lane, the same operations, so the same
+results bit for bit."""
+
+LANE_GAIN = 2
+"""How many times faster a member's tangent step runs in a block of lanes than alone (at
+least: 3.0-3.7 on AVX2 and AVX-512, ``benchmarks/bench_lanes.py``): the wrapper runs blocks
+of lanes only when the busiest thread's blocks (of ``BD_LANES`` steps each, spare lanes
+included) take at most ``LANE_GAIN`` times its members' steps; few members on many cores
+run member by member."""
+
+_LANES_WRAPPER = """
+static void bd_lanes_tangent(int path, bd_long count, int threads, {args_nom}) {{
+  /* path 0: blocks of lanes when they pay (LANE_GAIN), 1: blocks, 2: member by member */
+  if (threads <= 0) threads = 1;
+  const bd_long blocks = (count + BD_LANES - 1) / BD_LANES;
+  const bd_long per = (count + threads - 1) / threads;
+  const bd_long bper = (blocks + threads - 1) / threads;
+  if (path == 1 || (path == 0 && bper * BD_LANES <= {gain} * per)) {{
+    #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (bd_long b = 0; b < blocks; b++) bd_block_tangent(b * BD_LANES, count, {call_nom});
+  }} else {{
+    #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (bd_long m = 0; m < count; m++) bd_member_tangent({call});
+  }}
+}}
+void bd_members_tangent(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_tangent(0, count, threads, {call_nom});
+}}
+void bd_members_tangent_lanes(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_tangent(1, count, threads, {call_nom});
+}}
+void bd_members_tangent_single(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_tangent(2, count, threads, {call_nom});
+}}
+"""
+"""The wrappers of the tangent variant with lanes: ``bd_members_tangent`` chooses (the
+symbol every build has), ``_lanes`` and ``_single`` force a path (self-test, tests)."""
+
 _CUDA_WRAPPER = """
 BD_GLOBAL void bd_members_{variant}(bd_long count, {args_nom}) {{
   bd_long m = (bd_long)blockIdx.x * blockDim.x + threadIdx.x;
@@ -398,7 +641,7 @@ twice)."""
 
 def member_source(step: ca.Function, constants: ca.Function, n: int,
                   pairs: Sequence[tuple[int, int | None]], stage: Stage | None = None, *,
-                  target: str = "cpu", tangent: bool | None = None) -> str:
+                  target: str = "cpu", tangent: bool | None = None, lanes: int = 0) -> str:
     """The whole C text of one model and balls: the prelude, the written Functions
     (``rk4_steps1`` and ``rk4_constants``; with ``stage``, the tangent's ``stage``,
     ``stage_constants``, ``stage_angles`` and ``stage_rotations``), ``bd_bad``, the member
@@ -413,14 +656,23 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
     tangent's four stages run in a loop with one inlined stage (``bd_rk4_tangent``, the
     sin and cos at each stage time), and a model whose fused step or stage is too large
     (``FUSED_WORK_MAX``, ``STAGE_WORK_MAX``; needs ``stage``) steps stage by stage (its
-    states then differ from the CPU build's by rounding)."""
+    states then differ from the CPU build's by rounding).
+
+    ``lanes`` > 0 (CPU tangent variant only): the text also runs the tangent steps of
+    ``lanes`` members at once (``#define BD_LANES``, ``lanes_c``, ``_LANES_TANGENT``;
+    vectors of that many doubles: 4 for AVX2, 8 for AVX-512, ``cpu.host_lanes``), with the
+    same results bit for bit; ``bd_members_tangent`` chooses blocks of lanes or single
+    members (``LANE_GAIN``), ``bd_members_tangent_lanes`` and ``_single`` force one."""
     tangent = stage is not None if tangent is None else tangent
+    if lanes < 0 or (lanes and (target != "cpu" or not tangent)):
+        raise ValueError(f"lanes: 0, or > 0 for the CPU tangent variant, got {lanes}")
     if tangent and stage is None:
         raise ValueError("the tangent variant needs its stage")
     variant = "tangent" if tangent else "states"
     cuda = target == "cuda"
     ns, nc = step.size1_in(0), max(step.size1_in(4), 1)
-    parts = [PRELUDE, scalar_c(constants, "rk4_constants"), scalar_c(step, "rk4_steps1"),
+    parts = [PRELUDE, *((f"#define BD_LANES {lanes}", VECTOR_PRELUDE) if lanes else ()),
+             scalar_c(constants, "rk4_constants"), scalar_c(step, "rk4_steps1"),
              blow_up_c(n, pairs)]
     npar = step.size1_in(1)
     staged = cuda and stage is not None and step.sz_w() > FUSED_WORK_MAX
@@ -436,6 +688,8 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
                   scalar_c(stage.angles, "stage_angles"),
                   scalar_c(stage.rotations, "stage_rotations"), scalar_c(stage.stage, "stage")]
         parts.append(_ROTATE.format(na=na))  # after stage_angles: bd_trig calls it
+        if lanes:
+            parts += [lanes_c(stage.stage, "stage_lanes"), _LANES_ROTATE.format(na=na)]
         if cuda:
             split = stage.stage.sz_w() > STAGE_WORK_MAX
             parts += [scalar_c(stage.rhs, "stage_f"), _CUDA_STAGED.format(n=n)]
@@ -454,7 +708,12 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
                  + _MEMBER_TAIL.format(n=n, nan_log="logs[m * kmax + q] = NAN;"
                                        if tangent else ""))
     wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
-    parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL))
+    if lanes:
+        parts.append(_LANES_TANGENT.format(args_nom=_args_without_m(), ns=ns, nc=nc,
+                                           npar=npar, **sizes))
+        wrapper = _LANES_WRAPPER
+    parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL,
+                                call_nom=_CALL.split(", ", 1)[1], gain=LANE_GAIN))
     return "\n".join(parts)
 
 
@@ -561,13 +820,14 @@ def stage_functions(model: object, structure: tuple[int, ...]) -> Stage:
 
 
 def model_source(model: object, structure: tuple[int, ...], tangent: bool,
-                 target: str = "cpu") -> str:
+                 target: str = "cpu", lanes: int = 0) -> str:
     """The member C of ``model`` with these balls (``member_source``): the state variant,
     or with ``tangent`` the tangent variant, for ``target`` ``"cpu"`` or ``"cuda"`` (whose
-    state variant takes the stage functions too when its fused step is large)."""
+    state variant takes the stage functions too when its fused step is large); ``lanes``:
+    the CPU tangent variant's members per block of lanes (0: none)."""
     step, constants = state_functions(model, structure)
     staged = target == "cuda" and step.sz_w() > FUSED_WORK_MAX
     stage = stage_functions(model, structure) if tangent or staged else None
     return member_source(step, constants, model.n_state,  # type: ignore[attr-defined]
                          model.centre_indices(), stage, target=target,  # type: ignore
-                         tangent=tangent)
+                         tangent=tangent, lanes=lanes)
