@@ -6,12 +6,12 @@
   vector, CasADi's compiled C, one core);
 - the member kernels' CPU build (``analysis.integrate.kernels.cpu.cpu_library``), states
   and tangent variants, on one thread and on every core (``--members`` members per call;
-  per member step, wall time); the tangent variant scalar (``lanes=0``, the build before
-  lanes) and in blocks of lanes (``--lanes``, default the host's: 8 with AVX-512F, 4 with
-  AVX2; none: no such rows).
+  per member step, wall time), scalar (``lanes=0``, the build before lanes) and in blocks
+  of lanes (``--lanes``, default the host's: 8 with AVX-512F, 4 with
+  AVX2; with the host's flags for that count, ``cpu.host_isas``; ``--lanes`` alone: none).
 
     python benchmarks/bench_lanes.py [--model vakharia2015] [--n-balls 8] [--repeat 10]
-                                     [--members 16] [--lanes 8]
+                                     [--members 16] [--lanes 4 8]
 
 Prints the median and minimum µs per step (per member step for the kernels), the steps per
 second and the ratios to the states-only compiled block and to the kernel's state variant
@@ -29,7 +29,7 @@ import numpy as np
 
 from analysis.integrate.compiled import Runner, library
 from analysis.integrate.kernels import Schedule
-from analysis.integrate.kernels.cpu import CpuLibrary, cores, cpu_library, host_lanes
+from analysis.integrate.kernels.cpu import CpuLibrary, cores, cpu_library, host_isas, host_lanes
 from analysis.model import System
 from analysis.sweeps.points import _Caller, chart_blocks
 
@@ -60,10 +60,11 @@ def main() -> None:
     parser.add_argument("--speed-rpm", type=float, default=2000.0)
     parser.add_argument("--repeat", type=int, default=10)
     parser.add_argument("--members", type=int, default=16)
-    parser.add_argument("--lanes", type=int, default=None,
-                        help="members per block of lanes (default: the host's; 0: none)")
+    parser.add_argument("--lanes", type=int, nargs="*", default=None,
+                        help="members per block of lanes, one row each (default: the "
+                             "host's; none: no such row)")
     args = parser.parse_args()
-    lanes = host_lanes()[0] if args.lanes is None else args.lanes
+    lanes = [host_lanes()[0]] if args.lanes is None else args.lanes
     system = System.make(args.model, args.n_balls, speed_rpm=args.speed_rpm)
     model, structure = system.model, system.structure
     dt = float(model.simulation_defaults["dt"])
@@ -73,10 +74,13 @@ def main() -> None:
     start = np.concatenate([z, [0.0], np.eye(n)[:, 0]])
     runner = Runner(library(model, structure), system.p, dt)
     scalar = _Caller(chart_blocks(model, structure)[100], start.copy(), system.p, dt)
-    libs = {"states": cpu_library(model, structure, False),
+    libs = {"states": cpu_library(model, structure, False, 0),
             "tangent": cpu_library(model, structure, True, 0)}
-    if lanes:
-        libs[f"tangent, lanes of {lanes}"] = cpu_library(model, structure, True, lanes)
+    for count in filter(None, lanes):
+        flags = " ".join(host_isas().get(count, ())) or "no ISA flag"
+        for variant in ("states", "tangent"):
+            libs[f"{variant}, lanes of {count} ({flags})"] = \
+                cpu_library(model, structure, variant == "tangent", count)
     kernels = [(f"kernel {name} ({threads} thread{'s' if threads > 1 else ''})", lib, threads)
                for threads in (1, all_cores) for name, lib in libs.items()]
     times: dict[str, list[float]] = {

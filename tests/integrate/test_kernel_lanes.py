@@ -1,4 +1,4 @@
-"""The CPU tangent variant in blocks of lanes (``source.lanes_c``, ``BD_LANES``): bit for bit
+"""The CPU build's variants in blocks of lanes (``source.lanes_c``, ``BD_LANES``): bit for bit
 the scalar build (the build before lanes) on members whose states, parameters, steps,
 counters and schedules differ, one of them blowing up, in blocks with spare lanes, on one
 and two threads; the text and so the cache key change with the lanes."""
@@ -40,7 +40,7 @@ def _inputs(system: System) -> list[np.ndarray]:
     h[3] = 500 * dt
     limit = np.full(m, blow_up_limit(system.model, dict(system.parameters)))
     tr, every, count = np.arange(m) * 7, np.arange(m) % 3 + 9, np.arange(m) % 4 + 3
-    schedule = Schedule(tr, every, count, tangent=True,  # odd members run on 5 steps
+    schedule = Schedule(tr, every, count,  # the odd members run on 5 steps
                         extremes_to=tr + every * count + 5 * (np.arange(m) % 2))
     return [np.ascontiguousarray(a) for a in (
         z0, np.arange(m) * 2.0, np.array([x.p for x in members]), h, np.arange(m) * 1e-4,
@@ -50,25 +50,28 @@ def _inputs(system: System) -> list[np.ndarray]:
 def _run(lib: cpu.CpuLibrary, inputs: list[np.ndarray], n: int, threads: int,
          kmax: int = 6) -> list[np.ndarray]:
     m = len(inputs[0])
-    outs = [np.empty((m, kmax, n)), np.empty((m, kmax)), np.empty((m, n)),
-            np.empty(m, dtype=np.int64), np.empty((m, n)), np.empty((m, n))]
+    outs = [np.full((m, kmax, n), np.nan), np.full((m, kmax), np.nan), np.full((m, n), np.nan),
+            np.full(m, -7), np.full((m, n), np.nan), np.full((m, n), np.nan)]
     lib.run(m, threads, inputs, kmax, True, outs)
     return outs
 
 
 @pytest.mark.parametrize("lanes", [4, 8])
+@pytest.mark.parametrize("tangent", [False, True])
 @pytest.mark.parametrize("name", ["balanced-rotor", "vakharia2015"])
-def test_lanes_are_the_scalar_build_bit_for_bit(name, lanes):
+def test_lanes_are_the_scalar_build_bit_for_bit(name, tangent, lanes):
     """Every output (sections, logs, final states, blow-up steps, extremes) of the blocks of
     lanes, forced and chosen, on one and two threads, equals the scalar build's."""
     system = _system(name)
     model, structure, n = system.model, system.structure, system.n_state
     inputs = _inputs(system)
-    want = _run(cpu_library(model, structure, True, 0), inputs, n, 1)
+    want = _run(cpu_library(model, structure, tangent, 0), inputs, n, 1)
     assert want[3][3] > 0 and np.all(np.delete(want[3], 3) == -1)  # member 3 blows up
-    assert np.all(np.isfinite(want[1][:, :3]) == (np.arange(MEMBERS) != 3)[:, None])
+    assert np.all(np.isfinite(want[0][:, :3, 0]) == (np.arange(MEMBERS) != 3)[:, None])
+    if tangent:
+        assert np.all(np.isfinite(want[1][:, :3]) == (np.arange(MEMBERS) != 3)[:, None])
     for symbol in ("_lanes", ""):
-        lib = cpu_library(model, structure, True, lanes, symbol)
+        lib = cpu_library(model, structure, tangent, lanes, symbol)
         assert lib.lanes == lanes
         for threads in (1, 2):
             got = _run(lib, inputs, n, threads)
@@ -79,7 +82,7 @@ def test_lanes_are_the_scalar_build_bit_for_bit(name, lanes):
 def test_the_lanes_change_the_text_and_the_cache_key():
     """A build with lanes is a text of its own (so a library of its own in the cache, its
     instruction set in the command); the build without is today's text; lanes are for the
-    CPU tangent variant only."""
+    CPU build only."""
     system = _system("vakharia2015")
     model, structure = system.model, system.structure
     scalar = model_source(model, structure, True, "cpu")
@@ -89,24 +92,26 @@ def test_the_lanes_change_the_text_and_the_cache_key():
     keys = {cached_path("x", text, ["gcc"]) for text in (scalar, *with_lanes.values())}
     assert len(keys) == 3
     assert cached_path("x", scalar, ["gcc"]) != cached_path("x", scalar, ["gcc", "-mavx2"])
-    for kwargs in (dict(tangent=False, target="cpu"), dict(tangent=True, target="cuda")):
+    for tangent in (False, True):
         with pytest.raises(ValueError, match="lanes"):
-            model_source(model, structure, kwargs["tangent"], kwargs["target"], 4)
+            model_source(model, structure, tangent, "cuda", 4)
 
 
-def test_a_host_without_lanes_builds_the_scalar_tangent(monkeypatch):
-    """Where ``host_lanes`` finds neither AVX2 nor AVX-512F the default build is the scalar
+@pytest.mark.parametrize("tangent", [False, True])
+def test_a_host_without_lanes_builds_the_scalar_text(monkeypatch, tangent):
+    """Where ``host_isas`` finds neither AVX2 nor AVX-512F the default build is the scalar
     text (no instruction-set flag), and its members are those of the build with lanes."""
     system = _system("balanced-rotor")
     model, structure, n = system.model, system.structure, system.n_state
-    monkeypatch.setattr(cpu, "host_lanes", lambda: (0, ()))
+    monkeypatch.setattr(cpu, "host_isas", lambda: {})
     cpu_library.cache_clear()
     try:
-        lib = cpu_library(model, structure, True)
+        lib = cpu_library(model, structure, tangent)
         assert lib.lanes == 0
+        assert lib.path == cpu_library(model, structure, tangent, 0).path
         inputs = _inputs(system)
         got = _run(lib, inputs, n, 1)
-        want = _run(cpu_library(model, structure, True, 4, "_lanes"), inputs, n, 1)
+        want = _run(cpu_library(model, structure, tangent, 4, "_lanes"), inputs, n, 1)
         for a, b in zip(got, want, strict=True):
             assert np.array_equal(a, b, equal_nan=True)
     finally:

@@ -126,13 +126,13 @@ def self_test(model, structure: tuple[int, ...], tangent: bool) -> None:
         if not ok:
             raise CompileError(f"the member kernel of {model.name} does not reproduce "
                                "CasADi (check BEARINGDYN_CFLAGS: no fast-math)")
-    if lib.lanes and not lanes_agree(model, structure, lib.lanes):
+    if lib.lanes and not lanes_agree(model, structure, tangent, lib.lanes):
         raise CompileError(f"the member kernel of {model.name} in lanes of {lib.lanes} "
                            "does not reproduce it member by member")
 
 
-def lanes_agree(model, structure: tuple[int, ...], lanes: int) -> bool:
-    """Whether the tangent variant's blocks of ``lanes`` members (``cpu.cpu_library``
+def lanes_agree(model, structure: tuple[int, ...], tangent: bool, lanes: int) -> bool:
+    """Whether the blocks of ``lanes`` members of the variant (``cpu.cpu_library``
     symbol ``_lanes``) give what its members one by one give (``_single``), bit for bit:
     every output of three members (a spare lane) whose schedules differ, one of them
     blowing up."""
@@ -145,10 +145,11 @@ def lanes_agree(model, structure: tuple[int, ...], lanes: int) -> bool:
     inputs = [np.ascontiguousarray(a) for a in (z0, k0s, p, hs, t0s, limit)] + \
         [np.ascontiguousarray(a, dtype=np.int64) for a in sched]
     results = []
-    for symbol in ("_lanes", "_single"):
-        outs = [np.empty((3, 3, n)), np.empty((3, 3)), np.empty((3, n)),
-                np.empty(3, dtype=np.int64), np.empty((3, n)), np.empty((3, n))]
-        cpu_library(model, structure, True, lanes, symbol).run(3, 1, inputs, 3, True, outs)
+    for symbol in ("_lanes", "_single"):  # NaN where a path writes nothing (logs of states)
+        outs = [np.full((3, 3, n), np.nan), np.full((3, 3), np.nan), np.full((3, n), np.nan),
+                np.full(3, -7), np.full((3, n), np.nan), np.full((3, n), np.nan)]
+        cpu_library(model, structure, tangent, lanes, symbol).run(3, 1, inputs, 3, True,
+                                                                   outs)
         results.append(outs)
     return all(np.array_equal(a, b, equal_nan=True) for a, b in zip(*results, strict=True))
 

@@ -14,12 +14,12 @@ variant bit for bit against the CasADi step it is written from, the tangent vari
 (``schedule(dynamic, 1)``), ``threads`` cores (``BEARINGDYN_THREADS``, else every core of
 ``os.sched_getaffinity``).
 
-Lanes: on a host with AVX-512F (8 doubles a vector) or AVX2 (4), the tangent variant is
-built with that instruction set (``host_lanes``: its flags join the compiler command, so
-the cache key, and a host without them builds and loads its own library) and also runs
-blocks of that many members at once (``source.lanes_c``), bit for bit the member by member
-path (checked by ``builds.self_test``); elsewhere, or when the build with them fails, the
-tangent variant is today's scalar build.
+Lanes: on a host with AVX-512F (8 doubles a vector) or AVX2 (4), both variants are built
+with that instruction set (``host_lanes``, ``LANE_ISAS``: its flags join the compiler
+command, so the cache key, and a host without them builds and loads its own library) and
+also runs blocks of that many members at once (``source.lanes_c``), bit for bit the member by member
+path (checked by ``builds.self_test``); elsewhere, or when the build with them fails, they
+are the scalar build.
 """
 
 from __future__ import annotations
@@ -51,24 +51,26 @@ LANE_ISAS = ((8, "avx512f", ("-mavx512f", "-mprefer-vector-width=512")),
              (4, "avx2", ("-mavx2",)))
 """Members per block of lanes, the /proc/cpuinfo flag of the instruction set and its
 compiler flags, best first (doubles of 512 and 256 bits). Without either the lanes lose
-(2 doubles of SSE2: 0.8 times the scalar stage), so the tangent stays scalar."""
+(2 doubles of SSE2: 0.8 times the scalar stage), so the build stays scalar."""
 
 
 @cache
-def host_lanes() -> tuple[int, tuple[str, ...]]:
-    """The tangent variant's lanes on this host and their compiler flags (``LANE_ISAS``:
-    the first whose flag the kernel lists in /proc/cpuinfo), or ``(0, ())`` (no such file:
-    scalar)."""
+def host_isas() -> dict[int, tuple[str, ...]]:
+    """The compiler flags of every entry of ``LANE_ISAS`` whose flag the kernel lists in
+    /proc/cpuinfo, by members per block of lanes, best first (none without that file)."""
     try:
         with open("/proc/cpuinfo") as handle:
             line = next((x for x in handle if x.startswith("flags")), "")
     except OSError:
-        return 0, ()
+        return {}
     flags = set(line.split(":", 1)[-1].split())
-    for lanes, flag, options in LANE_ISAS:
-        if flag in flags:
-            return lanes, options
-    return 0, ()
+    return {lanes: options for lanes, flag, options in LANE_ISAS if flag in flags}
+
+
+def host_lanes() -> tuple[int, tuple[str, ...]]:
+    """The members per block of lanes on this host and their compiler flags: the best of
+    ``host_isas``, or ``(0, ())`` (scalar)."""
+    return next(iter(host_isas().items()), (0, ()))
 
 
 def cores() -> int:
@@ -103,7 +105,7 @@ class CpuLibrary:
     path: Path
     fn: Any
     lanes: int = 0
-    """Members per block of lanes of its tangent variant (0: none)."""
+    """Members per block of lanes (0: none)."""
 
     def run(self, count: int, threads: int, inputs: list[np.ndarray], kmax: int, keep: bool,
             outputs: list[np.ndarray]) -> None:
@@ -142,10 +144,11 @@ def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool,
                 lanes: int | None = None, symbol: str = "") -> CpuLibrary:
     """The CPU build of ``model``'s member C with these balls (the tangent variant with
     ``tangent``), memoised per process; ``CompileError`` or ``source.Unsupported`` when it
-    cannot be written or built. ``lanes``: the tangent variant's members per block of
-    lanes (None: ``host_lanes``, scalar when that build fails; 0: scalar; 4 or 8 on a host
-    without the instruction set: portable vector C, for tests); ``symbol``: a suffix of
-    the function (``"_lanes"`` or ``"_single"``: one path of a build with lanes)."""
+    cannot be written or built. ``lanes``: members per block of lanes (None:
+    ``host_lanes``, scalar when that build fails; 0: scalar; 4 or 8: with the flags of
+    ``host_isas``, portable vector C on a host without them, for tests); ``symbol``: a
+    suffix of the function (``"_lanes"`` or ``"_single"``: one path of a build with
+    lanes)."""
     from analysis.integrate.kernels.source import model_source
 
     variant = "tangent" if tangent else "states"
@@ -157,13 +160,14 @@ def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool,
         lib.lanes = lanes
         return lib
 
-    host, isa = host_lanes()
-    if lanes is None and tangent and host:
-        try:
-            return built(host, isa)
-        except CompileError:  # a compiler without the instruction set: scalar
-            pass
-    lanes = lanes or 0
+    if lanes is None:
+        host, isa = host_lanes()
+        if host:
+            try:
+                return built(host, isa)
+            except CompileError:  # a compiler without the instruction set: scalar
+                pass
+        lanes = 0
     if symbol and not lanes:
         raise ValueError(f"symbol {symbol!r}: only in a build with lanes")
-    return built(lanes, isa if lanes and lanes == host else ())
+    return built(lanes, host_isas().get(lanes, ()) if lanes else ())

@@ -459,136 +459,200 @@ BD_FN void bd_rotate_lanes(bd_vd *cs, const bd_vd *cs0, const bd_vd *rot, int j)
 }}
 """
 
-_LANES_TANGENT = """
-BD_FN void bd_block_tangent(bd_long m0, bd_long count, {args_nom}) {{
-  /* bd_member_tangent of the members m0 … m0 + BD_LANES - 1 below count, lane l of every
-     bd_vd one member: the transients member by member, then the tangent steps of all the
-     lanes at once (stage_lanes) until every lane is done; spare lanes repeat the last
-     member and write nothing */
-  double s[BD_LANES][{ns}], nx[{ns}], c[{nc}], lo[BD_LANES][{n}], hi[BD_LANES][{n}];
-  double d[{nd}] = {{0.0}}, rot[{nr}] = {{0.0}}, ang[{na1}], cs0[{ncs}] = {{0.0}};
-  double lim[BD_LANES];
-  const double *pl[BD_LANES];
-  bd_long step[BD_LANES], bad[BD_LANES], sec[BD_LANES], left[BD_LANES], end[BD_LANES],
-          from[BD_LANES], upto[BD_LANES], nsec[BD_LANES], ev[BD_LANES];
-  int on[BD_LANES];
-  bd_vd z[{n}], v[{n}], zs[{n}], vs[{n}], f[{n}], jv[{n}], az[{n}], av[{n}];
-  bd_vd pv[{npar}], dv[{nd}], rotv[{nr}], csv0[{ncs}], csv[{ncs}], hv, t0v, kv;
-  const int lanes = count - m0 < BD_LANES ? (int)(count - m0) : BD_LANES;
+_LANES_BLOCK = """
+typedef struct {{
+  /* the members of a block of lanes: lane l is member m0 + l (spare lanes repeat the last
+     member and write nothing) */
+  double s[BD_LANES][{ns}], lo[BD_LANES][{n}], hi[BD_LANES][{n}], lim[BD_LANES];
+  const double *p[BD_LANES];
+  bd_long step[BD_LANES], bad[BD_LANES], sec[BD_LANES], left[BD_LANES], tr[BD_LANES],
+          ev[BD_LANES], nsec[BD_LANES], from[BD_LANES], upto[BD_LANES], end[BD_LANES];
+  int on[BD_LANES], lanes;
+  bd_vd sv[{ns}], nx[{ns}], pv[{npar}], cv[{nc}], hv, t0v;
+}} bd_block;
+
+BD_FN void bd_block_start(bd_block *B, bd_long m0, bd_long count, {args_nom}) {{
+  /* _MEMBER_HEAD's start of every lane */
+  double c[{nc}] = {{0.0}};
+  B->lanes = count - m0 < BD_LANES ? (int)(count - m0) : BD_LANES;
   for (int l = 0; l < BD_LANES; l++) {{
-    const bd_long m = m0 + (l < lanes ? l : lanes - 1);
+    const bd_long m = m0 + (l < B->lanes ? l : B->lanes - 1);
     const double *pm = p + m * {npar};
     const double hm = h[m], t0m = t0[m];
-    double *sl = s[l];
-    pl[l] = pm; lim[l] = limit[m];
+    double *sl = B->s[l];
+    B->p[l] = pm; B->lim[l] = limit[m];
     for (int i = 0; i < {n}; i++) {{
-      sl[i] = z0[m * {n} + i]; lo[l][i] = INFINITY; hi[l][i] = -INFINITY;
+      sl[i] = z0[m * {n} + i]; B->lo[l][i] = INFINITY; B->hi[l][i] = -INFINITY;
     }}
     sl[{n}] = k0[m];
     rk4_constants(pm, &hm, &t0m, c);
-    const bd_long tr = transient[m];
-    ev[l] = every[m]; nsec[l] = n_sec[m]; from[l] = ext_from[m]; upto[l] = ext_to[m];
-    const bd_long total = tr + ev[l] * nsec[l];
-    end[l] = total > upto[l] ? total : upto[l];
-    bd_long st = 0, bd = -1;
-    if (from[l] <= 0 && upto[l] >= 0) bd_extend(lo[l], hi[l], sl);
-    for (; st < tr; ) {{
-      rk4_steps1(sl, pm, &hm, &t0m, c, nx);
-      for (int i = 0; i < {ns}; i++) sl[i] = nx[i];
-      st++;
-      if (bd_bad(sl, lim[l])) {{ bd = st; break; }}
-      if (st >= from[l] && st <= upto[l]) bd_extend(lo[l], hi[l], sl);
-    }}
-    step[l] = st; bad[l] = bd; sec[l] = 0; left[l] = ev[l];
-    on[l] = l < lanes && bd < 0 && st < end[l];
-    stage_constants(pm, d);
-    stage_rotations(pm, &hm, rot);
-    for (int i = 0; i < {n}; i++) {{ z[i][l] = sl[i]; v[i][l] = i == 0 ? 1.0 : 0.0; }}
-    for (int i = 0; i < {npar}; i++) pv[i][l] = pm[i];
-    for (int i = 0; i < {nd}; i++) dv[i][l] = d[i];
-    for (int i = 0; i < {nr}; i++) rotv[i][l] = rot[i];
-    hv[l] = hm; t0v[l] = t0m; kv[l] = sl[{n}];
+    B->tr[l] = transient[m]; B->ev[l] = every[m]; B->nsec[l] = n_sec[m];
+    B->from[l] = ext_from[m]; B->upto[l] = ext_to[m];
+    const bd_long total = B->tr[l] + B->ev[l] * B->nsec[l];
+    B->end[l] = total > B->upto[l] ? total : B->upto[l];
+    B->step[l] = 0; B->bad[l] = -1; B->sec[l] = 0; B->left[l] = B->ev[l];
+    if (B->from[l] <= 0 && B->upto[l] >= 0) bd_extend(B->lo[l], B->hi[l], sl);
+    for (int i = 0; i < {ns}; i++) B->sv[i][l] = sl[i];
+    for (int i = 0; i < {npar}; i++) B->pv[i][l] = pm[i];
+    for (int i = 0; i < {nc}; i++) B->cv[i][l] = c[i];
+    B->hv[l] = hm; B->t0v[l] = t0m;
   }}
-  const bd_vd half = hv / 2.0, sixth = hv / 6.0;
+}}
+
+BD_FN void bd_block_steps(bd_block *B, int transient_only, bd_long m0, bd_long kmax,
+                          int keep, double *sections) {{
+  /* the state steps of every lane at once (rk4_lanes), each lane's bookkeeping as the
+     member loop's: its transient (transient_only: then stop), then its sections */
+  for (int l = 0; l < BD_LANES; l++)
+    B->on[l] = l < B->lanes && (transient_only ? B->tr[l] : B->end[l]) > 0;
   for (;;) {{
     int any = 0;
-    for (int l = 0; l < BD_LANES; l++) any |= on[l];
+    for (int l = 0; l < BD_LANES; l++) any |= B->on[l];
+    if (!any) break;
+    rk4_lanes(B->sv, B->pv, &B->hv, &B->t0v, B->cv, B->nx);
+    for (int i = 0; i < {ns}; i++) B->sv[i] = B->nx[i];
+    for (int l = 0; l < BD_LANES; l++) {{
+      if (!B->on[l]) continue;
+      double *sl = B->s[l];
+      const bd_long st = ++B->step[l];
+      for (int i = 0; i < {ns}; i++) sl[i] = B->sv[i][l];
+      if (bd_bad(sl, B->lim[l])) {{ B->bad[l] = st; B->on[l] = 0; continue; }}
+      if (st >= B->from[l] && st <= B->upto[l]) bd_extend(B->lo[l], B->hi[l], sl);
+      if (st > B->tr[l] && --B->left[l] == 0) {{
+        if (keep && B->sec[l] < B->nsec[l])
+          for (int i = 0; i < {n}; i++)
+            sections[((m0 + l) * kmax + B->sec[l]) * {n} + i] = sl[i];
+        B->sec[l]++; B->left[l] = B->ev[l];
+      }}
+      if (st >= (transient_only ? B->tr[l] : B->end[l])) B->on[l] = 0;
+    }}
+  }}
+}}
+
+BD_FN void bd_block_end(bd_block *B, bd_long m0, const double *k0, bd_long kmax, int keep,
+                        double *sections, double *logs, double *final, bd_long *diverged,
+                        double *low, double *high) {{
+  /* _MEMBER_TAIL of every lane (logs: the tangent variant's, else NULL) */
+  for (int l = 0; l < B->lanes; l++) {{
+    const bd_long m = m0 + l;
+    diverged[m] = B->bad[l] < 0 ? -1 : (bd_long)k0[m] + B->bad[l];
+    for (bd_long q = B->sec[l] < B->nsec[l] ? B->sec[l] : B->nsec[l]; q < kmax; q++) {{
+      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
+      if (logs) logs[m * kmax + q] = NAN;
+    }}
+    for (int i = 0; i < {n}; i++) {{
+      final[m * {n} + i] = B->s[l][i]; low[m * {n} + i] = B->lo[l][i];
+      high[m * {n} + i] = B->hi[l][i];
+    }}
+  }}
+}}
+
+BD_FN void bd_lanes_states(bd_long m0, bd_long count, {args_nom}) {{
+  /* bd_member_states of the members m0 … m0 + BD_LANES - 1 below count */
+  bd_block B;
+  bd_block_start(&B, m0, count, {call_nom});
+  bd_block_steps(&B, 0, m0, kmax, keep, sections);
+  bd_block_end(&B, m0, k0, kmax, keep, sections, NULL, final, diverged, low, high);
+}}
+"""
+"""The CPU build's member loop on ``BD_LANES`` members at once (``bd_block``): the state
+steps of all the lanes in one call of the step written on lanes (``rk4_lanes``), each
+lane's bookkeeping (blow-up, extremes, sections) as ``_MEMBER_HEAD``, ``_STATE_BODY`` and
+``_MEMBER_TAIL`` do it; the same operations, so the same results bit for bit. A lane that
+is done is still stepped (its values unused) until every lane is."""
+
+_LANES_TANGENT = """
+BD_FN void bd_lanes_tangent(bd_long m0, bd_long count, {args_nom}) {{
+  /* bd_member_tangent of the members m0 … m0 + BD_LANES - 1 below count: the transients
+     on lanes (bd_block_steps), then the tangent steps of _TANGENT_BODY on lanes
+     (stage_lanes) */
+  bd_block B;
+  double d[{nd}] = {{0.0}}, rot[{nr}] = {{0.0}}, ang[{na1}], cs0[{ncs}] = {{0.0}};
+  bd_vd z[{n}], v[{n}], zs[{n}], vs[{n}], f[{n}], jv[{n}], az[{n}], av[{n}];
+  bd_vd dv[{nd}], rotv[{nr}], csv0[{ncs}], csv[{ncs}], kv;
+  bd_block_start(&B, m0, count, {call_nom});
+  bd_block_steps(&B, 1, m0, kmax, keep, sections);
+  const bd_vd hv = B.hv, t0v = B.t0v, half = hv / 2.0, sixth = hv / 6.0;
+  for (int l = 0; l < BD_LANES; l++) {{
+    const double *sl = B.s[l];
+    B.on[l] = l < B.lanes && B.bad[l] < 0 && B.step[l] < B.end[l];
+    stage_constants(B.p[l], d);
+    stage_rotations(B.p[l], &B.hv[l], rot);
+    for (int i = 0; i < {n}; i++) {{ z[i][l] = sl[i]; v[i][l] = i == 0 ? 1.0 : 0.0; }}
+    for (int i = 0; i < {nd}; i++) dv[i][l] = d[i];
+    for (int i = 0; i < {nr}; i++) rotv[i][l] = rot[i];
+    kv[l] = sl[{n}];
+  }}
+  for (;;) {{
+    int any = 0;
+    for (int l = 0; l < BD_LANES; l++) any |= B.on[l];
     if (!any) break;
     const bd_vd t = t0v + kv * hv, th = t + half, tf = t + hv;
     for (int l = 0; l < BD_LANES; l++) {{
       const double tl = t[l];
-      bd_trig(cs0, &tl, pl[l], ang);
+      bd_trig(cs0, &tl, B.p[l], ang);
       for (int k = 0; k < {ncs}; k++) csv0[k][l] = cs0[k];
     }}
-    stage_lanes(&t, z, pv, v, dv, csv0, f, jv);
+    stage_lanes(&t, z, B.pv, v, dv, csv0, f, jv);
     for (int i = 0; i < {n}; i++) {{
       az[i] = f[i]; av[i] = jv[i];
       zs[i] = z[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
     }}
     bd_rotate_lanes(csv, csv0, rotv, 0);  /* the angles at t + h/2 */
-    stage_lanes(&th, zs, pv, vs, dv, csv, f, jv);
+    stage_lanes(&th, zs, B.pv, vs, dv, csv, f, jv);
     for (int i = 0; i < {n}; i++) {{
       az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
       zs[i] = z[i] + half * f[i]; vs[i] = v[i] + half * jv[i];
     }}
-    stage_lanes(&th, zs, pv, vs, dv, csv, f, jv);
+    stage_lanes(&th, zs, B.pv, vs, dv, csv, f, jv);
     for (int i = 0; i < {n}; i++) {{
       az[i] += 2.0 * f[i]; av[i] += 2.0 * jv[i];
       zs[i] = z[i] + hv * f[i]; vs[i] = v[i] + hv * jv[i];
     }}
     bd_rotate_lanes(csv, csv0, rotv, 2);  /* the angles at t + h */
-    stage_lanes(&tf, zs, pv, vs, dv, csv, f, jv);
+    stage_lanes(&tf, zs, B.pv, vs, dv, csv, f, jv);
     for (int i = 0; i < {n}; i++) {{
       z[i] += sixth * (az[i] + f[i]); v[i] += sixth * (av[i] + jv[i]);
     }}
     kv += 1.0;
     for (int l = 0; l < BD_LANES; l++) {{
-      if (!on[l]) continue;
+      if (!B.on[l]) continue;
       const bd_long m = m0 + l;
-      double *sl = s[l];
+      double *sl = B.s[l];
       for (int i = 0; i < {n}; i++) sl[i] = z[i][l];
       sl[{n}] = kv[l];
-      step[l]++;
-      if (bd_bad(sl, lim[l])) {{ bad[l] = step[l]; on[l] = 0; continue; }}
-      if (step[l] >= from[l] && step[l] <= upto[l]) bd_extend(lo[l], hi[l], sl);
-      if (--left[l] == 0 && sec[l] < nsec[l]) {{
+      const bd_long st = ++B.step[l];
+      if (bd_bad(sl, B.lim[l])) {{ B.bad[l] = st; B.on[l] = 0; continue; }}
+      if (st >= B.from[l] && st <= B.upto[l]) bd_extend(B.lo[l], B.hi[l], sl);
+      if (--B.left[l] == 0 && B.sec[l] < B.nsec[l]) {{
+        const bd_long q = B.sec[l];
         double norm = 0.0;
         for (int i = 0; i < {n}; i++) norm += v[i][l] * v[i][l];
         norm = sqrt(norm);
         for (int i = 0; i < {n}; i++) v[i][l] /= norm;
-        logs[m * kmax + sec[l]] = log(norm);
-        if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + sec[l]) * {n} + i] = sl[i];
-        sec[l]++; left[l] = ev[l];
+        logs[m * kmax + q] = log(norm);
+        if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = sl[i];
+        B.sec[l]++; B.left[l] = B.ev[l];
       }}
-      if (step[l] >= end[l]) on[l] = 0;
+      if (st >= B.end[l]) B.on[l] = 0;
     }}
   }}
-  for (int l = 0; l < lanes; l++) {{
-    const bd_long m = m0 + l;
-    diverged[m] = bad[l] < 0 ? -1 : (bd_long)k0[m] + bad[l];
-    for (bd_long q = sec[l] < nsec[l] ? sec[l] : nsec[l]; q < kmax; q++) {{
-      if (keep) for (int i = 0; i < {n}; i++) sections[(m * kmax + q) * {n} + i] = NAN;
-      logs[m * kmax + q] = NAN;
-    }}
-    for (int i = 0; i < {n}; i++) {{
-      final[m * {n} + i] = s[l][i]; low[m * {n} + i] = lo[l][i]; high[m * {n} + i] = hi[l][i];
-    }}
-  }}
+  bd_block_end(&B, m0, k0, kmax, keep, sections, logs, final, diverged, low, high);
 }}
 """
-"""The CPU build's tangent variant on ``BD_LANES`` members at once: ``_MEMBER_HEAD``,
-``_TANGENT_BODY`` and ``_MEMBER_TAIL`` lane by lane, the same operations, so the same
-results bit for bit."""
+"""The CPU build's tangent variant on ``BD_LANES`` members at once: ``_TANGENT_BODY`` and
+its bookkeeping lane by lane after the transients (``_LANES_BLOCK``), the same operations,
+so the same results bit for bit."""
 
 LANE_GAIN = 2
-"""How many times faster a member's tangent step runs in a block of lanes than alone (at
-least: 3.0-3.7 on AVX2 and AVX-512, ``benchmarks/bench_lanes.py``): the wrapper runs blocks
+"""How many times faster a member's step runs in a block of lanes than alone, at least
+(``benchmarks/bench_lanes.py``): the wrapper runs blocks
 of lanes only when the busiest thread's blocks (of ``BD_LANES`` steps each, spare lanes
 included) take at most ``LANE_GAIN`` times its members' steps; few members on many cores
 run member by member."""
 
 _LANES_WRAPPER = """
-static void bd_lanes_tangent(int path, bd_long count, int threads, {args_nom}) {{
+static void bd_lanes_run(int path, bd_long count, int threads, {args_nom}) {{
   /* path 0: blocks of lanes when they pay (LANE_GAIN), 1: blocks, 2: member by member */
   if (threads <= 0) threads = 1;
   const bd_long blocks = (count + BD_LANES - 1) / BD_LANES;
@@ -596,24 +660,25 @@ static void bd_lanes_tangent(int path, bd_long count, int threads, {args_nom}) {
   const bd_long bper = (blocks + threads - 1) / threads;
   if (path == 1 || (path == 0 && bper * BD_LANES <= {gain} * per)) {{
     #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (bd_long b = 0; b < blocks; b++) bd_block_tangent(b * BD_LANES, count, {call_nom});
+    for (bd_long b = 0; b < blocks; b++) bd_lanes_{variant}(b * BD_LANES, count, {call_nom});
   }} else {{
     #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (bd_long m = 0; m < count; m++) bd_member_tangent({call});
+    for (bd_long m = 0; m < count; m++) bd_member_{variant}({call});
   }}
 }}
-void bd_members_tangent(bd_long count, int threads, {args_nom}) {{
-  bd_lanes_tangent(0, count, threads, {call_nom});
+void bd_members_{variant}(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_run(0, count, threads, {call_nom});
 }}
-void bd_members_tangent_lanes(bd_long count, int threads, {args_nom}) {{
-  bd_lanes_tangent(1, count, threads, {call_nom});
+void bd_members_{variant}_lanes(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_run(1, count, threads, {call_nom});
 }}
-void bd_members_tangent_single(bd_long count, int threads, {args_nom}) {{
-  bd_lanes_tangent(2, count, threads, {call_nom});
+void bd_members_{variant}_single(bd_long count, int threads, {args_nom}) {{
+  bd_lanes_run(2, count, threads, {call_nom});
 }}
 """
-"""The wrappers of the tangent variant with lanes: ``bd_members_tangent`` chooses (the
-symbol every build has), ``_lanes`` and ``_single`` force a path (self-test, tests)."""
+"""The wrappers of a build with lanes: ``bd_members_<variant>`` chooses (the symbol every
+build has), ``_lanes`` and ``_single`` force a path (self-test, tests)."""
+
 
 _CUDA_WRAPPER = """
 BD_GLOBAL void bd_members_{variant}(bd_long count, {args_nom}) {{
@@ -658,14 +723,14 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
     (``FUSED_WORK_MAX``, ``STAGE_WORK_MAX``; needs ``stage``) steps stage by stage (its
     states then differ from the CPU build's by rounding).
 
-    ``lanes`` > 0 (CPU tangent variant only): the text also runs the tangent steps of
-    ``lanes`` members at once (``#define BD_LANES``, ``lanes_c``, ``_LANES_TANGENT``;
-    vectors of that many doubles: 4 for AVX2, 8 for AVX-512, ``cpu.host_lanes``), with the
-    same results bit for bit; ``bd_members_tangent`` chooses blocks of lanes or single
-    members (``LANE_GAIN``), ``bd_members_tangent_lanes`` and ``_single`` force one."""
+    ``lanes`` > 0 (CPU only): the text also runs the steps of ``lanes`` members at once
+    (``#define BD_LANES``, ``lanes_c``, ``_LANES_BLOCK``, ``_LANES_TANGENT``; vectors of
+    that many doubles: 4 for AVX2, 8 for AVX-512, ``cpu.host_lanes``), with the same
+    results bit for bit; ``bd_members_<variant>`` chooses blocks of lanes or single
+    members (``LANE_GAIN``), ``bd_members_<variant>_lanes`` and ``_single`` force one."""
     tangent = stage is not None if tangent is None else tangent
-    if lanes < 0 or (lanes and (target != "cpu" or not tangent)):
-        raise ValueError(f"lanes: 0, or > 0 for the CPU tangent variant, got {lanes}")
+    if lanes < 0 or (lanes and target != "cpu"):
+        raise ValueError(f"lanes: 0, or > 0 for the CPU build, got {lanes}")
     if tangent and stage is None:
         raise ValueError("the tangent variant needs its stage")
     variant = "tangent" if tangent else "states"
@@ -673,7 +738,7 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
     ns, nc = step.size1_in(0), max(step.size1_in(4), 1)
     parts = [PRELUDE, *((f"#define BD_LANES {lanes}", VECTOR_PRELUDE) if lanes else ()),
              scalar_c(constants, "rk4_constants"), scalar_c(step, "rk4_steps1"),
-             blow_up_c(n, pairs)]
+             *((lanes_c(step, "rk4_lanes"),) if lanes else ()), blow_up_c(n, pairs)]
     npar = step.size1_in(1)
     staged = cuda and stage is not None and step.sz_w() > FUSED_WORK_MAX
     advance = ("    bd_rk4(s, pm, hm, t0m, d, ang, cs, zs, f, az);" if staged else
@@ -709,8 +774,11 @@ def member_source(step: ca.Function, constants: ca.Function, n: int,
                                        if tangent else ""))
     wrapper = _CPU_WRAPPER if target == "cpu" else _CUDA_WRAPPER
     if lanes:
-        parts.append(_LANES_TANGENT.format(args_nom=_args_without_m(), ns=ns, nc=nc,
-                                           npar=npar, **sizes))
+        block = dict(args_nom=_args_without_m(), call_nom=_CALL.split(", ", 1)[1], ns=ns,
+                     nc=nc, npar=npar, n=n)
+        parts.append(_LANES_BLOCK.format(**block))
+        if tangent:
+            parts.append(_LANES_TANGENT.format(**{**block, **sizes}))
         wrapper = _LANES_WRAPPER
     parts.append(wrapper.format(variant=variant, args_nom=_args_without_m(), call=_CALL,
                                 call_nom=_CALL.split(", ", 1)[1], gain=LANE_GAIN))
@@ -824,7 +892,7 @@ def model_source(model: object, structure: tuple[int, ...], tangent: bool,
     """The member C of ``model`` with these balls (``member_source``): the state variant,
     or with ``tangent`` the tangent variant, for ``target`` ``"cpu"`` or ``"cuda"`` (whose
     state variant takes the stage functions too when its fused step is large); ``lanes``:
-    the CPU tangent variant's members per block of lanes (0: none)."""
+    the CPU build's members per block of lanes (0: none)."""
     step, constants = state_functions(model, structure)
     staged = target == "cuda" and step.sz_w() > FUSED_WORK_MAX
     stage = stage_functions(model, structure) if tangent or staged else None
