@@ -34,7 +34,7 @@ def test_the_kernel_probe_times_a_step_and_its_tangent(system):
     assert probe is not None, "the CPU build of the member kernel is there in the tests"
     assert math.isfinite(probe.step_seconds) and 0 < probe.step_seconds < 1e-3
     assert probe.tangent_factor is not None and math.isfinite(probe.tangent_factor)
-    assert probe.tangent_factor >= 1.0
+    assert probe.tangent_factor > 0, "measured, not clamped (lanes: 0.81x a state step)"
     assert 0 < probe.busy <= 1.0
     state_only = probe_kernel(system, 1e-5, members=8, steps=200)
     assert state_only is not None and state_only.tangent_factor is None
