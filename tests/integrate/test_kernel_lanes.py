@@ -11,7 +11,13 @@ import pytest
 from analysis.integrate.compiled import cached_path
 from analysis.integrate.kernels import Schedule, cpu
 from analysis.integrate.kernels.cpu import cpu_library
-from analysis.integrate.kernels.source import model_source
+from analysis.integrate.kernels.source import (
+    LANE_CALLS_MAX,
+    lane_calls,
+    lanes_pay,
+    model_source,
+    state_functions,
+)
 from analysis.integrate.simulate import blow_up_limit
 from analysis.model import System
 
@@ -114,5 +120,22 @@ def test_a_host_without_lanes_builds_the_scalar_text(monkeypatch, tangent):
         want = _run(cpu_library(model, structure, tangent, 4, "_lanes"), inputs, n, 1)
         for a, b in zip(got, want, strict=True):
             assert np.array_equal(a, b, equal_nan=True)
+    finally:
+        cpu_library.cache_clear()
+
+
+def test_lanes_only_where_they_pay(monkeypatch):
+    """A host with lanes builds them for a model whose Functions have few libm calls lane by
+    lane (balanced rotor: none in the stage, sin and cos in the step), not for one with
+    many (the inner-race defect's atan2 and cos: slower on lanes)."""
+    monkeypatch.setattr(cpu, "host_isas", lambda: {4: ()})
+    cpu_library.cache_clear()
+    try:
+        rotor, defect = _system("balanced-rotor"), System.make("6205-inner-defect")
+        assert lanes_pay(rotor.model, rotor.structure, True)
+        assert not lanes_pay(defect.model, defect.structure, False)
+        assert lane_calls(state_functions(defect.model, defect.structure)[0]) > LANE_CALLS_MAX
+        assert cpu_library(rotor.model, rotor.structure, True).lanes == 4
+        assert cpu_library(defect.model, defect.structure, False).lanes == 0
     finally:
         cpu_library.cache_clear()

@@ -18,8 +18,9 @@ Lanes: on a host with AVX-512F (8 doubles a vector) or AVX2 (4), both variants a
 with that instruction set (``host_lanes``, ``LANE_ISAS``: its flags join the compiler
 command, so the cache key, and a host without them builds and loads its own library) and
 also runs blocks of that many members at once (``source.lanes_c``), bit for bit the member by member
-path (checked by ``builds.self_test``); elsewhere, or when the build with them fails, they
-are the scalar build.
+path (checked by ``builds.self_test``), for a model whose Functions have few libm calls
+(``source.lanes_pay``); elsewhere, or when the build with them fails, they are the scalar
+build.
 """
 
 from __future__ import annotations
@@ -145,11 +146,11 @@ def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool,
     """The CPU build of ``model``'s member C with these balls (the tangent variant with
     ``tangent``), memoised per process; ``CompileError`` or ``source.Unsupported`` when it
     cannot be written or built. ``lanes``: members per block of lanes (None:
-    ``host_lanes``, scalar when that build fails; 0: scalar; 4 or 8: with the flags of
-    ``host_isas``, portable vector C on a host without them, for tests); ``symbol``: a
-    suffix of the function (``"_lanes"`` or ``"_single"``: one path of a build with
-    lanes)."""
-    from analysis.integrate.kernels.source import model_source
+    ``host_lanes`` where they pay, ``source.lanes_pay``, scalar when that build fails; 0:
+    scalar; 4 or 8: with the flags of ``host_isas``, portable vector C on a host without
+    them, for tests); ``symbol``: a suffix of the function (``"_lanes"`` or
+    ``"_single"``: one path of a build with lanes)."""
+    from analysis.integrate.kernels.source import lanes_pay, model_source
 
     variant = "tangent" if tangent else "states"
     stem = library_stem(f"bd_members_{variant}", model, structure)
@@ -162,7 +163,7 @@ def cpu_library(model: Any, structure: tuple[int, ...], tangent: bool,
 
     if lanes is None:
         host, isa = host_lanes()
-        if host:
+        if host and lanes_pay(model, structure, tangent):
             try:
                 return built(host, isa)
             except CompileError:  # a compiler without the instruction set: scalar

@@ -217,6 +217,29 @@ def lanes_c(fn: ca.Function, name: str) -> str:
     return "\n".join(lines)
 
 
+LANE_CALLS_MAX = 8
+"""Most libm calls lane by lane (``BD_VMAP1``/``BD_VMAP2``: all but sqrt, which is one
+instruction) in a Function written on lanes for the lanes to pay: each call spills every
+live vector. Measured on one thread, 16 members, AVX-512 (``benchmarks/bench_lanes.py``):
+0-8 calls (sin and cos of the forcing angles) run in 0.3-0.9 times the scalar build's time,
+20-128 (atan2, fmax, pow of the defect and roller models) in 1.1-3.7 times."""
+
+
+def lane_calls(fn: ca.Function) -> int:
+    """The libm calls lane by lane of ``lanes_c(fn)``."""
+    plain = {*VUNARY, *VBINARY, "INPUT", "OUTPUT", "CONST", "SQRT"}
+    return sum(_OP[fn.instruction_id(i)] not in plain for i in range(fn.n_instructions()))
+
+
+def lanes_pay(model: object, structure: tuple[int, ...], tangent: bool) -> bool:
+    """Whether the CPU build of this variant should run in blocks of lanes: every Function
+    it writes on lanes (the step; the tangent's stage too) has at most ``LANE_CALLS_MAX``
+    libm calls lane by lane."""
+    functions = [state_functions(model, structure)[0]]
+    if tangent:
+        functions.append(stage_functions(model, structure).stage)
+    return all(lane_calls(fn) <= LANE_CALLS_MAX for fn in functions)
+
 def blow_up_c(n: int, pairs: Sequence[tuple[int, int | None]]) -> str:
     """``bd_bad(z, limit)``: 1 when a state is not finite (``z - z == 0`` fails for inf and
     NaN, needing no header on either build) or a centre displacement
