@@ -34,7 +34,7 @@ from analysis.cli.records import (
     record_options,
     run_or_record,
 )
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 
 @app.command()
@@ -258,8 +258,7 @@ def _spectrum_options(band: str | None, envelope: bool, noise: float | None,
         from analysis.signal.noise import check_snr
 
         check_snr(noise)
-        if noise_seed < 0:
-            raise InputError(f"--noise-seed: must be an integer >= 0, got {noise_seed}")
+        check_count("--noise-seed", noise_seed, 0)
     return passband
 
 

@@ -226,7 +226,7 @@ def test_noise_through_the_cli(tmp_path):
         assert done.returncode == 2 and done.stderr.strip() == f"error: {word}", done.stderr
     done = run_cli("spectrum", str(run), "--envelope", "--noise", "0", "--noise-seed", "-1")
     assert done.returncode == 2
-    assert done.stderr.strip() == "error: --noise-seed: must be an integer >= 0, got -1"
+    assert done.stderr.strip() == "error: --noise-seed: must be a whole number >= 0, got -1"
     done = run_cli("spectrum", str(run), "--envelope", "--noise", "10", "--noise-seed", "4",
                    "--json")
     assert done.returncode == 0, done.stderr
