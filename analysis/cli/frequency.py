@@ -6,7 +6,6 @@ import math
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 
 from analysis.cli.common import (
@@ -153,6 +152,8 @@ def points_json(data) -> list[dict]:
 
 
 def _print(data, output: Path) -> None:
+    import numpy as np
+
     from analysis.frequency.accuracy import error_words
 
     param = data.attrs.get("param", "")
@@ -183,6 +184,8 @@ def response_figure(data):
     """The amplitude of the first state against the parameter (one point without one):
     stable solid, unstable dashed, special points marked; the PNG carries the result's
     provenance (``canvas.finish``)."""
+    import numpy as np
+
     from analysis.reports import canvas
 
     fig, ax = canvas.subplots(figsize=(8, 5), layout="constrained")
@@ -423,6 +426,8 @@ def torus_figure(data, duration: float, dt: float | None = None):
     """The shaft section of the (last) torus, u(0, θ2) for θ2 in [0, 2π), against the
     Poincaré section (shaft) of a time run of the same system from a state on the torus,
     in the first two states; the PNG carries the result's provenance (``canvas.finish``)."""
+    import numpy as np
+
     from analysis.frequency import torus_of
     from analysis.frequency.accuracy import error_words
     from analysis.integrate.simulate import simulate

@@ -78,8 +78,6 @@ def test_reading_the_command_line_loads_no_numerical_library(loaded, name):
     assert heavy == [], f"{LINES[name][0]} imported {heavy}"
 
 
-@pytest.mark.xfail(strict=True, reason="analysis/cli/frequency.py still imports numpy at module "
-                   "top (issue 39, item 6): remove this mark with that import")
 @pytest.mark.parametrize("name", list(LINES))
 def test_reading_the_command_line_loads_no_numpy(loaded, name):
     assert "numpy" not in loaded[name]["loaded"], f"{LINES[name][0]} imported numpy"
