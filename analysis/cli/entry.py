@@ -1,8 +1,8 @@
 """The ``bearingdyn`` console script (and ``python -m analysis.cli``): its first statement
 installs a Ctrl-C handler, before anything of the command is imported.
 
-A Ctrl-C while Python loads the command's modules (the first second or so: typer, the
-command modules, NumPy) then ends as every other interrupt does: the line ``interrupted
+A Ctrl-C while Python loads the command's modules (the first few tenths of a second: typer and
+the command modules) then ends as every other interrupt does: the line ``interrupted
 (nothing was started)`` and exit code 130, never a ``KeyboardInterrupt`` traceback. Once
 the command line is read, ``analysis.cli.common.main`` installs its own handler (finally
 blocks run, outputs are left whole). What remains is the interpreter's own start before
