@@ -60,8 +60,9 @@ def sweep(
     device: SweepDeviceOption = None,
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
+    from analysis.integrate.cost import KERNELS
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.diagram import bifurcation_diagram
+    from analysis.sweeps.diagram import bifurcation_diagram, safe_diagram_point
     from analysis.sweeps.executors import workers_of
     from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
     from analysis.sweeps.points import grid_device
@@ -79,9 +80,11 @@ def sweep(
     ex = executor_of(executor, workers, scheduler)
     if not quiet and direction in ("up", "down", "both"):  # the cost, said before it is
         # paid (a followed sweep: one run at a time); another direction is refused below
+        point = (lambda system: safe_diagram_point(setting, system)) if follow else None
         typer.echo("\n".join(grid_cost(setting, axis, workers=1 if follow else workers_of(ex),
                                         members_per_point=2 if direction == "both" else 1,
-                                        lyapunov=False).lines()), err=True)
+                                        lyapunov=False, path=None if follow else KERNELS,
+                                        point=point).lines()), err=True)
     try:
         ds = bifurcation_diagram(setting, axis, output, device=device,
                                  direction=direction, follow=follow, executor=ex,
