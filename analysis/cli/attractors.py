@@ -254,7 +254,8 @@ def basins(
     system = _system(model, n_balls, speed_rpm, sets)
     settings = dict(period=period, dt=dt, options=options, block=block,
                     **_mapping(mapper, device, transient_periods, sections))
-    check_basins(system, x_range, y_range, **settings)  # before any work or file
+    # every input, before any work or file; the device judged once, kept for the rest
+    settings["device"] = check_basins(system, x_range, y_range, **settings)[1]
     _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings,
               (x_range, y_range))
     ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
@@ -339,7 +340,7 @@ def attractors(
         return executor_of(executor, workers, scheduler)
 
     if along is None:
-        check_fractions(system, sides, samples, **settings)  # before any work or file
+        settings["device"] = check_fractions(system, sides, samples, **settings)[1]
         _say_cost(quiet or as_json, system, samples, executor, workers, settings,
                   sides.sides)
         ds = _run(executor_made, lambda ex: fractions_to_file(
@@ -349,8 +350,8 @@ def attractors(
     else:
         say = None if quiet else (lambda line: typer.echo(line, err=True))
         settings["match_distance"] = match_threshold
-        check_continuation(system, along.coordinate, along.points, sides, samples,
-                           **settings)
+        settings["device"] = check_continuation(system, along.coordinate, along.points,
+                                                sides, samples, **settings)[1]
         _say_cost(quiet or as_json, system, (samples + 16) * along.num, executor, workers,
                   settings, sides.sides)
         ds = _run(executor_made, lambda ex: continuation_to_file(

@@ -35,6 +35,7 @@ import xarray as xr
 from analysis import errors
 from analysis.errors import InputError
 from analysis.integrate.cost import COMPILED, KERNELS, CostEstimate, estimate_cost
+from analysis.integrate.kernels.placement import Placement
 from analysis.io import save_dataset
 from analysis.model import System, load_model
 from analysis.stability.attractors.continuation import MATCH_DISTANCE
@@ -331,9 +332,9 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
                  dt: float | None = None, options: MapperOptions | None = None,
                  label_options: LabelOptions | None = None, block: int | None = None,
                  mapper: str = "auto", device: str = "auto",
-                 feature_options: FeatureOptions | None = None) -> dict:
-    """Every input of ``basins_to_file`` checked before any work; its store's
-    definition."""
+                 feature_options: FeatureOptions | None = None) -> tuple[dict, Placement]:
+    """Every input of ``basins_to_file`` checked before any work: its store's definition
+    and the study's placement (judged here, once: pass it on as ``device``)."""
     check_count("x", x.num)
     check_count("y", y.num)
     check_pair(system, x, y)
@@ -349,7 +350,7 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
         raise InputError(f"x, y: a {x.num} x {y.num} grid: {x.num * y.num} initial states"
                          + text[len(head):].replace("use fewer", "use fewer grid values")
                          ) from None
-    return study_definition(study, "basins", block, x=asdict(x), y=asdict(y))
+    return study_definition(study, "basins", block, x=asdict(x), y=asdict(y)), study.placement
 
 
 def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
@@ -357,8 +358,9 @@ def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     options: MapperOptions | None = None,
                     label_options: LabelOptions | None = None, block: int | None = None,
                     mapper: str = "auto", device: str = "auto",
-                    feature_options: FeatureOptions | None = None) -> dict:
-    """Every input of ``fractions_to_file`` checked before any work; its definition."""
+                    feature_options: FeatureOptions | None = None) -> tuple[dict, Placement]:
+    """Every input of ``fractions_to_file`` checked before any work: its definition and the
+    study's placement (``check_basins``)."""
     check_count("samples", samples)
     errors.check_count("seed", seed, 0, MAX_SEED)
     box.check(system)
@@ -366,7 +368,7 @@ def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
     study = check_study(system, samples, period, dt, options, label_options, block, mapper,
                         device, feature_options)
     return study_definition(study, "attractors", block, box=box.text, samples=samples,
-                            seed=seed)
+                            seed=seed), study.placement
 
 
 def check_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
@@ -375,9 +377,11 @@ def check_continuation(system: System, parameter: str, values: Sequence[float], 
                        label_options: LabelOptions | None = None,
                        match_distance: float = MATCH_DISTANCE, block: int | None = None,
                        mapper: str = "auto", device: str = "auto",
-                       feature_options: FeatureOptions | None = None) -> dict:
+                       feature_options: FeatureOptions | None = None
+                       ) -> tuple[dict, Placement]:
     """Every input of ``continuation_to_file`` checked before any work (the study at each
-    value); its definition."""
+    value, on the placement of the first): its definition and that placement
+    (``check_basins``)."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
@@ -387,13 +391,16 @@ def check_continuation(system: System, parameter: str, values: Sequence[float], 
     check_value_count("param", len(values))
     box.check(system)
     check_sides(system, box.sides, "box")
-    settings = (period, dt, options, label_options, block, mapper, device, feature_options)
-    study = check_study(system, samples + 16, *settings)
+    study = check_study(system, samples + 16, period, dt, options, label_options, block,
+                        mapper, device, feature_options)
+    settings = (period, dt, options, label_options, block, mapper, study.placement,
+                feature_options)
     for value in values:
         check_study(system.replace(**{parameter: float(value)}), samples + 16, *settings)
     return study_definition(study, "attractor-continuation", block, param=parameter,
                             values=[float(v) for v in values], box=box.text,
-                            samples=samples, seed=seed, match_distance=match_distance)
+                            samples=samples, seed=seed, match_distance=match_distance
+                            ), study.placement
 
 
 def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner], xr.Dataset],
@@ -438,8 +445,9 @@ def basins_to_file(system: System, x: Range, y: Range, output: str | Path, *,
     mapper's blocks in this process, on the member kernel) and stored under ``output``;
     writes the netCDF file ``output`` and returns its Dataset."""
     how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition = check_basins(system, x, y, period=period, dt=dt, options=options,
-                              label_options=label_options, block=block, **how)
+    definition, how["device"] = check_basins(system, x, y, period=period, dt=dt,
+                                             options=options, label_options=label_options,
+                                             block=block, **how)
     return stored_run(output, definition, lambda runner: basins(
         system, x, y, period=period, dt=dt, options=options, label_options=label_options,
         progress=progress, block=block, runner=runner, **how), executor, on_damaged)
@@ -456,9 +464,10 @@ def fractions_to_file(system: System, box: Box, samples: int, output: str | Path
     """``studies.basin_fractions`` with its blocks on ``executor``, stored under
     ``output``; writes ``output``."""
     how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition = check_fractions(system, box, samples, seed=seed, period=period, dt=dt,
-                                 options=options, label_options=label_options, block=block,
-                                 **how)
+    definition, how["device"] = check_fractions(system, box, samples, seed=seed,
+                                                period=period, dt=dt, options=options,
+                                                label_options=label_options, block=block,
+                                                **how)
     return stored_run(output, definition, lambda runner: basin_fractions(
         system, box, samples, seed=seed, period=period, dt=dt, options=options,
         label_options=label_options, progress=progress, block=block, runner=runner, **how),
@@ -481,10 +490,10 @@ def continuation_to_file(system: System, parameter: str, values: Sequence[float]
     ``output``; writes ``output``. On a re-run the stored values' attractors are described
     again (in this process) to seed the next value."""
     how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition = check_continuation(system, parameter, values, box, samples, seed=seed,
-                                    period=period, dt=dt, options=options,
-                                    label_options=label_options,
-                                    match_distance=match_distance, block=block, **how)
+    definition, how["device"] = check_continuation(
+        system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
+        options=options, label_options=label_options, match_distance=match_distance,
+        block=block, **how)
     return stored_run(output, definition, lambda runner: global_continuation(
         system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
         options=options, label_options=label_options, match_distance=match_distance,

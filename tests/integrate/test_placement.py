@@ -147,3 +147,23 @@ def test_an_ensemble_judges_its_device_once(judged):
     ds = ensemble(system, states, 0.002, device="auto")
     assert ds.sizes["member"] == 3
     assert judged == ["auto"]
+
+
+@pytest.mark.parametrize("args", [
+    ["basins", "duffing", "--x", "x:-3:3:4", "--y", "vx:-3:3:4"],
+    ["attractors", "duffing", "--samples", "8", "--box", "x:-3:3", "--box", "vx:-3:3"],
+    ["attractors", "duffing", "--samples", "8", "--box", "x:-3:3", "--box", "vx:-3:3",
+     "--param", "forcing_amplitude:7.4:7.5:2"],
+], ids=["basins", "attractors", "global-continuation"])
+def test_an_attractor_command_judges_its_device_once(judged, args, tmp_path):
+    """The command's checks, its cost and its run share the placement judged first (they
+    made the study three times, each judging the device)."""
+    from typer.testing import CliRunner
+
+    from analysis.cli import app
+
+    done = CliRunner().invoke(app, [*args, "-o", str(tmp_path / "out.nc"), "--mapper",
+                                    "features", "--device", "cpu", "--executor", "serial",
+                                    "--transient-periods", "20", "--sections", "48"])
+    assert done.exit_code == 0, done.output
+    assert judged == ["cpu"]

@@ -35,7 +35,7 @@ from analysis.integrate.kernels.builds import (
 )
 from analysis.integrate.kernels.builds import unbuildable as unbuildable
 from analysis.integrate.kernels.cpu import cores
-from analysis.integrate.kernels.placement import Placement, on_gpu, place
+from analysis.integrate.kernels.placement import CPU, Placement, on_gpu, place
 from analysis.integrate.kernels.schedule import Schedule
 from analysis.integrate.simulate import blow_up_limit, check_bounded
 from analysis.model import System
@@ -158,7 +158,7 @@ def _kernel(system: System, tangent: bool, device: str | Placement):
 def run_members(system: System, states: np.ndarray, parameters: np.ndarray | None,
                 h: np.ndarray | float, schedule: Schedule, *,
                 t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
-                device: str | Placement = "cpu", block: int | None = None,
+                device: str | Placement = CPU, block: int | None = None,
                 progress: Callable[[int, int], None] | None = None,
                 threads: int | None = None) -> MemberResult:
     """Run M members of ``system``'s model and balls by ``schedule``.
