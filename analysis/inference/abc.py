@@ -512,15 +512,14 @@ def check_row_kernels(model: Model, target: Target, device: str) -> None:
     """Before the estimate: the member kernels (tangent variant) of every row's balls are
     built, or loaded and self-tested, on the device that may run them (``auto``: the cores,
     and the GPU too where one can be used), so that a kernel or a cache that cannot be
-    built or written is one ``InputError`` (``members.check_kernels``) before any work."""
-    from analysis.integrate.kernels.devices import gpu_problem
-    from analysis.integrate.kernels.members import check_kernels
+    built or written is one ``InputError`` (``placement.place``: the device judged once)
+    before any work."""
+    from analysis.integrate.kernels.placement import TABLE, build, place
 
     systems = [row_system(model, row) for row in target.rows]
-    places = {"auto": ["cpu"] + (["gpu"] if gpu_problem() is None else [])}.get(device,
-                                                                            [device])
-    for place in places:
-        check_kernels(systems, place, tangent=True)
+    place(device, 1, systems, "tangent")  # the name, the GPU (gpu), the cores' kernels
+    if device == "auto" and TABLE["gpu"].problem() is None:  # auto may take the GPU too
+        build(TABLE["gpu"], systems, ["tangent"])
 
 
 @dataclass(frozen=True)
