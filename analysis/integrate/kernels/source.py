@@ -448,15 +448,25 @@ BD_FN void bd_trig(double *cs, const double *t, const double *p, double *ang) {{
   stage_angles(t, p, ang);
   for (int k = 0; k < {na}; k++) {{ cs[2 * k] = cos(ang[k]); cs[2 * k + 1] = sin(ang[k]); }}
 }}
-BD_FN void bd_rotate(double *cs, const double *cs0, const double *rot, int j) {{
-  /* [cos, sin] of every forcing angle a_k turned by the rotation j (0: ω_k h/2, 2: ω_k h) */
-  for (int k = 0; k < {na}; k++) {{
-    const double c = cs0[2 * k], sn = cs0[2 * k + 1], rc = rot[4 * k + j],
-                 rs = rot[4 * k + j + 1];
-    cs[2 * k] = c * rc - sn * rs; cs[2 * k + 1] = sn * rc + c * rs;
-  }}
-}}
-"""
+{rotate}"""
+
+
+def _rotate_c(kind: str, name: str, what: str) -> str:
+    """The C of ``name``: [cos, sin] of every forcing angle turned by a rotation, on values
+    of type ``kind`` (``double``, or ``bd_vd``: the lanes), as a template of ``{{na}}``."""
+    pad = " " * (len(kind) + 11)
+    return (f"BD_FN void {name}({kind} *cs, const {kind} *cs0, const {kind} *rot, int j) {{{{\n"
+            f"  /* {what} */\n"
+            f"  for (int k = 0; k < {{na}}; k++) {{{{\n"
+            f"    const {kind} c = cs0[2 * k], sn = cs0[2 * k + 1], rc = rot[4 * k + j],\n"
+            f"{pad}rs = rot[4 * k + j + 1];\n"
+            f"    cs[2 * k] = c * rc - sn * rs; cs[2 * k + 1] = sn * rc + c * rs;\n"
+            f"  }}}}\n}}}}\n")
+
+
+_ROTATE = _ROTATE.replace("{rotate}", _rotate_c(
+    "double", "bd_rotate", "[cos, sin] of every forcing angle a_k turned by the rotation j "
+    "(0: ω_k h/2, 2: ω_k h)"))
 
 _MEMBER_TAIL = """
   diverged[m] = bad < 0 ? -1 : (bd_long)k0[m] + bad;
@@ -479,16 +489,7 @@ void bd_members_{variant}(bd_long count, int threads, {args_nom}) {{
 }}
 """
 
-_LANES_ROTATE = """
-BD_FN void bd_rotate_lanes(bd_vd *cs, const bd_vd *cs0, const bd_vd *rot, int j) {{
-  /* bd_rotate on the lanes */
-  for (int k = 0; k < {na}; k++) {{
-    const bd_vd c = cs0[2 * k], sn = cs0[2 * k + 1], rc = rot[4 * k + j],
-                rs = rot[4 * k + j + 1];
-    cs[2 * k] = c * rc - sn * rs; cs[2 * k + 1] = sn * rc + c * rs;
-  }}
-}}
-"""
+_LANES_ROTATE = "\n" + _rotate_c("bd_vd", "bd_rotate_lanes", "bd_rotate on the lanes")
 
 _LANES_BLOCK = """
 typedef struct {{
