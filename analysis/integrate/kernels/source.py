@@ -111,16 +111,24 @@ class Unsupported(ValueError):
     """An operation ``scalar_c`` does not write, or a Function that is not SX."""
 
 
+def function_head(fn: ca.Function, name: str, kind: str, qualifier: str = "BD_FN"
+                  ) -> list[str]:
+    """The first lines of the C of the SX Function ``fn`` as ``name``, on values of type
+    ``kind`` (``double``; ``bd_vd``, the lanes): its signature and its work values
+    (``Unsupported`` for a Function that is not SX)."""
+    if not fn.is_a("SXFunction"):
+        raise Unsupported(f"{fn.name()}: not an SX Function")
+    inputs = ", ".join(f"const {kind} *BD_RESTRICT x{i}" for i in range(fn.n_in()))
+    outputs = ", ".join(f"{kind} *BD_RESTRICT y{i}" for i in range(fn.n_out()))
+    return [f"{qualifier} void {name}({inputs}, {outputs}) {{",
+            f"  {kind} " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+
+
 def scalar_c(fn: ca.Function, name: str, qualifier: str = "BD_FN") -> str:
     """``BD_FN void name(const double *x0, …, double *y0, …)``: the SX Function ``fn`` on
     doubles, one C statement per instruction in CasADi's order (``Unsupported`` for an
     operation outside ``UNARY``/``BINARY``); ``qualifier`` replaces ``BD_FN``."""
-    if not fn.is_a("SXFunction"):
-        raise Unsupported(f"{fn.name()}: not an SX Function")
-    inputs = ", ".join(f"const double *BD_RESTRICT x{i}" for i in range(fn.n_in()))
-    outputs = ", ".join(f"double *BD_RESTRICT y{i}" for i in range(fn.n_out()))
-    lines = [f"{qualifier} void {name}({inputs}, {outputs}) {{",
-             "  double " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+    lines = function_head(fn, name, "double", qualifier)
     for i in range(fn.n_instructions()):
         op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
             fn.instruction_input(i)
@@ -194,12 +202,7 @@ def lanes_c(fn: ca.Function, name: str) -> str:
     """``BD_FN void name(const bd_vd *x0, …, bd_vd *y0, …)``: ``scalar_c`` of ``fn`` on
     ``BD_LANES`` members at once (``VECTOR_PRELUDE``; element i of an input or output is
     the vector of its lanes), the same operations in the same order in every lane."""
-    if not fn.is_a("SXFunction"):
-        raise Unsupported(f"{fn.name()}: not an SX Function")
-    inputs = ", ".join(f"const bd_vd *BD_RESTRICT x{i}" for i in range(fn.n_in()))
-    outputs = ", ".join(f"bd_vd *BD_RESTRICT y{i}" for i in range(fn.n_out()))
-    lines = [f"BD_FN void {name}({inputs}, {outputs}) {{",
-             "  bd_vd " + ", ".join(f"w{i}" for i in range(max(fn.sz_w(), 1))) + ";"]
+    lines = function_head(fn, name, "bd_vd")
     for i in range(fn.n_instructions()):
         op, out, arg = _OP[fn.instruction_id(i)], fn.instruction_output(i), \
             fn.instruction_input(i)
