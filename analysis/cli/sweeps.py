@@ -24,7 +24,7 @@ from analysis.cli.common import (
     reports_errors,
 )
 from analysis.cli.devices import DeviceOption, SweepDeviceOption
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 
 
 @app.command()
@@ -142,9 +142,7 @@ def chart(
     from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid, grid_cost
     from analysis.sweeps.multistability import parse_ics
 
-    if not 1 <= revolutions <= MAX_SAMPLES:
-        raise InputError(f"--revolutions: must be a whole number in [1, {MAX_SAMPLES}], "
-                         f"got {revolutions}")
+    check_count("revolutions", revolutions, 1, MAX_SAMPLES)
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, revolutions,
                       section, dt, lyapunov)
     axes = Axis.parse(x), Axis.parse(y)

@@ -48,7 +48,7 @@ import numpy as np
 from scipy.special import ndtr
 from scipy.stats import qmc
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.inference.priors import Prior, box, check_priors
 from analysis.inference.simulate import (
     MemberRow,
@@ -118,10 +118,7 @@ class Options:
                                        ("rounds", self.rounds, 1, MAX_ROUNDS),
                                        ("block", self.block, 1, MAX_SAMPLES),
                                        ("seed", self.seed, 0, 2**32 - 1)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
-                    not low <= value <= high:
-                raise InputError(f"--{name}: must be a whole number in [{low}, {high}], "
-                                 f"got {value!r}")
+            check_count(name, value, low, high)
         if not 0 < self.quantile < 1:
             raise InputError(f"quantile: must be in (0, 1), got {self.quantile!r}")
         if self.device not in ("cpu", "gpu", "auto"):

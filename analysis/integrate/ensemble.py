@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.checks import check_start
 from analysis.integrate.compiled import CompileError, Library, block_plan, library
 from analysis.integrate.flow import Period, period_seconds, steps_per_period
@@ -194,9 +194,7 @@ class StroboscopicMap:
         if s.ndim != 2 or s.shape[1] != self.system.n_state + 1:
             raise InputError(f"s: rows [z, k] of {self.system.n_state + 1} numbers, got an "
                              f"array of shape {s.shape}")
-        if isinstance(n_periods, bool) or not isinstance(n_periods, (int, np.integer)) \
-                or n_periods < 0:
-            raise InputError(f"n_periods: must be a whole number >= 0, got {n_periods!r}")
+        check_count("n_periods", n_periods, 0)
         k = len(s)
         p = np.repeat(self.system.p[None, :], k, axis=0)
         return run_members(self.system, p, np.full(k, self.dt), s, n_periods, self.steps,

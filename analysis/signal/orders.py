@@ -139,7 +139,7 @@ def check_samples_per_rev(ds: xr.Dataset, samples_per_rev: int | None = None
     integer >= 4, and the grid of at least 16 and at most ``MAX_ANGLE_SAMPLES`` samples."""
     samples_per_rev = default_samples_per_rev(ds) if samples_per_rev is None \
         else samples_per_rev
-    check_count("--samples-per-rev", samples_per_rev, 4)
+    check_count("samples_per_rev", samples_per_rev, 4)
     phi = shaft_angle(ds)
     turns = (phi[-1] - phi[0]) / (2 * math.pi)
     count = math.floor((phi[-1] - phi[0]) / (2 * math.pi / samples_per_rev) * (1 + 1e-12)) + 1

@@ -53,7 +53,7 @@ class Design:
 
 def check_samples(samples: int) -> int:
     """``samples`` as a whole number in [1, ``MAX_SAMPLES``] (``InputError`` else)."""
-    return check_count("--samples", samples, 1, MAX_SAMPLES)
+    return check_count("samples", samples, 1, MAX_SAMPLES)
 
 
 def unit_design(p: int, samples: int, seed: int) -> np.ndarray:
@@ -75,7 +75,7 @@ def unit_design(p: int, samples: int, seed: int) -> np.ndarray:
 def draw(dists: Sequence[Dist], samples: int, seed: int = 0) -> Design:
     """The Saltelli design of ``samples`` base points for ``dists``, seeded."""
     samples = check_samples(samples)
-    seed = check_count("--seed", seed, 0, 2**32 - 1)
+    seed = check_count("seed", seed, 0, 2**32 - 1)
     unit = unit_design(len(dists), samples, seed)
     values = np.column_stack([d.ppf(unit[:, j]) for j, d in enumerate(dists)])
     if not np.all(np.isfinite(values)):

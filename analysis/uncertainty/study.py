@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.inference.simulate import (
     RunSettings,
     check_corner_step,
@@ -144,8 +144,7 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
     design = draw(found, samples, seed)
     if block is None:
         block = BLOCK if device == "cpu" else design.runs
-    if isinstance(block, bool) or not isinstance(block, int) or block < 1:
-        raise InputError(f"--block: must be a whole number >= 1, got {block!r}")
+    check_count("block", block, 1)
     study = Study(mdl, found, sets, axis, values, design, int(seed), device, settings, block,
                   balls)
     check_size(study)

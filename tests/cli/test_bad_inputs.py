@@ -16,6 +16,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+import re
 import sys
 import threading
 import tomllib
@@ -118,7 +119,7 @@ SPEC_CASES = [
              ("parameters.rotor_mass.value: must be a number in (0, 100000] kg, got '0.6'",)),
     SpecCase("fractional-balls", "wrong type", "a fractional number of balls",
              (("structure.n_balls", 6.5),),
-             ("structure.n_balls: must be an integer in [3, 64], got 6.5",)),
+             ("structure.n_balls: must be a whole number in [3, 64], got 6.5",)),
     SpecCase("parameter-not-table", "wrong type", "a parameter without its table",
              ((f"{P}.damping", 200.0),), ("parameters.damping: must be a table, got 200.0",)),
     SpecCase("terms-not-list", "wrong type", "terms not a list of tables",
@@ -511,10 +512,10 @@ def _hostile_spec(folder: Path) -> None:
 
 CLI_CASES = [
     CliCase("balls-too-few", "command line", "fewer than 3 balls", (*SIM, "--n-balls", "2"),
-            ("n_balls: must be an integer in [3, 17] (at most 17 balls fit the geometry), "
+            ("n_balls: must be a whole number in [3, 17] (at most 17 balls fit the geometry), "
              "got 2",)),
     CliCase("balls-absurd", "command line", "an absurd number of balls",
-            (*SIM, "--n-balls", "1000"), ("n_balls: must be an integer in [3, 17] (at most 17 "
+            (*SIM, "--n-balls", "1000"), ("n_balls: must be a whole number in [3, 17] (at most 17 "
                                           "balls fit the geometry), got 1000",)),
     CliCase("balls-not-integer", "command line", "an option of the wrong type (checked by the "
             "command-line parser, before the command runs)", (*SIM, "--n-balls", "six"),
@@ -688,9 +689,9 @@ CLI_CASES += _cases("simulate", ("simulate", "vakharia2015", "-o", "r.nc"), [
     ("sim-transient-nan", "NaN as the transient", ("--duration", "0.01", "--transient",
                                                    "nan"), ["transient: must be in"]),
     ("sim-save-every-zero", "--save-every 0", ("--save-every", "0", *SHORT),
-     ["save_every: must be an integer >= 1"]),
+     ["save_every: must be a whole number >= 1"]),
     ("sim-save-every-negative", "--save-every -3", ("--save-every", "-3", *SHORT),
-     ["save_every: must be an integer >= 1"]),
+     ["save_every: must be a whole number >= 1"]),
     ("sim-memory", "a run held in memory beyond 8 GiB (CVODES keeps every sample)",
      ("--duration", "3000", "--method", "cvodes"), ["save_every: the run would keep"]),
     ("sim-speed-nan", "NaN as the speed", ("--speed-rpm", "nan", *SHORT), ["speed_rpm: must be"]),
@@ -712,9 +713,10 @@ CLI_CASES += _cases("simulate", ("simulate", "vakharia2015", "-o", "r.nc"), [
      ["contact_stiffness: must be"]),
     ("sim-set-overflow", "a number beyond the double range", ("--set", "damping=1e400",
                                                              *SHORT), ["damping: must be"]),
-    ("sim-balls-zero", "zero balls", ("--n-balls", "0", *SHORT), ["n_balls: must be an integer"]),
+    ("sim-balls-zero", "zero balls", ("--n-balls", "0", *SHORT),
+     ["n_balls: must be a whole number"]),
     ("sim-balls-too-many", "more balls than fit the geometry", ("--n-balls", "18", *SHORT),
-     ["n_balls: must be an integer in [3, 17]"]),
+     ["n_balls: must be a whole number in [3, 17]"]),
     ("sim-balls-named", "a bearing name on a one-bearing model", ("--n-balls", "left=7",
                                                                   *SHORT), ["left"]),
     ("sim-balls-two-numbers", "two plain numbers of balls", ("--n-balls", "7", "--n-balls",
@@ -824,12 +826,12 @@ CLI_CASES += _cases("stability", ("lyapunov", "vakharia2015", "--duration", "0.0
      ("--transient", "0", "--duration", "1", "--dt", "5e-4"),
      ["dt: must be in (0, ", "s for RK4 with these parameters"]),
     ("lyap-renorm-zero", "--renorm-every 0", ("--renorm-every", "0"),
-     ["renorm_every: must be an integer >= 1"]),
+     ["renorm_every: must be a whole number >= 1"]),
     ("lyap-renorm-long", "a renormalisation interval longer than the run",
      ("--renorm-every", "100000000"), ["renorm_every: 10 renormalisations", "must fit"]),
     ("lyap-steps-huge", "a run of 1e17 steps", ("--duration", "1e12"),
      ["duration: 1e+17 RK4 steps in all"]),
-    ("lyap-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be an integer"]),
+    ("lyap-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
     ("lyap-figure-suffix", "a figure with a result suffix", ("-o", "l.nc"),
      ["must end in one of .png"]),
 ])
@@ -843,9 +845,9 @@ CLI_CASES += _cases("stability", ("floquet", "balanced-rotor", "--n-balls", "8")
     ("floquet-param-unknown", "a period held by an unknown parameter",
      ("--period", "param:nothing"), ["period: param:nothing: not a parameter"]),
     ("floquet-segments-zero", "zero shooting segments", ("--segments", "0"),
-     ["segments: must be an integer in [1, 64]"]),
+     ["segments: must be a whole number in [1, 64]"]),
     ("floquet-segments-many", "100 shooting segments", ("--segments", "100"),
-     ["segments: must be an integer in [1, 64]"]),
+     ["segments: must be a whole number in [1, 64]"]),
     ("floquet-dt-zero", "a step of zero", ("--dt", "0"), ["dt: must be a finite number > 0"]),
     ("floquet-dt-unstable", "a step beyond RK4's stability limit", ("--dt", "5e-4"),
      ["dt: must be in (0, ", "s for RK4 with these parameters"]),
@@ -876,7 +878,7 @@ CLI_CASES += _cases("continuation", CONT, [
     ("cont-plot-suffix", "a figure with a result suffix", ("--plot", "b.nc"),
      ["must end in one of .png"]),
     ("cont-period-unknown", "an unknown period", ("--period", "moon"), ["period: must be"]),
-    ("cont-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be an integer"]),
+    ("cont-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
 ])
 CLI_CASES += _cases("continuation", ("continue",), [
     ("cont-to-nan", "NaN as the end value", ("balanced-rotor", "--param", "speed_rpm",
@@ -966,7 +968,7 @@ CLI_CASES += _cases("sweeps", CHART, [
     ("chart-dask-workers", "a Dask cluster of -1 workers (used to hang)",
      ("--executor", "dask", "--workers", "-1"), ["--workers: must be a whole number"]),
     ("chart-balls-too-many", "a ball axis beyond the geometry", ("--y", "n_balls:7:30"),
-     ["n_balls: must be an integer in [3, 17]"]),
+     ["n_balls: must be a whole number in [3, 17]"]),
     ("chart-bearing-unknown", "a ball axis of a bearing the model lacks",
      ("--y", "n_balls[left]:7:9"), ["has no bearing 'left'"]),
     ("chart-param-unknown", "an axis over an unknown parameter", ("--y", "dampign:1:2:2"),
@@ -989,7 +991,7 @@ CLI_CASES += _cases("curves", ("curve", "run.nc", "--point", "PD", "--param", "r
      _run_file()),
 ])
 CLI_CASES += _cases("jobs", ("run",), [
-    ("run-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be an integer"]),
+    ("run-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
     ("run-duration", "a duration of zero", ("--duration", "0"), ["duration: must be"]),
     ("run-transient", "a negative transient", ("--transient", "-1"), ["transient:"]),
     ("run-model", "an unknown model", ("--model", "vakharia"), ["model: no model named"]),
@@ -1035,7 +1037,7 @@ CLI_CASES += _cases("checked before any write", (), [
      ("explore", "c.nc", "-o", "page.txt"), ["--output: 'page.txt' must end in one of .html"]),
     ("explore-bins", "too few spectrum bins (judged before the workers start)",
      ("explore", "c.nc", "-o", "page.html", "--spectrum-bins", "3"),
-     ["spectrum_bins: must be an integer >= 16, got 3"]),
+     ["spectrum_bins: must be a whole number >= 16, got 3"]),
     ("explore-run-as-chart", "a run given as the chart (judged before the workers start)",
      ("explore", "run.nc", "-o", "page.html"), ["chart file: kind must be 'chart', got None"],
      _run_file()),
@@ -1255,7 +1257,7 @@ CLI_CASES += _cases("envelopes and noise", ("spectrum", *RUN), [
     ("noise-snr-range", "an SNR beyond its range", ("--noise", "500"),
      ["--noise: must be an SNR in dB in [-60, 200], got 500.0"]),
     ("noise-seed-negative", "a negative noise seed", ("--noise", "0", "--noise-seed", "-1"),
-     ["--noise-seed: must be an integer >= 0, got -1"]),
+     ["--noise-seed: must be a whole number >= 0, got -1"]),
     ("band-resonance-none", "the resonance band of a model without a structural resonance",
      ("--envelope", "--band", "resonance"),
      ["--band: 'resonance' needs a structural resonance of the model", "this model has none"]),
@@ -1757,6 +1759,11 @@ GROUPS = ["wrong type", "missing field", "unknown field", "units and ranges", "u
           FOURTH, "numerical failures"]
 
 
+KERNEL_KEY = re.compile(r"_[0-9a-f]{20}\.so")
+"""A kernel library's cache key in a message (it depends on the host's compiler, its flags
+and instruction set: the page shows ``_<key>.so``)."""
+
+
 def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome]) -> str:
     """docs/bad-inputs.md from the catalogue and the messages it produced."""
     rows: dict[str, list[str]] = {g: [] for g in GROUPS}
@@ -1770,7 +1777,7 @@ def render_docs(spec_messages: dict[str, str], cli_outcomes: dict[str, Outcome])
         elif not case.one_line:  # click's usage error: the line after the usage lines
             errors = [line for line in text.splitlines() if line.startswith("Error: ")]
             text = errors[-1].removeprefix("Error: ") if errors else text.splitlines()[-1]
-        rows[case.group].append(_row(case.what, case.shown(), text))
+        rows[case.group].append(_row(case.what, case.shown(), KERNEL_KEY.sub("_<key>.so", text)))
     parts = [DOCS_HEAD]
     for group in GROUPS:
         parts.append(f"\n## {group.capitalize()}\n\n| input | example | message |\n|---|---|---|\n"

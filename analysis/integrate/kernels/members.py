@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.budgets import RUN_MEMORY
-from analysis.errors import InputError, SimulationError
+from analysis.errors import InputError, SimulationError, check_count
 from analysis.integrate.kernels.builds import GPU_SELF_TEST_TOL as GPU_SELF_TEST_TOL
 from analysis.integrate.kernels.builds import SELF_TEST_TOL as SELF_TEST_TOL
 from analysis.integrate.kernels.builds import (
@@ -138,9 +138,7 @@ def check_fits(device: str | Placement, members: int, schedule: Schedule, n: int
 
 def _block_size(placed: Placement, members: int, per: int, block: int | None) -> int:
     if block is not None:
-        if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
-            raise InputError(f"block: a whole number >= 1, got {block!r}")
-        return int(block)
+        return check_count("block", block, 1)
     if not placed.gpu:
         return min(members, CPU_BLOCK)
     from analysis.integrate.kernels.cuda import free_memory
