@@ -997,7 +997,8 @@ def _format_error(err: dict[str, Any]) -> str:
 
 NUMBER_ERRORS = {
     "float_parsing": "a number", "float_type": "a number", "finite_number": "a finite number",
-    "int_parsing": "an integer", "int_type": "an integer", "int_from_float": "an integer",
+    "int_parsing": "a whole number", "int_type": "a whole number",
+    "int_from_float": "a whole number",
 }
 """Pydantic's number errors, as the value the field must be."""
 TYPE_ERRORS = {

@@ -418,15 +418,18 @@ def progress_lines(quiet: bool, err: bool = True):
 
 
 def as_option(exc: Exception) -> Exception:
-    """``exc``, or where it is an ``InputError`` whose ``field`` is a parameter of the
-    running command, the same error naming that parameter's option (``device gpu: …`` ->
-    ``--device gpu: …``): the field is the error's own, no message text is read back."""
+    """``exc``, or where it is an ``InputError`` whose ``field`` is an option of the
+    running command that holds a value (given or its default), the same error naming that
+    option (``device gpu: …`` -> ``--device gpu: …``): the field is the error's own, no
+    message text is read back. An option left empty is not named: the value came from
+    elsewhere (``n_balls`` of a chart's ``--y n_balls:7:30``)."""
     field = getattr(exc, "field", None)
     context = click.globals.get_current_context(silent=True)
     if not isinstance(exc, InputError) or field is None or context is None:
         return exc
     for param in context.command.params:
-        if param.name == field and param.param_type_name == "option":
+        if param.name == field and param.param_type_name == "option" and \
+                context.params.get(param.name) is not None:
             return exc.renamed(max(param.opts, key=len))
     return exc
 

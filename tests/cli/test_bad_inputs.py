@@ -512,11 +512,12 @@ def _hostile_spec(folder: Path) -> None:
 
 CLI_CASES = [
     CliCase("balls-too-few", "command line", "fewer than 3 balls", (*SIM, "--n-balls", "2"),
-            ("n_balls: must be a whole number in [3, 17] (at most 17 balls fit the geometry), "
+            ("--n-balls: must be a whole number in [3, 17] (at most 17 balls fit the geometry), "
              "got 2",)),
     CliCase("balls-absurd", "command line", "an absurd number of balls",
-            (*SIM, "--n-balls", "1000"), ("n_balls: must be a whole number in [3, 17] (at most 17 "
-                                          "balls fit the geometry), got 1000",)),
+            (*SIM, "--n-balls", "1000"),
+            ("--n-balls: must be a whole number in [3, 17] (at most 17 balls fit the "
+             "geometry), got 1000",)),
     CliCase("balls-not-integer", "command line", "an option of the wrong type (checked by the "
             "command-line parser, before the command runs)", (*SIM, "--n-balls", "six"),
             ("Invalid value for '--n-balls'",)),
@@ -689,9 +690,9 @@ CLI_CASES += _cases("simulate", ("simulate", "vakharia2015", "-o", "r.nc"), [
     ("sim-transient-nan", "NaN as the transient", ("--duration", "0.01", "--transient",
                                                    "nan"), ["transient: must be in"]),
     ("sim-save-every-zero", "--save-every 0", ("--save-every", "0", *SHORT),
-     ["save_every: must be a whole number >= 1"]),
+     ["--save-every: must be a whole number >= 1"]),
     ("sim-save-every-negative", "--save-every -3", ("--save-every", "-3", *SHORT),
-     ["save_every: must be a whole number >= 1"]),
+     ["--save-every: must be a whole number >= 1"]),
     ("sim-memory", "a run held in memory beyond 8 GiB (CVODES keeps every sample)",
      ("--duration", "3000", "--method", "cvodes"), ["save_every: the run would keep"]),
     ("sim-speed-nan", "NaN as the speed", ("--speed-rpm", "nan", *SHORT), ["speed_rpm: must be"]),
@@ -714,9 +715,9 @@ CLI_CASES += _cases("simulate", ("simulate", "vakharia2015", "-o", "r.nc"), [
     ("sim-set-overflow", "a number beyond the double range", ("--set", "damping=1e400",
                                                              *SHORT), ["damping: must be"]),
     ("sim-balls-zero", "zero balls", ("--n-balls", "0", *SHORT),
-     ["n_balls: must be a whole number"]),
+     ["--n-balls: must be a whole number"]),
     ("sim-balls-too-many", "more balls than fit the geometry", ("--n-balls", "18", *SHORT),
-     ["n_balls: must be a whole number in [3, 17]"]),
+     ["--n-balls: must be a whole number in [3, 17]"]),
     ("sim-balls-named", "a bearing name on a one-bearing model", ("--n-balls", "left=7",
                                                                   *SHORT), ["left"]),
     ("sim-balls-two-numbers", "two plain numbers of balls", ("--n-balls", "7", "--n-balls",
@@ -826,12 +827,12 @@ CLI_CASES += _cases("stability", ("lyapunov", "vakharia2015", "--duration", "0.0
      ("--transient", "0", "--duration", "1", "--dt", "5e-4"),
      ["dt: must be in (0, ", "s for RK4 with these parameters"]),
     ("lyap-renorm-zero", "--renorm-every 0", ("--renorm-every", "0"),
-     ["renorm_every: must be a whole number >= 1"]),
+     ["--renorm-every: must be a whole number >= 1"]),
     ("lyap-renorm-long", "a renormalisation interval longer than the run",
      ("--renorm-every", "100000000"), ["renorm_every: 10 renormalisations", "must fit"]),
     ("lyap-steps-huge", "a run of 1e17 steps", ("--duration", "1e12"),
      ["duration: 1e+17 RK4 steps in all"]),
-    ("lyap-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
+    ("lyap-balls", "too few balls", ("--n-balls", "2"), ["--n-balls: must be a whole number"]),
     ("lyap-figure-suffix", "a figure with a result suffix", ("-o", "l.nc"),
      ["must end in one of .png"]),
 ])
@@ -869,16 +870,16 @@ CLI_CASES += _cases("continuation", CONT, [
     ("cont-ds-max-nan", "--ds-max nan", ("--ds-max", "nan"),
      ["ds_max: must be a finite number > 0"]),
     ("cont-max-points-zero", "--max-points 0", ("--max-points", "0"),
-     ["max_points: must be a whole number in [2, 100000]"]),
+     ["--max-points: must be a whole number in [2, 100000]"]),
     ("cont-max-points-one", "--max-points 1", ("--max-points", "1"),
-     ["max_points: must be a whole number in [2, 100000]"]),
+     ["--max-points: must be a whole number in [2, 100000]"]),
     ("cont-dt-zero", "a step of zero", ("--dt", "0"), ["dt: must be a finite number > 0"]),
     ("cont-settle-negative", "a negative settling time", ("--settle", "-5"),
      ["settle: must be a finite number >= 0 s"]),
     ("cont-plot-suffix", "a figure with a result suffix", ("--plot", "b.nc"),
      ["must end in one of .png"]),
     ("cont-period-unknown", "an unknown period", ("--period", "moon"), ["period: must be"]),
-    ("cont-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
+    ("cont-balls", "too few balls", ("--n-balls", "2"), ["--n-balls: must be a whole number"]),
 ])
 CLI_CASES += _cases("continuation", ("continue",), [
     ("cont-to-nan", "NaN as the end value", ("balanced-rotor", "--param", "speed_rpm",
@@ -976,7 +977,7 @@ CLI_CASES += _cases("sweeps", CHART, [
 ])
 CLI_CASES += _cases("curves", CURVE, [
     ("curve-max-points", "--max-points 0", ("--max-points", "0"),
-     ["max_points: must be a whole number in [2, 100000]"]),
+     ["--max-points: must be a whole number in [2, 100000]"]),
     ("curve-ds-max", "--ds-max 0", ("--ds-max", "0"), ["ds_max: must be a finite number > 0"]),
     ("curve-to-nan", "NaN as the end value", ("--to", "nan"), ["stop: must be a finite number"]),
     ("curve-branch-missing", "a branch that does not exist", (), ["'b.nc' does not exist"]),
@@ -991,7 +992,7 @@ CLI_CASES += _cases("curves", ("curve", "run.nc", "--point", "PD", "--param", "r
      _run_file()),
 ])
 CLI_CASES += _cases("jobs", ("run",), [
-    ("run-balls", "too few balls", ("--n-balls", "2"), ["n_balls: must be a whole number"]),
+    ("run-balls", "too few balls", ("--n-balls", "2"), ["--n-balls: must be a whole number"]),
     ("run-duration", "a duration of zero", ("--duration", "0"), ["duration: must be"]),
     ("run-transient", "a negative transient", ("--transient", "-1"), ["transient:"]),
     ("run-model", "an unknown model", ("--model", "vakharia"), ["model: no model named"]),
@@ -1037,7 +1038,7 @@ CLI_CASES += _cases("checked before any write", (), [
      ("explore", "c.nc", "-o", "page.txt"), ["--output: 'page.txt' must end in one of .html"]),
     ("explore-bins", "too few spectrum bins (judged before the workers start)",
      ("explore", "c.nc", "-o", "page.html", "--spectrum-bins", "3"),
-     ["spectrum_bins: must be a whole number >= 16, got 3"]),
+     ["--spectrum-bins: must be a whole number >= 16, got 3"]),
     ("explore-run-as-chart", "a run given as the chart (judged before the workers start)",
      ("explore", "run.nc", "-o", "page.html"), ["chart file: kind must be 'chart', got None"],
      _run_file()),

@@ -237,8 +237,8 @@ def place(device: str | Placement, members: int,
     variants = _variants(variant)
     if isinstance(device, Placement):
         missing = tuple(v for v in variants if v not in device.variants)
-        if not missing:
-            return device
+        if not missing or (fallback and device.asked == "auto" and not device.gpu):
+            return device  # (auto on the cores with fallback: their builds not judged)
         found = _systems(systems)
         if not found:
             return device
