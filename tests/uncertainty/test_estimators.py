@@ -121,7 +121,7 @@ def test_bad_distributions_are_one_line(given, sets, words):
 
 
 def test_zero_samples_refused():
-    with pytest.raises(InputError, match="^samples: must be a whole number") as err:
+    with pytest.raises(InputError, match=r"^samples: must be a whole number") as err:
         draw([Dist("a", "uniform", 0, 1)], 0)
     assert err.value.field == "samples"  # the command line names its option from it
 
