@@ -13,8 +13,9 @@ kernels (``KERNELS``: charts, no-follow sweeps, basins, attractors, calibrate, u
 are timed by ``probe_kernel``, a block of members on as many threads of the CPU build as the
 command has workers (so that a loaded machine's share is measured, not guessed), sized to
 about ``KERNEL_PROBE_SECONDS``, the best of two; a step that carries the tangent of λ1 is
-counted by its measured cost (``tangent_step_factor``: 1.66–1.71 state steps on the
-development machine, not 2). The compiled RK4 blocks (``COMPILED``: ``simulate``, a followed
+counted by its measured cost (``tangent_step_factor``: 1.5–1.7 state steps in the scalar
+build, 0.7–0.8 in the lanes build on the development machine; it was counted as 2). The
+compiled RK4 blocks (``COMPILED``: ``simulate``, a followed
 sweep, the runs of ``hb`` and ``torus``) are timed by ``probe_step_seconds``, sized to about
 ``COMPILED_PROBE_SECONDS``. The compiled probe of 400 steps (a millisecond: on a loaded
 machine a burst of a whole core) stood in for the kernels before and was 1.5–5× off

@@ -104,8 +104,3 @@ def device_info() -> list[DeviceInfo]:
                               cupy_version=cupy.__version__,
                               cuda_version=f"{version // 1000}.{version % 1000 // 10}"))
     return out
-
-
-def no_gpu_error(problem: str) -> DeviceError:
-    """The one line of ``device gpu`` where no GPU can be used (``problem``: why)."""
-    return DeviceError("gpu", f"{problem}; {INSTALL_HINT}", instead="cpu")
