@@ -33,7 +33,7 @@ import numpy as np
 import xarray as xr
 
 from analysis import errors
-from analysis.errors import InputError
+from analysis.errors import InputError, check_count
 from analysis.integrate.cost import COMPILED, KERNELS, CostEstimate, estimate_cost
 from analysis.integrate.kernels.placement import Placement
 from analysis.io import save_dataset
@@ -43,12 +43,7 @@ from analysis.stability.attractors.featurizing import FeatureOptions
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions, Scale
 from analysis.stability.attractors.sampling import Box, Range, check_pair
-from analysis.stability.attractors.studies import (
-    basin_fractions,
-    basins,
-    check_count,
-    global_continuation,
-)
+from analysis.stability.attractors.studies import basin_fractions, basins, global_continuation
 from analysis.stability.attractors.study import AttractorStudy, Block, make_study
 from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
 from analysis.sweeps.store import PointStore

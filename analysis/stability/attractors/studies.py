@@ -18,7 +18,7 @@ from dataclasses import asdict
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError
+from analysis.errors import check_count
 from analysis.integrate.flow import Period
 from analysis.model import System
 from analysis.stability.attractors.continuation import (
@@ -44,13 +44,6 @@ from analysis.stability.attractors.study import (
 )
 
 Progress = Callable[[int, int], None]
-
-
-def check_count(field: str, value: int) -> int:
-    """``InputError`` unless ``value`` is a whole number >= 1."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InputError(f"{field}: must be a whole number >= 1, got {value!r}")
-    return int(value)
 
 
 LABEL_PERIODS = {"units": "forcing periods",
