@@ -10,22 +10,14 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import os
-from collections.abc import Callable, Iterable, Iterator
-from typing import Any, Protocol
+from collections.abc import Callable, Iterable
+from typing import Any
 
 from analysis.errors import InputError, check_count
+from analysis.integrate.study import Executor
 
 MAX_WORKERS = 1024
 """Most local worker processes."""
-
-
-class Executor(Protocol):
-    name: str
-
-    def run(self, fn: Callable[[Any], Any], tasks: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
-        """Yield (task, fn(task)) as tasks complete."""
-
-    def close(self) -> None: ...
 
 
 class SerialExecutor:
