@@ -78,7 +78,7 @@ structural resonance of the model: where an outer-race fault is judged (BPFO = V
 
 def parse_band(text: str) -> tuple[float, float] | str:
     """``"LO:HI"`` (Hz) as a pair of numbers, or ``"resonance"`` (:data:`RESONANCE`);
-    InputError naming ``--band`` otherwise."""
+    InputError naming ``band`` otherwise."""
     if text.strip().lower() == RESONANCE:
         return RESONANCE
     lo, sep, hi = text.partition(":")
@@ -87,7 +87,7 @@ def parse_band(text: str) -> tuple[float, float] | str:
     except ValueError:
         band = None
     if not sep or band is None or not 0 <= band[0] < band[1]:
-        raise InputError(f"--band: must be LO:HI in Hz with 0 <= LO < HI, got {text!r}")
+        raise InputError(f"band: must be LO:HI in Hz with 0 <= LO < HI, got {text!r}", field="band")
     return band
 
 
@@ -101,20 +101,20 @@ def check_band(band: tuple[float, float], fs: float, n_samples: int) -> tuple[fl
     nyquist, resolution = fs / 2, fs / n_samples
     text = f"{band[0]:g}:{band[1]:g}"
     if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
-        raise InputError(f"--band: must be LO:HI in Hz with 0 <= LO < HI, got {text}")
+        raise InputError(f"band: must be LO:HI in Hz with 0 <= LO < HI, got {text}", field="band")
     if high > nyquist * (1 + 1e-9):
-        raise InputError(f"--band: must lie in [0, {nyquist:g}] Hz, below the Nyquist "
-                         f"frequency of this run (dt = {1 / fs:g} s), got {text}")
+        raise InputError(f"band: must lie in [0, {nyquist:g}] Hz, below the Nyquist "
+                         f"frequency of this run (dt = {1 / fs:g} s), got {text}", field="band")
     if high - low < 2 * resolution:
-        raise InputError(f"--band: must be at least {2 * resolution:.3g} Hz wide (two bins "
+        raise InputError(f"band: must be at least {2 * resolution:.3g} Hz wide (two bins "
                          f"of this run's resolution 1/T = {resolution:.3g} Hz), got {text} "
-                         f"({high - low:g} Hz)")
+                         f"({high - low:g} Hz)", field="band")
     narrowest = 4 * kg.EDGE_BANDWIDTHS * fs / max(n_samples - 1, 1)
     if high - low < narrowest:
-        raise InputError(f"--band: must be at least {narrowest:.3g} Hz wide for this "
+        raise InputError(f"band: must be at least {narrowest:.3g} Hz wide for this "
                          f"{(n_samples - 1) / fs:g} s record (the filter's edges, "
                          f"{kg.EDGE_BANDWIDTHS:g}/width s at each end, must leave half of "
-                         f"it), got {text} ({high - low:g} Hz)")
+                         f"it), got {text} ({high - low:g} Hz)", field="band")
     return low, min(high, nyquist)  # the Nyquist frequency within rounding: as given
 
 
@@ -230,11 +230,11 @@ def _best(ds: xr.Dataset, spectrum: kg.Spectrum, min_width_hz: float | None,
         if resonance is None:
             resonance = bool(holds.any())
         if resonance is True and not holds.any():
-            raise InputError(f"--band: {RESONANCE!r} needs a structural resonance of the "
+            raise InputError(f"band: {RESONANCE!r} needs a structural resonance of the "
                              "model inside a searched band (a sprung body's <body>_stiffness "
                              "and <body>_mass); " + ("this model has none" if not resonances
                              else f"{', '.join(f'{f:g}' for f in resonances)} Hz lie outside "
-                             "the searched range"))
+                             "the searched range"), field="band")
         if resonance:
             k = np.where(holds, k, -np.inf)
     i = int(np.argmax(k))
@@ -263,7 +263,8 @@ def envelope(ds: xr.Dataset, var: str | None = None,
     spectrum = kg.Spectrum(values, fs)
     if band is None or isinstance(band, str):
         if band is not None and band != RESONANCE:
-            raise InputError(f"--band: must be LO:HI in Hz or {RESONANCE!r}, got {band!r}")
+            raise InputError(f"band: must be LO:HI in Hz or {RESONANCE!r}, got {band!r}",
+                             field="band")
         chosen = _best(ds, spectrum, min_width_hz, resonance=True if band == RESONANCE
                        else None)
     else:

@@ -29,7 +29,8 @@ def check_snr(snr_db: float) -> float:
     value = float(snr_db)
     low, high = SNR_RANGE_DB
     if not (math.isfinite(value) and low <= value <= high):
-        raise InputError(f"--noise: must be an SNR in dB in [{low:g}, {high:g}], got {snr_db}")
+        raise InputError(f"noise: must be an SNR in dB in [{low:g}, {high:g}], got {snr_db}",
+                         field="noise")
     return value
 
 
@@ -40,15 +41,16 @@ def add_noise(ds: xr.Dataset, snr_db: float, seed: int,
     ``numpy.random.default_rng(seed)``. attrs gain ``noise_snr_db``, ``noise_seed`` and
     ``noise_variables``; a run that already has noise is refused (say it once)."""
     snr = check_snr(snr_db)
-    check_count("--noise-seed", seed, 0)
+    check_count("noise_seed", seed, 0)
     if "noise_seed" in ds.attrs:
-        raise InputError(f"--noise: this run already has noise (SNR "
-                         f"{ds.attrs.get('noise_snr_db')} dB, seed {ds.attrs['noise_seed']})")
+        raise InputError(f"noise: this run already has noise (SNR "
+                         f"{ds.attrs.get('noise_snr_db')} dB, seed {ds.attrs['noise_seed']})",
+                         field="noise")
     names = tuple(state_names(ds)) if variables is None else tuple(variables)
     for name in names:
         if name not in ds.data_vars:
-            raise InputError(f"--var: no state variable {name!r} in this run; variables: "
-                             f"{', '.join(map(str, ds.data_vars))}")
+            raise InputError(f"var: no state variable {name!r} in this run; variables: "
+                             f"{', '.join(map(str, ds.data_vars))}", field="var")
     rng = np.random.default_rng(int(seed))
     out = ds.copy(deep=True)
     scale = 10 ** (-snr / 20)

@@ -93,11 +93,12 @@ def node_terms(model, node: int) -> list[tuple[int, float, float]]:
     naming ``--node`` for a model without finite-element nodes or a node it lacks."""
     node_map = getattr(model.module, "NODE_MAP", None)
     if node_map is None:
-        raise InputError(f"--node: only for a flexible (finite-element) model; "
-                         f"{model.name} has no shaft nodes")
+        raise InputError(f"node: only for a flexible (finite-element) model; "
+                         f"{model.name} has no shaft nodes", field="node")
     if isinstance(node, bool) or not isinstance(node, (int, np.integer)) \
             or not 0 <= int(node) < len(node_map):
-        raise InputError(f"--node: a node of {model.name}, 0…{len(node_map) - 1}, got {node}")
+        raise InputError(f"node: a node of {model.name}, 0…{len(node_map) - 1}, got {node}",
+                         field="node")
     return [(int(i), float(a), float(b)) for i, a, b in node_map[int(node)]]
 
 
@@ -136,8 +137,8 @@ def orbits(ds: xr.Dataset, x: str | None = None, y: str | None = None,
     run with no planar motion."""
     if node is not None:
         if x is not None or y is not None:
-            raise InputError("--node: draws one shaft node's orbit; give --node or --var, "
-                             "not both")
+            raise InputError("node: draws one shaft node's orbit; give --node or --var, "
+                             "not both", field="node")
         return [node_orbit(ds, node)]
     names = state_names(ds)
     marks = revolution_marks(ds)

@@ -148,9 +148,9 @@ def check_samples_per_rev(ds: xr.Dataset, samples_per_rev: int | None = None
                          "tracking needs several")
     if count > MAX_ANGLE_SAMPLES:
         most = max(4, int(MAX_ANGLE_SAMPLES // max(turns, 1e-300)))
-        raise InputError(f"--samples-per-rev: at most {most} over the record's {turns:.4g} "
+        raise InputError(f"samples_per_rev: at most {most} over the record's {turns:.4g} "
                          f"revolutions ({MAX_ANGLE_SAMPLES:.0e} angle samples in all), got "
-                         f"{samples_per_rev}")
+                         f"{samples_per_rev}", field="samples_per_rev")
     return int(samples_per_rev), count, phi
 
 
@@ -162,8 +162,8 @@ def angle_resample(ds: xr.Dataset, var: str | None = None,
     and, along it, the times ``t`` (s) of the samples."""
     var = displacement_names(ds)[0] if var is None else var
     if var not in ds.data_vars:
-        raise InputError(f"--var: no state variable {var!r} in this run; variables: "
-                         f"{', '.join(map(str, ds.data_vars))}")
+        raise InputError(f"var: no state variable {var!r} in this run; variables: "
+                         f"{', '.join(map(str, ds.data_vars))}", field="var")
     samples_per_rev, count, phi = check_samples_per_rev(ds, samples_per_rev)
     t = np.asarray(ds["t"].values, dtype=float)
     values = np.asarray(ds[var].values, dtype=float)

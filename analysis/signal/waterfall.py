@@ -81,15 +81,15 @@ def waterfall(ds: xr.Dataset, var: str | None = None, window_s: float | None = N
                          "spectrum`")
     var = displacement_names(ds)[0] if var is None else var
     if var not in ds.data_vars:
-        raise InputError(f"--var: no state variable {var!r} in this run; variables: "
-                         f"{', '.join(map(str, ds.data_vars))}")
+        raise InputError(f"var: no state variable {var!r} in this run; variables: "
+                         f"{', '.join(map(str, ds.data_vars))}", field="var")
     t = np.asarray(ds["t"].values, dtype=float)
     dt = _time_step(t)
     span = float(t[-1] - t[0])
     window_s = default_window(ds) if window_s is None else float(window_s)
     if not (math.isfinite(window_s) and 8 * dt <= window_s <= span / 2):
-        raise InputError(f"--window: must be in [{8 * dt:g}, {span / 2:g}] s (8 samples to "
-                         f"half the record), got {window_s!r}")
+        raise InputError(f"window: must be in [{8 * dt:g}, {span / 2:g}] s (8 samples to "
+                         f"half the record), got {window_s!r}", field="window")
     size = round(window_s / dt)
     hop = max(1, round(HOP_FRACTION * size))
     win = scipy.signal.get_window("hann", size)
@@ -99,7 +99,8 @@ def waterfall(ds: xr.Dataset, var: str | None = None, window_s: float | None = N
     first = stft.lower_border_end[1]
     last = stft.upper_border_begin(values.size)[1]
     if last <= first:
-        raise InputError(f"--window: {window_s:g} s leaves no whole window in the record")
+        raise InputError(f"window: {window_s:g} s leaves no whole window in the record",
+                         field="window")
     spectra = stft.stft(values, p0=first, p1=last)  # (frequency, time)
     amp = 2.0 * np.abs(spectra) / win.sum()
     amp[0] /= 2.0
