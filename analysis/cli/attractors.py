@@ -21,7 +21,6 @@ from analysis.cli.common import (
     WorkersOption,
     app,
     echo_json,
-    executor_of,
     figure_output,
     netcdf_output,
     parameter_values,
@@ -30,6 +29,7 @@ from analysis.cli.common import (
     write_figure,
 )
 from analysis.cli.devices import DeviceOption
+from analysis.cli.plans import run_plan
 
 DtOption = Annotated[float | None, typer.Option(
     help="Largest RK4 step, s (default: the spec's); the map takes N = ceil(T/dt) steps "
@@ -99,19 +99,6 @@ def _finish(ds, output: Path, as_json: bool, plot: Path | None, branches=()) -> 
         from analysis.reports.attractor_plots import study_figure
 
         write_figure(study_figure(ds, branches), plot, err=as_json)
-
-
-def _recomputing(key: str) -> None:
-    typer.echo(f"warning: stored block {key} could not be read; mapping it again", err=True)
-
-
-def _run(make, run):
-    """``run(executor)`` on the executor ``make()`` gives, closed afterwards."""
-    ex = make()
-    try:
-        return run(ex)
-    finally:
-        ex.close()
 
 
 def _echo_table(ds, output: Path) -> None:
@@ -244,24 +231,18 @@ def basins(
     """Basins of attraction: the attractor reached from every initial state of a grid over
     two state coordinates (the others at the model's initial state), and every attractor's
     class, period, λ1 and amplitudes. Resumable: re-run the same command to continue."""
-    from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Range
-    from analysis.sweeps.attractor_blocks import basins_to_file, check_basins
+    from analysis.sweeps.attractor_blocks import plan_basins
 
     x_range = Range.parse(x, "--x", with_num=True)
     y_range = Range.parse(y, "--y", with_num=True)
     options = _options(resolution, revisits, record, hits, max_periods)
     system = _system(model, n_balls, speed_rpm, sets)
-    settings = dict(period=period, dt=dt, options=options, block=block,
-                    **_mapping(mapper, device, transient_periods, sections))
-    # every input, before any work or file; the device judged once, kept for the rest
-    settings["device"] = check_basins(system, x_range, y_range, **settings)[1]
-    _say_cost(quiet or as_json, system, x_range.num * y_range.num, executor, workers, settings,
-              (x_range, y_range))
-    ds = _run(lambda: executor_of(executor, workers, scheduler), lambda ex: basins_to_file(
-        system, x_range, y_range, output, **settings, executor=ex,
-        progress=ProgressReporter("basins", quiet or as_json, unit="states"),
-        on_damaged=_recomputing))
+    # every input, before any work or file; the device judged once, the study made once
+    plan = plan_basins(system, x_range, y_range, output, period=period, dt=dt,
+                       options=options, block=block,
+                       **_mapping(mapper, device, transient_periods, sections))
+    ds = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json, part="block")
     _finish(ds, output, as_json, plot)
 
 
@@ -313,14 +294,11 @@ def attractors(
     states in a box; with --param, their global continuation: found at each value from the
     previous value's attractors and new random states (the blocks of each value on the
     executor), matched across values. Resumable: re-run the same command to continue."""
-    from analysis.reports.progress import ProgressReporter
     from analysis.stability.attractors import Box, Range
     from analysis.sweeps.attractor_blocks import (
         check_branch_of,
-        check_continuation,
-        check_fractions,
-        continuation_to_file,
-        fractions_to_file,
+        plan_continuation,
+        plan_fractions,
     )
 
     sides = Box.parse(box, "--box")
@@ -335,44 +313,16 @@ def attractors(
         check_branch_of(system, drawn, along.coordinate, f"--branch '{path}'")
     settings = dict(seed=seed, period=period, dt=dt, options=options, block=block,
                     **_mapping(mapper, device, transient_periods, sections))
-
-    def executor_made():
-        return executor_of(executor, workers, scheduler)
-
-    if along is None:
-        settings["device"] = check_fractions(system, sides, samples, **settings)[1]
-        _say_cost(quiet or as_json, system, samples, executor, workers, settings,
-                  sides.sides)
-        ds = _run(executor_made, lambda ex: fractions_to_file(
-            system, sides, samples, output, **settings, executor=ex,
-            progress=ProgressReporter("attractors", quiet or as_json, unit="states"),
-            on_damaged=_recomputing))
+    if along is None:  # every input checked once: the plan
+        plan = plan_fractions(system, sides, samples, output, **settings)
+        ds = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json,
+                      part="block")
     else:
-        say = None if quiet else (lambda line: typer.echo(line, err=True))
-        settings["match_distance"] = match_threshold
-        settings["device"] = check_continuation(system, along.coordinate, along.points,
-                                                sides, samples, **settings)[1]
-        _say_cost(quiet or as_json, system, (samples + 16) * along.num, executor, workers,
-                  settings, sides.sides)
-        ds = _run(executor_made, lambda ex: continuation_to_file(
-            system, along.coordinate, along.points, sides, samples, output, **settings,
-            executor=ex, progress=say, on_damaged=_recomputing))
+        plan = plan_continuation(system, along.coordinate, along.points, sides, samples,
+                                 output, **settings, match_distance=match_threshold)
+        ds = run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block",
+                      lines=True, cost=not as_json)
     _finish(ds, output, as_json, plot, branches)
-
-
-def _say_cost(quiet: bool, system, members: int, executor: str, workers: int | None,
-              settings: dict, sides) -> None:
-    """The cost estimate (``analysis.integrate.cost``; ``sides``: the states' box or grid,
-    for the recurrence mapper's timed probe) on stderr, before the work."""
-    if quiet:
-        return
-    import os
-
-    from analysis.sweeps.attractor_blocks import study_cost
-
-    count = 1 if executor == "serial" else (workers or os.cpu_count() or 1)
-    typer.echo("\n".join(study_cost(system, members, workers=count, sides=sides,
-                                     **settings).lines()), err=True)
 
 
 def _threshold(along, match_threshold: float | None) -> float | None:

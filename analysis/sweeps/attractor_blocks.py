@@ -1,7 +1,11 @@
 """Attractor studies at scale: their blocks of initial states on an executor, each block
 stored as it finishes, so an interrupted study resumes.
 
-``basins_to_file``, ``fractions_to_file`` and ``continuation_to_file`` run the studies of
+Each study is a plan (``plan_basins``, ``plan_fractions``, ``plan_continuation``: an
+``analysis.integrate.study.StudyPlan`` that checks every input once, the device judged once
+and the study at each value made once) run by the one runner
+(``analysis.sweeps.runner.run_study``); ``basins_to_file``, ``fractions_to_file`` and
+``continuation_to_file`` make and run one. A plan runs the studies of
 ``analysis.stability.attractors.studies`` with a ``StoredRunner``: the parent computes the
 study's cell scale once (``AttractorStudy.settled_scale``) and hands it, with the System and
 the mapper's settings (``StudyRef``), to every worker, so every block cuts the section into
@@ -36,20 +40,19 @@ from analysis import errors
 from analysis.errors import InputError, check_count
 from analysis.integrate.cost import COMPILED, KERNELS, CostEstimate, estimate_cost
 from analysis.integrate.kernels.placement import Placement
-from analysis.io import save_dataset
+from analysis.integrate.study import Executor, Progress
 from analysis.model import System, load_model
-from analysis.stability.attractors.continuation import MATCH_DISTANCE
+from analysis.stability.attractors.continuation import MATCH_DISTANCE, check_threshold
 from analysis.stability.attractors.featurizing import FeatureOptions
 from analysis.stability.attractors.label import LabelOptions
 from analysis.stability.attractors.mapper import MapperOptions, Scale
 from analysis.stability.attractors.sampling import Box, Range, check_pair
 from analysis.stability.attractors.studies import basin_fractions, basins, global_continuation
 from analysis.stability.attractors.study import AttractorStudy, Block, make_study
-from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.executors import SerialExecutor, run_with_progress
+from analysis.sweeps.runner import run_study
 from analysis.sweeps.store import PointStore
 from analysis.sweeps.worker_counts import WorkerCounts
-
-Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
@@ -251,6 +254,13 @@ def study_cost(system: System, members: int, *, workers: int | None = None,
     is not compiled)."""
     study = check_study(system, members, period, dt, options, None, block, mapper, device,
                         feature_options)
+    return cost_of(study, members, workers=workers, block=block, sides=sides)
+
+
+def cost_of(study: AttractorStudy, members: int, *, workers: int | None = None,
+            block: int | None = None, sides: Sequence[Range] | None = None) -> CostEstimate:
+    """``study_cost`` of a study already made (a plan's): ``members`` states in blocks of
+    ``block`` (None: the study's default) on ``workers`` workers."""
     if study.mapper_kind == "features":
         periods, bound = study.feature_options.transient + study.feature_options.sections, False
     else:
@@ -300,7 +310,7 @@ def system_definition(system: System) -> dict:
 
 def check_study(system: System, members: int, period: str | None, dt: float | None,
                 options: MapperOptions | None, label_options: LabelOptions | None,
-                block: int | None, mapper: str = "auto", device: str = "auto",
+                block: int | None, mapper: str = "auto", device: str | Placement = "auto",
                 feature_options: FeatureOptions | None = None) -> AttractorStudy:
     """Every setting of a study of ``members`` states checked (``InputError``), before any
     work: the block size, the period and its section, the step, the memory, the mapper and
@@ -323,20 +333,58 @@ def study_definition(study: AttractorStudy, kind: str, block: int | None, **extr
             "block": block or study.default_block, **mapper, **extra}
 
 
-def check_basins(system: System, x: Range, y: Range, *, period: str | None = None,
-                 dt: float | None = None, options: MapperOptions | None = None,
-                 label_options: LabelOptions | None = None, block: int | None = None,
-                 mapper: str = "auto", device: str = "auto",
-                 feature_options: FeatureOptions | None = None) -> tuple[dict, Placement]:
-    """Every input of ``basins_to_file`` checked before any work: its store's definition
-    and the study's placement (judged here, once: pass it on as ``device``)."""
-    check_count("x", x.num)
-    check_count("y", y.num)
-    check_pair(system, x, y)
-    check_sides(system, (x, y), "x, y")
+@dataclass(frozen=True)
+class AttractorPlan:
+    """A basins, fractions or global-continuation study, checked whole
+    (``plan_basins``, ``plan_fractions``, ``plan_continuation``): an
+    ``analysis.integrate.study.StudyPlan``. ``studies``: the checked study (at each
+    parameter value of a continuation), each made once and run as it is; ``work``: the
+    study function (``studies.basins`` …) with its arguments bound, called with the
+    ``runner`` that stores its blocks and the ``progress``; ``sides``: the sides of the
+    states' box or grid (the recurrence mapper's cost probe draws in them)."""
+
+    kind: str
+    output: Path
+    definition: dict
+    studies: tuple[AttractorStudy, ...]
+    total: int
+    """Initial states mapped (a continuation: ``samples + 16`` per value, a bound)."""
+    sides: tuple[Range, ...]
+    block: int | None
+    work: Callable[..., xr.Dataset]
+    lines: bool = False
+    """The study reports its progress as lines (a continuation's values), not a counter."""
+    unit: str = "states"
+
+    @property
+    def placement(self) -> Placement | str:
+        """Where the featurizing mapper's members run, judged once (the first study's)."""
+        return self.studies[0].placement
+
+    def cost(self, workers: int) -> CostEstimate:
+        """The cost of mapping ``total`` states on ``workers`` workers (``study_cost``)."""
+        return cost_of(self.studies[0], self.total, workers=workers, block=self.block,
+                       sides=self.sides)
+
+    def run(self, store: PointStore, executor: Executor, progress: Progress | None,
+            say: Callable[[str], None] | None) -> xr.Dataset:
+        """The study's blocks on ``executor``, each stored as it finishes."""
+        return self.work(runner=StoredRunner(store, executor, store.on_damaged),
+                         progress=say if self.lines else progress)
+
+    def stopped(self, store: PointStore, exc: BaseException) -> None:
+        """The note of a study stopped part way: the blocks kept, counted in states."""
+        kept = stored_states(store)
+        store.stopped(exc, what=f"blocks ({kept:,} initial states)" if kept else
+                      "blocks of initial states")
+
+
+def grid_study(system: System, x: Range, y: Range, study: Callable[[int], AttractorStudy]
+               ) -> AttractorStudy:
+    """``study(members)`` of the ``x`` × ``y`` grid, its memory refusal worded for the
+    grid's axes (no grid allocated)."""
     try:
-        study = check_study(system, x.num * y.num, period, dt, options, label_options, block,
-                            mapper, device, feature_options)  # no grid allocated
+        return study(x.num * y.num)
     except InputError as exc:  # the memory check counts states: name the grid's axes
         text = str(exc)
         head = f"samples: {x.num * y.num} initial states"
@@ -345,74 +393,90 @@ def check_basins(system: System, x: Range, y: Range, *, period: str | None = Non
         raise InputError(f"x, y: a {x.num} x {y.num} grid: {x.num * y.num} initial states"
                          + text[len(head):].replace("use fewer", "use fewer grid values")
                          ) from None
-    return study_definition(study, "basins", block, x=asdict(x), y=asdict(y)), study.placement
 
 
-def check_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
-                    period: str | None = None, dt: float | None = None,
-                    options: MapperOptions | None = None,
-                    label_options: LabelOptions | None = None, block: int | None = None,
-                    mapper: str = "auto", device: str = "auto",
-                    feature_options: FeatureOptions | None = None) -> tuple[dict, Placement]:
-    """Every input of ``fractions_to_file`` checked before any work: its definition and the
-    study's placement (``check_basins``)."""
+def plan_basins(system: System, x: Range, y: Range, output: str | Path, *,
+                period: str | None = None, dt: float | None = None,
+                options: MapperOptions | None = None,
+                label_options: LabelOptions | None = None, block: int | None = None,
+                mapper: str = "auto", device: str | Placement = "auto",
+                feature_options: FeatureOptions | None = None) -> AttractorPlan:
+    """Every input of a basins study checked once, before any work (the grid, its sides,
+    the study: ``check_study``, the device judged there once): its plan."""
+    check_count("x", x.num)
+    check_count("y", y.num)
+    check_pair(system, x, y)
+    check_sides(system, (x, y), "x, y")
+    settings = dict(period=period, dt=dt, options=options, label_options=label_options)
+    study = grid_study(system, x, y, lambda members: check_study(
+        system, members, **settings, block=block, mapper=mapper, device=device,
+        feature_options=feature_options))
+    work = functools.partial(basins, system, x, y, **settings, block=block, study=study)
+    return AttractorPlan("basins", Path(output),
+                         study_definition(study, "basins", block, x=asdict(x), y=asdict(y)),
+                         (study,), x.num * y.num, (x, y), block, work)
+
+
+def plan_fractions(system: System, box: Box, samples: int, output: str | Path, *,
+                   seed: int = 0, period: str | None = None, dt: float | None = None,
+                   options: MapperOptions | None = None,
+                   label_options: LabelOptions | None = None, block: int | None = None,
+                   mapper: str = "auto", device: str | Placement = "auto",
+                   feature_options: FeatureOptions | None = None) -> AttractorPlan:
+    """Every input of a basin-fractions study checked once, before any work: its plan
+    (``plan_basins``)."""
     check_count("samples", samples)
     errors.check_count("seed", seed, 0, MAX_SEED)
     box.check(system)
     check_sides(system, box.sides, "box")
-    study = check_study(system, samples, period, dt, options, label_options, block, mapper,
-                        device, feature_options)
-    return study_definition(study, "attractors", block, box=box.text, samples=samples,
-                            seed=seed), study.placement
+    settings = dict(period=period, dt=dt, options=options, label_options=label_options)
+    study = check_study(system, samples, **settings, block=block, mapper=mapper,
+                        device=device, feature_options=feature_options)
+    work = functools.partial(basin_fractions, system, box, samples, seed=seed, **settings,
+                             block=block, study=study)
+    return AttractorPlan("attractors", Path(output), study_definition(
+        study, "attractors", block, box=box.text, samples=samples, seed=seed), (study,),
+        samples, box.sides, block, work)
 
 
-def check_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
-                       samples: int, *, seed: int = 0, period: str | None = None,
-                       dt: float | None = None, options: MapperOptions | None = None,
-                       label_options: LabelOptions | None = None,
-                       match_distance: float = MATCH_DISTANCE, block: int | None = None,
-                       mapper: str = "auto", device: str = "auto",
-                       feature_options: FeatureOptions | None = None
-                       ) -> tuple[dict, Placement]:
-    """Every input of ``continuation_to_file`` checked before any work (the study at each
-    value, on the placement of the first): its definition and that placement
-    (``check_basins``)."""
+def plan_continuation(system: System, parameter: str, values: Sequence[float], box: Box,
+                      samples: int, output: str | Path, *, seed: int = 0,
+                      period: str | None = None, dt: float | None = None,
+                      options: MapperOptions | None = None,
+                      label_options: LabelOptions | None = None,
+                      match_distance: float = MATCH_DISTANCE, block: int | None = None,
+                      mapper: str = "auto", device: str | Placement = "auto",
+                      feature_options: FeatureOptions | None = None) -> AttractorPlan:
+    """Every input of a global continuation checked once, before any work: the study at
+    each value made once (for ``samples`` + 16 states: the random ones and a bound on the
+    previous value's attractors), on the placement of the first, and kept for the run."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
-                         f"{', '.join(system.model.parameter_names)}")
+                         f"{', '.join(system.model.parameter_names)}", field="param")
     check_count("samples", samples)
     errors.check_count("seed", seed, 0, MAX_SEED)
     check_value_count("param", len(values))
+    check_threshold(match_distance)
     box.check(system)
     check_sides(system, box.sides, "box")
-    study = check_study(system, samples + 16, period, dt, options, label_options, block,
-                        mapper, device, feature_options)
-    settings = (period, dt, options, label_options, block, mapper, study.placement,
-                feature_options)
-    for value in values:
-        check_study(system.replace(**{parameter: float(value)}), samples + 16, *settings)
-    return study_definition(study, "attractor-continuation", block, param=parameter,
-                            values=[float(v) for v in values], box=box.text,
-                            samples=samples, seed=seed, match_distance=match_distance
-                            ), study.placement
-
-
-def stored_run(output: str | Path, definition: dict, run: Callable[[StoredRunner], xr.Dataset],
-               executor: Executor | None,
-               on_damaged: Callable[[str], None] | None) -> xr.Dataset:
-    """``run(runner)`` with a store at ``output``; the file written, the store removed."""
-    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
-    try:
-        ds = run(StoredRunner(store, executor, on_damaged))
-        save_dataset(ds, output)
-        store.remove()
-    except BaseException as exc:  # a refusal or failure before the first block: no trace
-        kept = stored_states(store)
-        store.stopped(exc, what=f"blocks ({kept:,} initial states)" if kept else
-                      "blocks of initial states")
-        raise
-    return ds
+    settings = dict(period=period, dt=dt, options=options, label_options=label_options)
+    first = check_study(system.replace(**{parameter: float(values[0])}), samples + 16,
+                        **settings, block=block, mapper=mapper, device=device,
+                        feature_options=feature_options)
+    studies = (first, *(check_study(system.replace(**{parameter: float(value)}),
+                                    samples + 16, **settings, block=block, mapper=mapper,
+                                    device=first.placement, feature_options=feature_options)
+                        for value in values[1:]))
+    work = functools.partial(global_continuation, system, parameter, values, box, samples,
+                             seed=seed, **settings, match_distance=match_distance,
+                             block=block, studies=studies)
+    definition = study_definition(first, "attractor-continuation", block, param=parameter,
+                                  values=[float(v) for v in values], box=box.text,
+                                  samples=samples, seed=seed, match_distance=match_distance)
+    definition["system"] = system_definition(system)  # the system continued, as given
+    return AttractorPlan("attractor-continuation", Path(output), definition, studies,
+                         (samples + 16) * len(values), box.sides, block, work, lines=True)
 
 
 def stored_states(store: PointStore) -> int:
@@ -434,18 +498,16 @@ def basins_to_file(system: System, x: Range, y: Range, output: str | Path, *,
                    label_options: LabelOptions | None = None, block: int | None = None,
                    executor: Executor | None = None, progress: Progress | None = None,
                    on_damaged: Callable[[str], None] | None = None, mapper: str = "auto",
-                   device: str = "auto",
+                   device: str | Placement = "auto",
                    feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """``studies.basins`` with its blocks on ``executor`` (default: serial; the featurizing
     mapper's blocks in this process, on the member kernel) and stored under ``output``;
-    writes the netCDF file ``output`` and returns its Dataset."""
-    how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition, how["device"] = check_basins(system, x, y, period=period, dt=dt,
-                                             options=options, label_options=label_options,
-                                             block=block, **how)
-    return stored_run(output, definition, lambda runner: basins(
-        system, x, y, period=period, dt=dt, options=options, label_options=label_options,
-        progress=progress, block=block, runner=runner, **how), executor, on_damaged)
+    writes the netCDF file ``output`` and returns its Dataset (``plan_basins`` run by
+    ``runner.run_study``)."""
+    plan = plan_basins(system, x, y, output, period=period, dt=dt, options=options,
+                       label_options=label_options, block=block, mapper=mapper,
+                       device=device, feature_options=feature_options)
+    return run_study(plan, executor, progress=progress, on_damaged=on_damaged)
 
 
 def fractions_to_file(system: System, box: Box, samples: int, output: str | Path, *,
@@ -454,19 +516,14 @@ def fractions_to_file(system: System, box: Box, samples: int, output: str | Path
                       label_options: LabelOptions | None = None, block: int | None = None,
                       executor: Executor | None = None, progress: Progress | None = None,
                       on_damaged: Callable[[str], None] | None = None,
-                      mapper: str = "auto", device: str = "auto",
+                      mapper: str = "auto", device: str | Placement = "auto",
                       feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """``studies.basin_fractions`` with its blocks on ``executor``, stored under
-    ``output``; writes ``output``."""
-    how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition, how["device"] = check_fractions(system, box, samples, seed=seed,
-                                                period=period, dt=dt, options=options,
-                                                label_options=label_options, block=block,
-                                                **how)
-    return stored_run(output, definition, lambda runner: basin_fractions(
-        system, box, samples, seed=seed, period=period, dt=dt, options=options,
-        label_options=label_options, progress=progress, block=block, runner=runner, **how),
-        executor, on_damaged)
+    ``output``; writes ``output`` (``plan_fractions``)."""
+    plan = plan_fractions(system, box, samples, output, seed=seed, period=period, dt=dt,
+                          options=options, label_options=label_options, block=block,
+                          mapper=mapper, device=device, feature_options=feature_options)
+    return run_study(plan, executor, progress=progress, on_damaged=on_damaged)
 
 
 def continuation_to_file(system: System, parameter: str, values: Sequence[float], box: Box,
@@ -478,18 +535,15 @@ def continuation_to_file(system: System, parameter: str, values: Sequence[float]
                          executor: Executor | None = None,
                          progress: Callable[[str], None] | None = None,
                          on_damaged: Callable[[str], None] | None = None,
-                         mapper: str = "auto", device: str = "auto",
+                         mapper: str = "auto", device: str | Placement = "auto",
                          feature_options: FeatureOptions | None = None) -> xr.Dataset:
     """``studies.global_continuation`` with the blocks of each value on ``executor`` (the
     values one after the other: each is seeded from the previous one), stored under
-    ``output``; writes ``output``. On a re-run the stored values' attractors are described
-    again (in this process) to seed the next value."""
-    how = dict(mapper=mapper, device=device, feature_options=feature_options)
-    definition, how["device"] = check_continuation(
-        system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
-        options=options, label_options=label_options, match_distance=match_distance,
-        block=block, **how)
-    return stored_run(output, definition, lambda runner: global_continuation(
-        system, parameter, values, box, samples, seed=seed, period=period, dt=dt,
-        options=options, label_options=label_options, match_distance=match_distance,
-        progress=progress, block=block, runner=runner, **how), executor, on_damaged)
+    ``output``; writes ``output`` (``plan_continuation``). On a re-run the stored values'
+    attractors are described again (in this process) to seed the next value."""
+    plan = plan_continuation(system, parameter, values, box, samples, output, seed=seed,
+                             period=period, dt=dt, options=options,
+                             label_options=label_options, match_distance=match_distance,
+                             block=block, mapper=mapper, device=device,
+                             feature_options=feature_options)
+    return run_study(plan, executor, say=progress, cost=False, on_damaged=on_damaged)

@@ -104,6 +104,8 @@ class PointStore:
     def __init__(self, output: str | Path, definition: dict[str, Any], *, lock: bool = False,
                  on_damaged: Callable[[str], None] | None = None):
         check_definition(definition)  # before the folder is made
+        self.on_damaged = on_damaged
+        """Told the key of a stored point that cannot be read (it is computed again)."""
         self.output = Path(output)
         self.folder = self.output.with_name(self.output.name + ".parts")
         self._lock_fd: int | None = None

@@ -232,6 +232,7 @@ def continue_attractors(
     mapper: str = "auto",
     device: str = "auto",
     feature_options: FeatureOptions | None = None,
+    studies: Sequence[AttractorStudy] | None = None,
 ) -> list[Step]:
     """The attractors of ``system`` at each of ``values`` of ``parameter`` (its own unit:
     rpm for ``speed_rpm``), found from the previous value's attractors plus ``samples``
@@ -241,7 +242,8 @@ def continue_attractors(
     ``options``, ``label_options``: as ``AttractorStudy``;
     ``blocks``: how each value's states are cut and mapped (``study.Blocks``; default: the
     study's own block size, in this process); ``mapper``, ``device``, ``feature_options``:
-    as ``study.make_study``, resolved at each value."""
+    as ``study.make_study``, resolved at each value; ``studies``: the study at each value,
+    made (and checked) before, by a plan: used instead of making them here."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
@@ -252,10 +254,10 @@ def continue_attractors(
     for value in values:
         here = system.replace(**{parameter: float(value)})
         previous = steps[-1].attractors() if steps else []
-        study = make_study(here, samples + len(previous), period=period, dt=dt,
-                           options=options, label_options=label_options, mapper=mapper,
-                           device=device, feature_options=feature_options,
-                           block=None if blocks is None else blocks.size)
+        study = studies[len(steps)] if studies is not None else make_study(
+            here, samples + len(previous), period=period, dt=dt, options=options,
+            label_options=label_options, mapper=mapper, device=device,
+            feature_options=feature_options, block=None if blocks is None else blocks.size)
         seeds = np.array([a.representative for _, a in previous]).reshape(-1, here.n_state)
         random = box.sample(here, samples, np.random.default_rng([seed, 0]))
         result = study.find(np.concatenate([seeds, random]), blocks=blocks)

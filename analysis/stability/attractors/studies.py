@@ -70,19 +70,23 @@ def basins(system: System, x: Range, y: Range, *, period: str | Period | None = 
            label_options: LabelOptions | None = None,
            progress: Progress | None = None, block: int | None = None,
            runner: Runner | None = None, mapper: str = "auto", device: str = "auto",
-           feature_options: FeatureOptions | None = None) -> xr.Dataset:
+           feature_options: FeatureOptions | None = None,
+           study: AttractorStudy | None = None) -> xr.Dataset:
     """Basins of attraction on a grid of ``x.num`` × ``y.num`` initial states over two
     state coordinates (SI units; the others at ``system.state``): the attractor id of every
     grid cell and the attractors' table (``dataset.basins_dataset``). ``period``: the
     map's forcing period (None: the model's default); ``dt``: largest RK4 step, s;
     ``block``, ``runner``: see the module; ``mapper``, ``device``, ``feature_options``: the
-    mapper and where it runs (``study.make_study``)."""
-    check_count("x", x.num)
-    check_count("y", y.num)
-    check_pair(system, x, y)
-    study = make_study(system, x.num * y.num, period=period, dt=dt, options=options,
-                       label_options=label_options, mapper=mapper, device=device,
-                       feature_options=feature_options, block=block)  # before the grid
+    mapper and where it runs (``study.make_study``). ``study``: the study a plan checked
+    and made with these settings (``analysis.sweeps.attractor_blocks.plan_basins``): used
+    as it is, its checks not run again."""
+    if study is None:
+        check_count("x", x.num)
+        check_count("y", y.num)
+        check_pair(system, x, y)
+        study = make_study(system, x.num * y.num, period=period, dt=dt, options=options,
+                           label_options=label_options, mapper=mapper, device=device,
+                           feature_options=feature_options, block=block)  # before the grid
     block = block or study.default_block
     states = grid_states(system, x, y)
     result = study.find(states, progress, Blocks(block, runner))
@@ -99,14 +103,17 @@ def basin_fractions(system: System, box: Box, samples: int, *, seed: int = 0,
                     progress: Progress | None = None, block: int | None = None,
                     runner: Runner | None = None, mapper: str = "auto",
                     device: str = "auto",
-                    feature_options: FeatureOptions | None = None) -> xr.Dataset:
+                    feature_options: FeatureOptions | None = None,
+                    study: AttractorStudy | None = None) -> xr.Dataset:
     """Each attractor's basin fraction, with its standard error, among ``samples`` initial
-    states drawn uniformly in ``box`` (``seed``: NumPy's ``default_rng`` seed)."""
-    check_count("samples", samples)
-    box.check(system)
-    study = make_study(system, samples, period=period, dt=dt, options=options,
-                       label_options=label_options, mapper=mapper, device=device,
-                       feature_options=feature_options, block=block)
+    states drawn uniformly in ``box`` (``seed``: NumPy's ``default_rng`` seed); ``study``:
+    as ``basins``."""
+    if study is None:
+        check_count("samples", samples)
+        box.check(system)
+        study = make_study(system, samples, period=period, dt=dt, options=options,
+                           label_options=label_options, mapper=mapper, device=device,
+                           feature_options=feature_options, block=block)
     block = block or study.default_block
     states = box.sample(system, samples, np.random.default_rng(seed))
     result = study.find(states, progress, Blocks(block, runner))
@@ -123,24 +130,29 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
                         progress: Callable[[str], None] | None = None,
                         block: int | None = None, runner: Runner | None = None,
                         mapper: str = "auto", device: str = "auto",
-                        feature_options: FeatureOptions | None = None) -> xr.Dataset:
+                        feature_options: FeatureOptions | None = None,
+                        studies: Sequence[AttractorStudy] | None = None) -> xr.Dataset:
     """The attractors at each of ``values`` of ``parameter``, seeded from the previous
     value's and ``samples`` random states in ``box``, matched across values
     (``continuation.continue_attractors``; ``match_distance``: the matching threshold,
-    orbit sizes)."""
-    check_count("samples", samples)
-    check_threshold(match_distance)
-    box.check(system)
-    study = make_study(system, samples + 16, period=period, dt=dt, options=options,
-                       label_options=label_options, mapper=mapper, device=device,
-                       feature_options=feature_options, block=block)
+    orbit sizes). ``studies``: the study at each value, checked and made by a plan
+    (``analysis.sweeps.attractor_blocks.plan_continuation``), used as they are."""
+    if studies is None:
+        check_count("samples", samples)
+        check_threshold(match_distance)
+        box.check(system)
+        study = make_study(system, samples + 16, period=period, dt=dt, options=options,
+                           label_options=label_options, mapper=mapper, device=device,
+                           feature_options=feature_options, block=block)
+    else:
+        study = studies[0]
     block = block or study.default_block
     steps = continue_attractors(system, parameter, values, box, samples, seed=seed,
                                 period=period, dt=dt, options=options,
                                 label_options=label_options, match_distance=match_distance,
                                 progress=progress, blocks=Blocks(block, runner),
                                 mapper=mapper, device=study.placement,  # judged once
-                                feature_options=feature_options)
+                                feature_options=feature_options, studies=studies)
     ds = continuation_dataset(steps[0].study, steps, parameter, box, samples, seed,
                               match_distance)
     return blocks_attrs(ds, block, [s.result for s in steps], steps[0].study)
