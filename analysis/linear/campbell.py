@@ -118,12 +118,12 @@ class Campbell:
 def check_speeds(speed_rpm: Sequence[float]) -> np.ndarray:
     speeds = np.asarray(speed_rpm, dtype=float)
     if speeds.ndim != 1 or speeds.size < 1:
-        raise InputError("--speeds: give at least one speed")
+        raise InputError("speeds: give at least one speed", field="speeds")
     if not np.all(np.isfinite(speeds)) or np.any(speeds < 0):
-        raise InputError(f"--speeds: speeds must be finite and >= 0 rpm, got "
-                         f"{speeds.min():g} to {speeds.max():g}")
+        raise InputError(f"speeds: speeds must be finite and >= 0 rpm, got "
+                         f"{speeds.min():g} to {speeds.max():g}", field="speeds")
     if np.any(np.diff(speeds) <= 0):
-        raise InputError("--speeds: speeds must increase")
+        raise InputError("speeds: speeds must increase", field="speeds")
     return speeds
 
 
@@ -133,8 +133,8 @@ def campbell(rotor: RotorMatrices, speed_rpm: Sequence[float], n_modes: int = 6,
     ``lines`` (name: order, default ``{"1X": 1.0}``)."""
     speeds = check_speeds(speed_rpm)
     if not 1 <= n_modes <= rotor.n_dof:
-        raise InputError(f"--modes: must be in [1, {rotor.n_dof}] (the rotor's DOFs), got "
-                         f"{n_modes}")
+        raise InputError(f"modes: must be in [1, {rotor.n_dof}] (the rotor's DOFs), got "
+                         f"{n_modes}", field="modes")
     lines = dict(lines or {"1X": 1.0})
     shape = (n_modes, speeds.size)
     freq, logdec = np.full(shape, np.nan), np.full(shape, np.nan)
@@ -162,8 +162,9 @@ def check_critical(result: Campbell) -> None:
         order = min(result.lines.values())
         near = (f"; the lowest mode is at {np.nanmin(lowest):.4g} to {np.nanmax(lowest):.4g} "
                 f"Hz, near {np.nanmin(lowest) * 60 / order:.0f} rpm on the lowest line")
-    raise InputError(f"--speeds: {result.speed_rpm[0]:g} to {result.speed_rpm[-1]:g} rpm "
-                     f"passes no mode's crossing with {lines}{near}; widen the speed range")
+    raise InputError(f"speeds: {result.speed_rpm[0]:g} to {result.speed_rpm[-1]:g} rpm "
+                     f"passes no mode's crossing with {lines}{near}; widen the speed range",
+                     field="speeds")
 
 
 def _mode_frequency(rotor: RotorMatrices, speed_rpm: float, mode: int) -> float:

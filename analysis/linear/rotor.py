@@ -71,7 +71,8 @@ def load_rotor(model: str | Path, speeds_rpm: Sequence[float] = (0.0,)) -> Linea
 
 
 def parse_unbalance(text: str, node_count: int) -> Unbalance:
-    """``NODE:KG_M[:PHASE_DEG]`` (``--unbalance``) as an ``Unbalance``."""
+    """``NODE:KG_M[:PHASE_DEG]`` (``--unbalance``) as an ``Unbalance``; ``InputError``
+    naming ``unbalances`` (the python name of ``unbalance``'s option) otherwise."""
     import math
 
     parts = str(text).split(":")
@@ -81,12 +82,12 @@ def parse_unbalance(text: str, node_count: int) -> Unbalance:
         node, magnitude = int(parts[0]), float(parts[1])
         phase = math.radians(float(parts[2])) if len(parts) == 3 else 0.0
     except ValueError:
-        raise InputError(f"--unbalance: expected NODE:KG_M[:PHASE_DEG] (e.g. 6:1e-4:90), got "
-                         f"{text!r}") from None
+        raise InputError(f"unbalances: expected NODE:KG_M[:PHASE_DEG] (e.g. 6:1e-4:90), got "
+                         f"{text!r}", field="unbalances") from None
     if not 0 <= node < node_count:
-        raise InputError(f"--unbalance: no node {node}; the shaft's nodes are 0 to "
-                         f"{node_count - 1}")
+        raise InputError(f"unbalances: no node {node}; the shaft's nodes are 0 to "
+                         f"{node_count - 1}", field="unbalances")
     if not (math.isfinite(magnitude) and 0 < magnitude <= 1e3) or not math.isfinite(phase):
-        raise InputError(f"--unbalance: the unbalance must be in (0, 1000] kg m and the phase "
-                         f"finite, got {text!r}")
+        raise InputError(f"unbalances: the unbalance must be in (0, 1000] kg m and the phase "
+                         f"finite, got {text!r}", field="unbalances")
     return Unbalance(node=node, magnitude=magnitude, phase=math.remainder(phase, 2 * math.pi))

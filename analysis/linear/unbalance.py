@@ -56,15 +56,15 @@ def unbalance_response(rotor: RotorMatrices, node: int, speed_rpm: Sequence[floa
     """The 1X response at ``node`` to ``unbalances`` at each speed (rpm)."""
     speeds = check_speeds(speed_rpm)
     if not 0 <= node < rotor.n_nodes:
-        raise InputError(f"--node: no node {node}; the shaft's nodes are 0 to "
-                         f"{rotor.n_nodes - 1}")
+        raise InputError(f"node: no node {node}; the shaft's nodes are 0 to "
+                         f"{rotor.n_nodes - 1}", field="node")
     if not unbalances:
         raise InputError("--unbalance: the model has no [[shaft.unbalances]]; give one as "
                          "NODE:KG_M[:PHASE_DEG]")
     for u in unbalances:
         if not 0 <= u.node < rotor.n_nodes:
-            raise InputError(f"--unbalance: no node {u.node}; the shaft's nodes are 0 to "
-                             f"{rotor.n_nodes - 1}")
+            raise InputError(f"unbalances: no node {u.node}; the shaft's nodes are 0 to "
+                             f"{rotor.n_nodes - 1}", field="unbalances")
     xs, ys = np.zeros(speeds.size, complex), np.zeros(speeds.size, complex)
     with blas_threads():
         for j, s in enumerate(speeds):

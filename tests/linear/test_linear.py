@@ -77,7 +77,7 @@ def test_critical_speeds_lie_on_the_1x_line_and_are_refined():
     for a, b in zip(coarse.critical, fine.critical, strict=True):
         assert a.speed_rpm == pytest.approx(b.speed_rpm, rel=1e-7)
         assert a.frequency_hz == pytest.approx(a.speed_rpm / 60, rel=1e-12)
-    with pytest.raises(InputError, match=r"^--speeds: 0 to 100 rpm passes no mode's crossing"):
+    with pytest.raises(InputError, match=r"^speeds: 0 to 100 rpm passes no mode's crossing"):
         check_critical(campbell(rotor, [0.0, 100.0], n_modes=2))
 
 
