@@ -10,13 +10,15 @@ from __future__ import annotations
 import contextlib
 import io
 import re
+import sys
+import types
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "architecture.md"
-EXAMPLES = ("Adding a device",)
+EXAMPLES = ("Adding a device", "Adding a study")
 
 
 def example(heading: str) -> tuple[str, str]:
@@ -32,6 +34,11 @@ def example(heading: str) -> tuple[str, str]:
 def test_the_page_example_runs_and_prints_what_it_says(heading):
     code, expected = example(heading)
     out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        exec(compile(code, f"{PAGE.name}: {heading}", "exec"), {"__name__": "example"})
+    module = types.ModuleType("example")  # a real module: a dataclass looks itself up there
+    sys.modules["example"] = module
+    try:
+        with contextlib.redirect_stdout(out):
+            exec(compile(code, f"{PAGE.name}: {heading}", "exec"), module.__dict__)
+    finally:
+        del sys.modules["example"]
     assert out.getvalue().strip() == expected
