@@ -241,8 +241,8 @@ def _speed(system: System) -> str:
     model without one: a speed profile needs a rotor."""
     speed = system.model.role("speed")
     if not speed:
-        raise InputError(f"--speed-rpm: model '{system.model.name}' has no parameter "
-                         "speed_rpm; a speed profile needs a rotor")
+        raise InputError(f"speed_rpm: model '{system.model.name}' has no parameter "
+                         "speed_rpm; a speed profile needs a rotor", field="speed_rpm")
     return speed[0]
 
 

@@ -75,8 +75,8 @@ class SpeedProfile:
         (rpm, both > 0): a run-up, or a coast-down when ``end_rpm`` is lower."""
         for what, value in (("start", start_rpm), ("end", end_rpm)):
             if not _positive(value):
-                raise InputError(f"--speed-rpm: the ramp's {what} speed must be a finite "
-                                 f"number > 0 rpm, got {value!r}")
+                raise InputError(f"speed_rpm: the ramp's {what} speed must be a finite "
+                                 f"number > 0 rpm, got {value!r}", field="speed_rpm")
         return cls("ramp", (float(start_rpm), float(end_rpm)))
 
     @classmethod
@@ -281,30 +281,32 @@ def _table_text(path: Path) -> str:
 
     from modelgen.locations import broken_link
 
-    field = f"--speed-rpm: the speed table '{path}'"
+    head = f"speed_rpm: the speed table '{path}'"
     try:
         mode = path.stat().st_mode
     except OSError as exc:
         reason = broken_link(path) or ("does not exist" if not os.path.lexists(path)
                                        else exc.strerror)
-        raise InputError(f"{field} {reason}") from None
+        raise InputError(f"{head} {reason}", field="speed_rpm") from None
     if stat.S_ISDIR(mode):
-        raise InputError(f"{field} is a folder; give a CSV file (t_s,speed_rpm)")
+        raise InputError(f"{head} is a folder; give a CSV file (t_s,speed_rpm)", field="speed_rpm")
     if not stat.S_ISREG(mode):
         kind = "a pipe (FIFO)" if stat.S_ISFIFO(mode) else "a device or socket"
-        raise InputError(f"{field} is {kind}, not a plain file; give a CSV file (t_s,speed_rpm)")
+        raise InputError(f"{head} is {kind}, not a plain file; give a CSV file (t_s,speed_rpm)",
+                         field="speed_rpm")
     size = path.stat().st_size
     if size > TABLE_BYTES:
-        raise InputError(f"{field} is {size} bytes; at most {TABLE_BYTES} bytes (a table of 2 "
-                         f"to {MAX_ROWS} rows)")
+        raise InputError(f"{head} is {size} bytes; at most {TABLE_BYTES} bytes (a table of 2 "
+                         f"to {MAX_ROWS} rows)", field="speed_rpm")
     try:
         with open(path, encoding="utf-8-sig") as handle:  # a byte-order mark is dropped
             return handle.read(TABLE_BYTES + 1)
     except UnicodeDecodeError as exc:
-        raise InputError(f"{field} is not UTF-8 text (byte {exc.start}); save it as CSV "
-                         "UTF-8") from None
+        raise InputError(f"{head} is not UTF-8 text (byte {exc.start}); save it as CSV "
+                         "UTF-8", field="speed_rpm") from None
     except OSError as exc:
-        raise InputError(f"{field} cannot be read: {exc.strerror or exc}") from None
+        raise InputError(f"{head} cannot be read: {exc.strerror or exc}",
+                         field="speed_rpm") from None
 
 
 def parse_speed(text: str) -> float | SpeedProfile:
@@ -328,8 +330,9 @@ def parse_speed(text: str) -> float | SpeedProfile:
     if path.suffix.lower() == ".csv" or path.exists():
         profile = read_table(path)  # a missing file, a folder or a pipe refused by name
         return profile.start_rpm if profile.is_constant else profile
-    raise InputError(f"--speed-rpm: must be a speed in rpm, a ramp A:B (rpm, A at t = 0, B "
-                     f"at the end) or a CSV speed table (t_s,speed_rpm), got {text!r}")
+    raise InputError(f"speed_rpm: must be a speed in rpm, a ramp A:B (rpm, A at t = 0, B "
+                     f"at the end) or a CSV speed table (t_s,speed_rpm), got {text!r}",
+                     field="speed_rpm")
 
 
 def profile_of(attrs: Mapping) -> SpeedProfile | None:
@@ -395,12 +398,12 @@ def check_model(model: Any, structure: tuple[int, ...], values: Mapping[str, flo
     """``InputError`` unless ``model`` can follow a speed profile: it has a ``speed_rpm``
     parameter and its time dependence is the rotation of the shaft (``time_dependence``)."""
     if not model.role("speed"):  # the parameter shaft_speed reads, found by role
-        raise InputError(f"--speed-rpm: model '{model.name}' has no parameter speed_rpm; a "
-                         "speed profile needs a rotor")
+        raise InputError(f"speed_rpm: model '{model.name}' has no parameter speed_rpm; a "
+                         "speed profile needs a rotor", field="speed_rpm")
     reason = _reason(model, structure, tuple(sorted(values.items())))
     if reason:
-        raise InputError(f"--speed-rpm: model '{model.name}' cannot follow a speed profile: "
-                         f"{reason}")
+        raise InputError(f"speed_rpm: model '{model.name}' cannot follow a speed profile: "
+                         f"{reason}", field="speed_rpm")
 
 
 @cache

@@ -73,7 +73,7 @@ def test_a_speed_table_with_a_byte_order_mark_is_read(tmp_path):
 def test_a_speed_table_that_is_no_file_is_named_as_what_it_is(tmp_path, make, said):
     path = tmp_path / "t.csv"
     make(path)
-    with pytest.raises(InputError, match="^" + re.escape(f"--speed-rpm: the speed table "
+    with pytest.raises(InputError, match="^" + re.escape(f"speed_rpm: the speed table "
                                                          f"'{path}' {said}")):
         parse_speed(str(path))
 
