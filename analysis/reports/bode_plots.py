@@ -37,8 +37,8 @@ def phasor_variables(ds: xr.Dataset, variables: list[str] | tuple[str, ...] | No
                          "without a shaft); run the sweep again")
     for v in variables or ():
         if v not in recorded:
-            raise InputError(f"--var: no 1X record of {v!r} in this diagram; recorded: "
-                             f"{', '.join(recorded)}")
+            raise InputError(f"var: no 1X record of {v!r} in this diagram; recorded: "
+                             f"{', '.join(recorded)}", field="var")
     if variables:
         return tuple(variables)
     largest = {v: float(np.nanmax(ds[f"amplitude1x_{v}"].values)) for v in recorded}

@@ -122,7 +122,8 @@ class DaskExecutor:
             try:
                 self.client = Client(scheduler, timeout=f"{3 * PROBE_SECONDS:g}s")
             except OSError as exc:
-                raise InputError(f"--scheduler: cannot reach {scheduler} ({exc})") from None
+                raise InputError(f"scheduler: cannot reach {scheduler} ({exc})",
+                                 field="scheduler") from None
             self.name = f"dask {scheduler}"
         else:
             n = workers or os.cpu_count() or 1
@@ -160,16 +161,17 @@ def parse_scheduler(address: str) -> tuple[str, str, int]:
     scheme = scheme if sep else "tcp"
     allowed = f"must be tcp://HOST:PORT ({' or '.join(SCHEDULER_SCHEMES)}, port 1-65535)"
     if scheme not in SCHEDULER_SCHEMES:
-        raise InputError(f"--scheduler: {allowed}, got {address!r} (unknown scheme "
-                         f"{scheme!r})")
+        raise InputError(f"scheduler: {allowed}, got {address!r} (unknown scheme "
+                         f"{scheme!r})", field="scheduler")
     host, colon, port = rest.rstrip("/").rpartition(":")
     if not colon or not port.isdigit():
-        raise InputError(f"--scheduler: {allowed}, got {address!r} (no port)")
+        raise InputError(f"scheduler: {allowed}, got {address!r} (no port)", field="scheduler")
     host = host.removeprefix("[").removesuffix("]")
     if not host or any(c.isspace() or c in "/@" for c in host):
-        raise InputError(f"--scheduler: {allowed}, got {address!r} (no host)")
+        raise InputError(f"scheduler: {allowed}, got {address!r} (no host)", field="scheduler")
     if not 1 <= int(port) <= 65535:
-        raise InputError(f"--scheduler: {allowed}, got {address!r} (port {int(port)})")
+        raise InputError(f"scheduler: {allowed}, got {address!r} (port {int(port)})",
+                         field="scheduler")
     return scheme, host, int(port)
 
 
@@ -182,21 +184,22 @@ def probe_scheduler(address: str, seconds: float = PROBE_SECONDS) -> None:
     import struct
 
     scheme, host, port = parse_scheduler(address)
-    where = f"--scheduler: {address}"
+    where = f"scheduler: {address}"
     try:
         sock = socket.create_connection((host, port), timeout=seconds)
     except socket.gaierror:
-        raise InputError(f"{where}: unknown host {host!r}") from None
+        raise InputError(f"{where}: unknown host {host!r}", field="scheduler") from None
     except TimeoutError:
         raise InputError(f"{where}: no answer within {seconds:g} s (a Dask scheduler "
                          "answers at once); is the host reachable and the address "
-                         "right?") from None
+                         "right?", field="scheduler") from None
     except ConnectionRefusedError:
         raise InputError(f"{where}: nothing listens at {host}:{port} (connection refused); "
-                         "start the scheduler (`dask scheduler`) or give its address") from None
+                         "start the scheduler (`dask scheduler`) or give its address",
+                         field="scheduler") from None
     except OSError as exc:
         raise InputError(f"{where}: cannot reach {host}:{port} "
-                         f"({exc.strerror or exc})") from None
+                         f"({exc.strerror or exc})", field="scheduler") from None
     with sock:
         if scheme == "tls":
             return  # the TLS handshake comes first: Dask's own connect judges it
@@ -209,7 +212,7 @@ def probe_scheduler(address: str, seconds: float = PROBE_SECONDS) -> None:
     if b"pickle-protocol" not in body:
         raise InputError(f"{where}: not a Dask scheduler (what answers at {host}:{port} sent "
                          f"no Dask handshake within {seconds:g} s); give the address `dask "
-                         "scheduler` prints")
+                         "scheduler` prints", field="scheduler")
 
 
 def _receive(sock, size: int) -> bytes:
@@ -228,7 +231,7 @@ def make_executor(kind: str = "processes", workers: int | None = None,
     """``serial``, ``processes`` (default: all cores) or ``dask`` (``scheduler`` address,
     or a LocalCluster with ``workers`` workers)."""
     if workers is not None:
-        check_count("--workers", workers, 1, MAX_WORKERS)
+        check_count("workers", workers, 1, MAX_WORKERS)
     if scheduler is not None:
         return DaskExecutor(scheduler=scheduler)
     if kind == "serial":
@@ -237,7 +240,7 @@ def make_executor(kind: str = "processes", workers: int | None = None,
         return ProcessExecutor(workers)
     if kind == "dask":
         return DaskExecutor(workers=workers)
-    raise InputError(f"--executor: must be serial, processes or dask, got {kind!r}")
+    raise InputError(f"executor: must be serial, processes or dask, got {kind!r}", field="executor")
 
 
 def workers_of(executor: Executor) -> int:

@@ -42,7 +42,7 @@ def _server(reply: bytes | None) -> tuple[socket.socket, int]:
     ("127.0.0.1:", "no port"), ("tcp://:8786", "no host"), ("tcp://h:70000", "port 70000"),
     ("", "no port")])
 def test_a_malformed_address_names_what_is_wrong(address, why):
-    with pytest.raises(InputError, match=r"--scheduler: must be tcp://HOST:PORT .*" + why):
+    with pytest.raises(InputError, match=r"^scheduler: must be tcp://HOST:PORT .*" + why):
         parse_scheduler(address)
 
 
