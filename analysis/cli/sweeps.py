@@ -24,7 +24,7 @@ from analysis.cli.common import (
     reports_errors,
 )
 from analysis.cli.devices import DeviceOption, SweepDeviceOption
-from analysis.errors import InputError, check_count
+from analysis.errors import check_count
 
 
 @app.command()
@@ -60,40 +60,18 @@ def sweep(
     device: SweepDeviceOption = None,
 ):
     """Brute-force bifurcation diagram over one parameter (resumable: re-run to continue)."""
-    from analysis.integrate.cost import KERNELS
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.diagram import bifurcation_diagram, safe_diagram_point
-    from analysis.sweeps.executors import workers_of
-    from analysis.sweeps.grid import Axis, Setting, check_grid, grid_cost
-    from analysis.sweeps.points import grid_device
+    from analysis.sweeps.diagram import plan_diagram
+    from analysis.sweeps.grid import Axis, Setting
 
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, samples,
                       section, dt)
     axis = Axis.linear(param, start, stop, num)
-    check_grid(setting, axis)  # every input, before a worker starts or a file is made
-    if device is not None and follow:
-        raise InputError("--device: the member kernels run the values of a --no-follow sweep "
-                         "(a followed sweep is one trajectory); add --no-follow")
-    if device is not None:  # the GPU and the kernels, before the estimate and any executor
-        device = grid_device(setting, [axis], device,  # judged once: the Placement
-                             len(axis.values) * (2 if direction == "both" else 1))
-    ex = executor_of(executor, workers, scheduler)
-    if not quiet and direction in ("up", "down", "both"):  # the cost, said before it is
-        # paid (a followed sweep: one run at a time); another direction is refused below
-        point = (lambda system: safe_diagram_point(setting, system)) if follow else None
-        typer.echo("\n".join(grid_cost(setting, axis, workers=1 if follow else workers_of(ex),
-                                        members_per_point=2 if direction == "both" else 1,
-                                        lyapunov=False, path=None if follow else KERNELS,
-                                        point=point).lines()), err=True)
-    try:
-        ds = bifurcation_diagram(setting, axis, output, device=device,
-                                 direction=direction, follow=follow, executor=ex,
-                                 progress=ProgressReporter(f"sweep {param}", quiet),
-                                 on_damaged=_recomputing)
-    finally:
-        ex.close()
+    plan = plan_diagram(setting, axis, output, direction=direction, follow=follow,
+                        device=device)  # every input, before a worker starts or a file is made
+    ds, ran_on = _run_plan(plan, executor, workers, scheduler, quiet=quiet,
+                           label=f"sweep {param}")
     typer.echo(f"wrote {output}: {ds.sizes[param]} values × {ds.sizes['direction']} "
-               f"direction(s), {samples} section points each ({ex.name})")
+               f"direction(s), {samples} section points each ({ran_on})")
 
 
 @app.command()
@@ -136,38 +114,44 @@ def chart(
     device: DeviceOption = "auto",
 ):
     """Stability chart: periodic-n / quasi-periodic / chaotic on a 2-D grid (resumable)."""
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.chart import chart_device, chart_table, stability_chart
-    from analysis.sweeps.executors import workers_of
-    from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting, check_grid, grid_cost
+    from analysis.sweeps.chart import chart_table, plan_chart
+    from analysis.sweeps.grid import MAX_SAMPLES, Axis, Setting
     from analysis.sweeps.multistability import parse_ics
 
     check_count("revolutions", revolutions, 1, MAX_SAMPLES)
     setting = Setting(model, parse_n_balls(n_balls), parse_sets(sets), transient, revolutions,
                       section, dt, lyapunov)
-    axes = Axis.parse(x), Axis.parse(y)
-    check_grid(setting, *axes)  # every input, before a worker starts or a file is made
+    x_axis, y_axis = Axis.parse(x), Axis.parse(y)
     several = parse_ics(ics, ics_box, ics_seed)
-    if several is not None:  # its box within the model's bounds, before the estimate
-        several.check(setting.system_at(**{a.name: a.values[0] for a in axes}))
-    device = chart_device(setting, *axes, device)  # judged once, before the estimate
-    ex = executor_of(executor, workers, scheduler)
-    if not quiet:  # the cost, said before it is paid
-        typer.echo("\n".join(grid_cost(setting, *axes, workers=workers_of(ex), members_per_point=(
-            several.count if several is not None else 1)).lines()), err=True)
-    try:
-        ds = stability_chart(setting, *axes, output, executor=ex,
-                             progress=ProgressReporter("chart", quiet),
-                             on_damaged=_recomputing, ics=several, device=device)
-    finally:
-        ex.close()
+    plan = plan_chart(setting, x_axis, y_axis, output, ics=several,
+                      device=device)  # every input, before a worker starts or a file is made
+    ds, ran_on = _run_plan(plan, executor, workers, scheduler, quiet=quiet, label="chart")
     typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
-               f"points ({ex.name})" + (f"; {int(ds.multistable.sum())} multistable among "
-                                        f"{several.count} initial states each"
-                                        if several is not None else ""))
+               f"points ({ran_on})"
+               + (f"; {int(ds.multistable.sum())} multistable among {several.count} initial "
+                  "states each" if several is not None else ""))
     if table:
         typer.echo(chart_table(ds))
 
 
-def _recomputing(key: str) -> None:
-    typer.echo(f"warning: stored point {key} could not be read; computing it again", err=True)
+def _run_plan(plan, executor: str, workers: int | None, scheduler: str | None, *,
+              quiet: bool, label: str):
+    """``analysis.cli.plans.run_plan``'s path (the executor made, the cost said, the plan
+    run by ``run_study`` with the progress under ``label``, the executor closed), returning
+    the Dataset and the executor's name, which the command's last line says. The progress
+    starts after the cost is said (its rate and ETA count the points, not the probe).
+    ``run_plan`` does neither yet."""
+    from analysis.cli.plans import recomputing
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.runner import run_study, say_cost
+
+    say = None if quiet else (lambda text: typer.echo(text, err=True))
+    ex = executor_of(executor, workers, scheduler)
+    try:
+        if say is not None:
+            say_cost(plan, ex, say)
+        ds = run_study(plan, ex, progress=ProgressReporter(label, quiet, unit=plan.unit),
+                       say=say, on_damaged=recomputing("point"), cost=False)
+    finally:
+        ex.close()
+    return ds, ex.name

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
 
@@ -30,8 +30,10 @@ import numpy as np
 import xarray as xr
 
 from analysis.errors import SimulationError
+from analysis.integrate.cost import CostEstimate
 from analysis.integrate.kernels.cpu import cores
-from analysis.io import save_dataset
+from analysis.integrate.kernels.placement import Placement
+from analysis.integrate.study import Progress, Say
 from analysis.model import System, as_system
 from analysis.provenance import run_attrs, state_at
 from analysis.stability.classify import (
@@ -40,7 +42,7 @@ from analysis.stability.classify import (
     failure_text,
     nature_code,
 )
-from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.executors import Executor, run_with_progress
 from analysis.sweeps.grid import (
     Axis,
     Setting,
@@ -48,10 +50,12 @@ from analysis.sweeps.grid import (
     amplitudes,
     axis_bearing,
     check_grid,
+    grid_cost,
     record,
 )
 from analysis.sweeps.multistability import Ics, point_attractors
 from analysis.sweeps.points import chart_points, grid_device
+from analysis.sweeps.runner import run_study
 from analysis.sweeps.store import PointStore
 
 
@@ -156,41 +160,52 @@ def _chart_groups(setting: Setting, tasks: list[tuple],
     return groups
 
 
-def chart_device(setting: Setting, x: Axis, y: Axis, device: str) -> str:
-    """``"cpu"`` or ``"gpu"``: where the chart's points with λ1 run (``device``: ``cpu``,
-    ``gpu`` or ``auto``), judged before any point, store or estimate
-    (``points.grid_device``): with λ1 the tangent kernel of every balls of the grid is
-    built first, and one that cannot be built on ``cpu`` or ``gpu`` is one ``InputError``
-    naming the model and the reason; ``auto`` keeps the points-one-by-one fallback of the
-    cores (``points.kernel_points``)."""
+def chart_device(setting: Setting, x: Axis, y: Axis, device: str | Placement) -> Placement:
+    """Where the chart's points with λ1 run (``device``: ``cpu``, ``gpu`` or ``auto``),
+    judged before any point, store or estimate (``points.grid_device``): with λ1 the
+    tangent kernel of every balls of the grid is built first, and one that cannot be built
+    on ``cpu`` or ``gpu`` is one ``InputError`` naming the model and the reason; ``auto``
+    keeps the points-one-by-one fallback of the cores (``points.kernel_points``)."""
     return grid_device(setting, (x, y), device, len(x.values) * len(y.values), tangent=True,
                        kernels=setting.lyapunov, fallback=True)
 
 
-def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
-                    executor: Executor | None = None,
-                    progress: Callable[[int, int], None] | None = None,
-                    on_damaged: Callable[[str], None] | None = None,
-                    ics: Ics | None = None, device: str = "cpu") -> xr.Dataset:
-    """Classify every point of the grid y × x; writes and returns the netCDF Dataset.
+@dataclass(frozen=True)
+class ChartPlan:
+    """A stability chart, checked whole by ``plan_chart``: a ``StudyPlan``
+    (``analysis.integrate.study``) run by ``analysis.sweeps.runner.run_study``.
 
-    Resumable as ``analysis.sweeps.diagram.bifurcation_diagram``; a point whose run fails is
-    classed ``failed: …`` (``nature_code`` 0) and the chart goes on. ``ics``: also map K
-    initial states per point (``multistability``: ``n_attractors``, ``multistable``,
-    ``attractor_codes``, ``diverged_share``). ``device``: where the points with λ1 run
-    (``cpu``, ``gpu`` or ``auto``: ``chart_device``, checked before any point)."""
-    check_grid(setting, x, y)
-    device = chart_device(setting, x, y, device)
-    if ics is not None:  # its box fits the model, before any point runs
-        ics.check(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
-    definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
-                  "structure": list(setting.loaded().structure(setting.n_balls))}
-    if ics is not None:
-        definition["ics"] = {"count": ics.count, "seed": ics.seed,
-                             "box": ics.box.text if ics.box else None,
-                             "options": asdict(ics.options)}
-    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
-    try:
+    ``setting``, ``x``, ``y``, ``ics`` as ``stability_chart`` takes them, checked;
+    ``placement``: where its points run (judged once); ``definition``: its store's key."""
+
+    setting: Setting
+    x: Axis
+    y: Axis
+    output: Path
+    placement: Placement
+    definition: dict = field(compare=False)
+    ics: Ics | None = None
+
+    kind = "chart"
+    unit = "points"
+
+    @property
+    def total(self) -> int:
+        """The grid's points."""
+        return len(self.x.values) * len(self.y.values)
+
+    def cost(self, workers: int) -> CostEstimate:
+        """The chart's cost on ``workers`` workers (``grid.grid_cost``: every initial state
+        of ``ics`` a member of its point)."""
+        return grid_cost(self.setting, self.x, self.y, workers=workers,
+                         members_per_point=self.ics.count if self.ics is not None else 1)
+
+    def run(self, store: PointStore, executor: Executor, progress: Progress | None,
+            say: Say | None = None) -> xr.Dataset:
+        """Classify the points ``store`` lacks, in groups (``GROUP_POINTS``) on
+        ``executor``, each group stored as one block as it arrives; the chart of every
+        point."""
+        setting, x, y, ics = self.setting, self.x, self.y, self.ics
         done = set(store.points())
         stored = [len(done)]
 
@@ -201,19 +216,49 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
         tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
                  for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
                  if f"{iy:04d}-{ix:04d}" not in done]
-        executor = executor or SerialExecutor()
         threads = max(1, cores() // getattr(executor, "workers", 1))  # a pool shares them
-        run_with_progress(executor, partial(_chart_group_task, device=device,
+        run_with_progress(executor, partial(_chart_group_task, device=self.placement,
                                             threads=threads),
-                          _chart_groups(setting, tasks, GROUP_POINTS[device]),
-                          lambda: stored[0], len(x.values) * len(y.values), progress, keep)
-        ds = _assemble_chart(store, setting, x, y, ics)
-        save_dataset(ds, output)
-        store.remove()
-    except BaseException as exc:  # a refusal or failure before the first point: no trace
-        store.stopped(exc, len(x.values) * len(y.values))
-        raise
-    return ds
+                          _chart_groups(setting, tasks, GROUP_POINTS[self.placement]),
+                          lambda: stored[0], self.total, progress, keep)
+        return _assemble_chart(store, setting, x, y, ics)
+
+
+def plan_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
+               ics: Ics | None = None, device: str | Placement = "cpu") -> ChartPlan:
+    """The ``ChartPlan`` of the grid y × x written to ``output``, every input checked once
+    before any point, store or estimate: the grid (``grid.check_grid``), the box of ``ics``
+    within the model's bounds (``Ics.check``), then the device and its kernels
+    (``chart_device``: the ``Placement`` the points take). ``InputError`` naming its field
+    otherwise."""
+    check_grid(setting, x, y)
+    if ics is not None:  # its box fits the model, before any point runs
+        ics.check(setting.system_at(**{x.name: x.values[0], y.name: y.values[0]}))
+    placement = chart_device(setting, x, y, device)
+    definition = {"kind": "chart", "setting": asdict(setting), "x": asdict(x), "y": asdict(y),
+                  "structure": list(setting.loaded().structure(setting.n_balls))}
+    if ics is not None:
+        definition["ics"] = {"count": ics.count, "seed": ics.seed,
+                             "box": ics.box.text if ics.box else None,
+                             "options": asdict(ics.options)}
+    return ChartPlan(setting, x, y, Path(output), placement, definition, ics)
+
+
+def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
+                    executor: Executor | None = None,
+                    progress: Callable[[int, int], None] | None = None,
+                    on_damaged: Callable[[str], None] | None = None,
+                    ics: Ics | None = None, device: str | Placement = "cpu") -> xr.Dataset:
+    """Classify every point of the grid y × x; writes and returns the netCDF Dataset
+    (``run_study(plan_chart(…))``).
+
+    Resumable as ``analysis.sweeps.diagram.bifurcation_diagram``; a point whose run fails is
+    classed ``failed: …`` (``nature_code`` 0) and the chart goes on. ``ics``: also map K
+    initial states per point (``multistability``: ``n_attractors``, ``multistable``,
+    ``attractor_codes``, ``diverged_share``). ``device``: where the points with λ1 run
+    (``cpu``, ``gpu`` or ``auto``: ``chart_device``, checked before any point)."""
+    return run_study(plan_chart(setting, x, y, output, ics=ics, device=device), executor,
+                     progress=progress, on_damaged=on_damaged)
 
 
 def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,

@@ -52,29 +52,34 @@ import xarray as xr
 
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.compiled import library, run_rk4
+from analysis.integrate.cost import CostEstimate
 from analysis.integrate.kernels import (
     Schedule,
     blow_up_error,
     run_members,
     section_step,
 )
+from analysis.integrate.kernels.placement import Placement
 from analysis.integrate.plan import RunPlan
 from analysis.integrate.simulate import blow_up_limit, check_bounded
-from analysis.io import save_dataset
+from analysis.integrate.study import Progress, Say
 from analysis.model import System, as_system
 from analysis.provenance import completed_attrs, state_at, to_dataset
 from analysis.signal.phasor import phasor_fields, phasor_record
 from analysis.signal.poincare import poincare_section
 from analysis.stability.classify import failure_text
-from analysis.sweeps.executors import Executor, SerialExecutor, run_with_progress
+from analysis.sweeps.executors import Executor, run_with_progress
 from analysis.sweeps.grid import (
     Axis,
+    ParameterError,
     Setting,
     amplitude_fields,
     amplitudes,
     check_grid,
+    grid_cost,
     record,
 )
+from analysis.sweeps.runner import run_study
 from analysis.sweeps.store import PointStore
 
 
@@ -290,41 +295,59 @@ def _point_task(args: tuple) -> tuple[str, dict]:
     return f"{chain.direction}-{i:05d}", safe_diagram_point(chain.setting, chain.system(i))
 
 
-def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
-                        direction: str = "up", follow: bool = True,
-                        executor: Executor | None = None,
-                        progress: Callable[[int, int], None] | None = None,
-                        on_damaged: Callable[[str], None] | None = None,
-                        device: str | None = None) -> xr.Dataset:
-    """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset.
+DIRECTIONS = {"up": ("up",), "down": ("down",), "both": ("up", "down")}
+"""The chains of a diagram's ``direction``."""
 
-    Resumable (``analysis.sweeps.store``): a stored point that cannot be read is removed,
-    reported to ``on_damaged(key)`` and computed again. A value whose run fails is recorded
-    (``status``: ``failed: …``) and the diagram goes on. ``device`` (``cpu``, ``gpu``,
-    ``auto``; without ``follow`` only): the values run as members of the member kernels,
-    ``ENSEMBLE_BLOCK`` per call (``ensemble_points``: sections on steps, no 1X phasor); None:
-    value by value (``diagram_point``) through ``executor``."""
-    if direction not in ("up", "down", "both"):
-        raise InputError(f"direction: must be up, down or both, got {direction!r}")
-    directions = ["up", "down"] if direction == "both" else [direction]
-    check_grid(setting, axis)
-    if device is not None:
-        if follow:
-            raise InputError("--device: a followed diagram runs value by value; use "
-                             "--no-follow for the ensemble on a device")
-        from analysis.sweeps.points import grid_device  # the device and its kernels, first
 
-        device = grid_device(setting, [axis], device, len(axis.values) * len(directions))
-    definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
-                  "structure": list(setting.loaded().structure(setting.n_balls)),
-                  "directions": directions, "follow": follow}
-    if follow:  # stores of the former restarts at t = 0 are not resumed with these
-        definition["restart"] = FOLLOW_RESTART
-    store = PointStore(output, definition, lock=True, on_damaged=on_damaged)
-    try:
-        chains = [Chain(setting, axis, d, follow, str(output), definition) for d in directions]
-        total = len(chains) * len(axis.values)
-        executor = executor or SerialExecutor()
+@dataclass(frozen=True)
+class DiagramPlan:
+    """A brute-force bifurcation diagram, checked whole by ``plan_diagram``: a
+    ``StudyPlan`` (``analysis.integrate.study``) run by
+    ``analysis.sweeps.runner.run_study``.
+
+    ``directions``: its chains in order (``up``, ``down``); ``placement``: where its values
+    run as members of the member kernels (judged once), None value by value;
+    ``definition``: its store's key."""
+
+    setting: Setting
+    axis: Axis
+    output: Path
+    directions: tuple[str, ...]
+    follow: bool
+    placement: Placement | None
+    definition: dict = field(compare=False)
+
+    kind = "diagram"
+    unit = "points"
+
+    @property
+    def total(self) -> int:
+        """The values of every chain."""
+        return len(self.directions) * len(self.axis.values)
+
+    def cost(self, workers: int) -> CostEstimate:
+        """The diagram's cost (``grid.grid_cost``): a followed diagram runs one value at a
+        time (on 1 worker, each value's whole work probed: ``safe_diagram_point``); without
+        following its values are members of the member kernels (``KERNELS``) on
+        ``workers``."""
+        from analysis.integrate.cost import KERNELS
+
+        setting = self.setting
+        point = (lambda system: safe_diagram_point(setting, system)) if self.follow else None
+        return grid_cost(setting, self.axis, workers=1 if self.follow else workers,
+                         members_per_point=len(self.directions), lyapunov=False,
+                         path=None if self.follow else KERNELS, point=point)
+
+    def run(self, store: PointStore, executor: Executor, progress: Progress | None,
+            say: Say | None = None) -> xr.Dataset:
+        """The values ``store`` lacks: followed chains (one per direction, each on one
+        worker, storing its points), blocks of ``ENSEMBLE_BLOCK`` values on the member
+        kernels (``placement``), or value by value on ``executor``; the diagram of every
+        value."""
+        setting, axis, follow = self.setting, self.axis, self.follow
+        directions, device, total = list(self.directions), self.placement, self.total
+        chains = [Chain(setting, axis, d, follow, str(self.output), self.definition)
+                  for d in directions]
         if follow:
             run_with_progress(executor, run_chain, chains, lambda: len(store.done()), total,
                               progress, None)
@@ -347,13 +370,58 @@ def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
                     if f"{c.direction}-{i:05d}" not in store.done()]
             run_with_progress(executor, _point_task, todo, lambda: len(store.done()), total,
                               progress, lambda task, result: store.save(*result))
-        ds = _assemble_diagram(store, setting, axis, directions, follow)
-        save_dataset(ds, output)
-        store.remove()
-    except BaseException as exc:  # a refusal or failure before the first point: no trace
-        store.stopped(exc, len(directions) * len(axis.values))
-        raise
-    return ds
+        return _assemble_diagram(store, setting, axis, directions, follow)
+
+
+def plan_diagram(setting: Setting, axis: Axis, output: str | Path, *,
+                 direction: str = "up", follow: bool = True,
+                 device: str | Placement | None = None) -> DiagramPlan:
+    """The ``DiagramPlan`` over ``axis`` written to ``output``, every input checked once
+    before any value, store or estimate: ``direction`` (``up``, ``down`` or ``both``), the
+    grid (``grid.check_grid``), ``device`` only without ``follow`` (a followed diagram is
+    one trajectory), then the device and its state kernels (``points.grid_device``: the
+    ``Placement`` the values take). ``InputError`` naming its field otherwise."""
+    if direction not in DIRECTIONS:
+        raise InputError(f"direction: must be up, down or both, got {direction!r}")
+    directions = DIRECTIONS[direction]
+    check_grid(setting, axis)
+    placement = None
+    if device is not None:
+        if follow:
+            raise ParameterError(
+                "device", "{field}: the member kernels run the values of {unfollowed} "
+                "(a followed {sweep} is one trajectory); {add}",
+                {"unfollowed": ("a diagram with follow=False", "a --no-follow sweep"),
+                 "sweep": ("diagram", "sweep"), "add": ("set follow=False", "add --no-follow")})
+        from analysis.sweeps.points import grid_device  # the device and its kernels, first
+
+        placement = grid_device(setting, [axis], device, len(axis.values) * len(directions))
+    definition = {"kind": "diagram", "setting": asdict(setting), "axis": asdict(axis),
+                  "structure": list(setting.loaded().structure(setting.n_balls)),
+                  "directions": list(directions), "follow": follow}
+    if follow:  # stores of the former restarts at t = 0 are not resumed with these
+        definition["restart"] = FOLLOW_RESTART
+    return DiagramPlan(setting, axis, Path(output), directions, follow, placement, definition)
+
+
+def bifurcation_diagram(setting: Setting, axis: Axis, output: str | Path, *,
+                        direction: str = "up", follow: bool = True,
+                        executor: Executor | None = None,
+                        progress: Callable[[int, int], None] | None = None,
+                        on_damaged: Callable[[str], None] | None = None,
+                        device: str | Placement | None = None) -> xr.Dataset:
+    """Brute-force orbit diagram over ``axis``; writes and returns the netCDF Dataset
+    (``run_study(plan_diagram(…))``).
+
+    Resumable (``analysis.sweeps.store``): a stored point that cannot be read is removed,
+    reported to ``on_damaged(key)`` and computed again. A value whose run fails is recorded
+    (``status``: ``failed: …``) and the diagram goes on. ``device`` (``cpu``, ``gpu``,
+    ``auto``; without ``follow`` only): the values run as members of the member kernels,
+    ``ENSEMBLE_BLOCK`` per call (``ensemble_points``: sections on steps, no 1X phasor); None:
+    value by value (``diagram_point``) through ``executor``."""
+    return run_study(plan_diagram(setting, axis, output, direction=direction, follow=follow,
+                                  device=device), executor, progress=progress,
+                     on_damaged=on_damaged)
 
 
 def _assemble_diagram(store: PointStore, setting: Setting, axis: Axis, directions: list[str],

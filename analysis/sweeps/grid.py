@@ -50,6 +50,39 @@ MAX_SAMPLES = 100_000
 """Most section samples per grid value."""
 
 
+class ParameterError(InputError):
+    """An ``InputError`` about the parameter ``field`` whose line says more than its head:
+    ``template`` holds ``{field}`` wherever the parameter is named and ``{word}`` for each
+    of ``words`` (``word -> (the library's words, the command line's words)``), for a line
+    that names other parameters too. The library's line names parameters
+    (``sets speed_rpm: also an axis; …``); ``renamed(option)``, the command line's edge
+    (``cli.common.as_option``), gives the same line with the field's option and the
+    command line's words (``--set speed_rpm: …; drop the --set …``): no text is read back.
+
+    >>> err = ParameterError("ics_box", "{field}: draws the states of {ics}",
+    ...                      {"ics": ("ics", "--ics")})
+    >>> str(err), str(err.renamed("--ics-box"))
+    ('ics_box: draws the states of ics', '--ics-box: draws the states of --ics')
+    """
+
+    def __init__(self, field: str, template: str,
+                 words: Mapping[str, tuple[str, str]] | None = None) -> None:
+        self.field, self.template, self.words = field, template, dict(words or {})
+        super().__init__(self.text(field))
+
+    def text(self, name: str, command_line: bool = False) -> str:
+        """The line naming the parameter ``name`` (the field or its option), with the
+        command line's words where ``command_line``."""
+        return self.template.format(field=name, **{k: v[int(command_line)]
+                                                   for k, v in self.words.items()})
+
+    def renamed(self, name: str) -> InputError:
+        return InputError(self.text(name, command_line=True))
+
+    def __reduce__(self):  # pickled across worker processes with its parts
+        return type(self), (self.field, self.template, self.words)
+
+
 def axis_bearing(name: str) -> str | None:
     """The bearing a structure axis names: ``""`` for ``n_balls``, ``"left"`` for
     ``n_balls[left]``, None for a parameter axis."""
@@ -264,15 +297,17 @@ def check_grid(setting: Setting, *axes: Axis, warn: Callable[[str], None] | None
                          f"{' x '.join(str(len(a.values)) for a in axes)}")
     for axis in axes:
         if axis.name in setting.values:
-            raise InputError(f"--set {axis.name}: also an axis; drop the --set (the axis "
-                             "gives its values)")
+            raise ParameterError("sets", f"{{field}} {axis.name}: also an axis; drop {{it}} "
+                                 "(the axis gives its values)",
+                                 {"it": (f"{axis.name} from sets", "the --set")})
         bearing = axis_bearing(axis.name)
         if bearing == "" and setting.n_balls is not None and \
                 not isinstance(setting.n_balls, Mapping):
-            raise InputError(f"--n-balls: also an axis ({axis.name}); drop --n-balls")
+            raise ParameterError("n_balls", f"{{field}}: also an axis ({axis.name}); drop "
+                                 "{field}")
         if bearing and isinstance(setting.n_balls, Mapping) and bearing in setting.n_balls:
-            raise InputError(f"--n-balls {bearing}: also an axis ({axis.name}); drop it "
-                             "from --n-balls")
+            raise ParameterError("n_balls", f"{{field}} {bearing}: also an axis "
+                                 f"({axis.name}); drop it from {{field}}")
         if bearing == "" and len(model.bearings) > 1:
             raise InputError(f"axis {axis.name}: model '{model.name}' has bearings "
                              f"{', '.join(model.bearing_names)}; name one, e.g. "

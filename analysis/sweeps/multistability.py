@@ -21,6 +21,7 @@ from analysis.forcing import PERIOD
 from analysis.model import System
 from analysis.stability.attractors import DIVERGED, AttractorStudy, Box, MapperOptions, Range
 from analysis.stability.classify import nature_code
+from analysis.sweeps.grid import ParameterError
 
 MAX_ICS = 256
 """Most initial states per chart point."""
@@ -103,9 +104,11 @@ def point_attractors(ics: Ics, system: System, section: str, point: int,
 
 
 def parse_ics(count: int | None, box: Sequence[str] | None, seed: int) -> Ics | None:
-    """The ``Ics`` of ``--ics K --ics-box … --ics-seed S`` (None without ``--ics``)."""
+    """The ``Ics`` of ``--ics K --ics-box … --ics-seed S`` (None without ``--ics``); a box
+    without a count is refused naming ``ics_box`` (``grid.ParameterError``)."""
     if count is None:
         if box:
-            raise InputError("--ics-box: draws the initial states of --ics; give --ics K")
+            raise ParameterError("ics_box", "{field}: draws the initial states of {ics}; "
+                                 "give {ics} K", {"ics": ("ics", "--ics")})
         return None
     return Ics(count, Box.parse(box, "--ics-box") if box else None, seed)
