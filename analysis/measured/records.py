@@ -18,7 +18,8 @@ A record is an ``xarray.Dataset``:
 
 ``read_record`` reads any file the readers know (``analysis.measured.readers.READERS``,
 by suffix) and judges what the file lacks: the rate (``--fs``), the speed (``--rpm`` or
-``--tacho``), each in one ``InputError`` line naming the option that gives it.
+``--tacho``), each in one ``InputError`` line naming the parameter that gives it (its
+``field``: the command line names the option).
 """
 
 from __future__ import annotations
@@ -65,17 +66,19 @@ def _listing(record: xr.Dataset) -> str:
     return ", ".join(out)
 
 
-def pick_channel(record: xr.Dataset, pattern: str | None, option: str = "--channel") -> str:
+def pick_channel(record: xr.Dataset, pattern: str | None, field: str = "channel") -> str:
     """The channel ``pattern`` names: a channel's name, or its file's name, exactly (either
     case), or a glob (``*DE*``) or a substring of either, case-insensitive, that only one
     channel matches (``DE`` picks ``X105_DE_time``'s channel). With None: the only channel.
-    ``InputError`` naming ``option`` and listing the channels otherwise."""
+    ``InputError`` naming ``field`` (the parameter that gave ``pattern``: ``channel``,
+    ``tacho``) and listing the channels otherwise."""
     names = channels(record)
     where = f" in '{record.attrs['source_file']}'" if "source_file" in record.attrs else ""
     if pattern is None:
         if len(names) == 1:
             return names[0]
-        raise InputError(f"{option}: this record has {len(names)} channels; give one of "
+        # no value given: the command line names no option from a field, so the line does
+        raise InputError(f"--{field}: this record has {len(names)} channels; give one of "
                          f"{_listing(record)}")
     text = str(pattern).strip()
     pairs = [(n, str(record[n].attrs.get("original_name", n))) for n in names]
@@ -88,9 +91,11 @@ def pick_channel(record: xr.Dataset, pattern: str | None, option: str = "--chann
         if len(found) == 1:
             return found[0]
         if len(found) > 1:
-            raise InputError(f"{option}: {text!r} matches {len(found)} channels{where} "
-                             f"({', '.join(found)}); give one of {_listing(record)}")
-    raise InputError(f"{option}: no channel {text!r}{where}; channels: {_listing(record)}")
+            raise InputError(f"{field}: {text!r} matches {len(found)} channels{where} "
+                             f"({', '.join(found)}); give one of {_listing(record)}",
+                             field=field)
+    raise InputError(f"{field}: no channel {text!r}{where}; channels: {_listing(record)}",
+                     field=field)
 
 
 def record_speed_hz(record: xr.Dataset) -> float | None:
@@ -125,13 +130,16 @@ def sha256_of(path: Path) -> str:
     return digest.hexdigest()
 
 
-def _positive(value: Any, option: str, unit: str) -> float:
+def _positive(value: Any, name: str, unit: str, *, field: str | None = None) -> float:
+    """``value`` as a float > 0 (``unit``), or ``InputError`` naming ``name`` (the
+    parameter ``field``, when it is one)."""
     try:
         number = float(value)
     except (TypeError, ValueError):
         number = math.nan
     if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{option}: must be a finite number > 0 {unit}, got {value}")
+        raise InputError(f"{name}: must be a finite number > 0 {unit}, got {value}",
+                         field=field)
     return number
 
 
@@ -164,15 +172,16 @@ def read_record(path: str | Path, *, fs: float | None = None, channel: str | Non
     file, whose integer samples are first scaled to [-1, 1)); ``units``: the channels'
     units (one of ``analysis.measured.readers.UNITS``).
 
-    Every problem is one ``InputError`` naming the file or the option; a missing rate names
-    ``--fs``. A record without a speed is returned without one (:func:`record_speed_hz`
-    None): the analyses that need it say ``give --rpm or --tacho``."""
+    Every problem is one ``InputError`` naming the file or the parameter (with its
+    ``field``); a missing rate says ``give --fs HZ``. A record without a speed is returned
+    without one (:func:`record_speed_hz` None): the analyses that need it say ``give --rpm
+    or --tacho``."""
     path = Path(path)
-    fs = None if fs is None else _positive(fs, "--fs", "Hz")
+    fs = None if fs is None else _positive(fs, "fs", "Hz", field="fs")
     scale = None if scale is None else _nonzero_scale(scale)
-    units = None if units is None else unit_of(units, "--units")
+    units = None if units is None else unit_of(units, "units", field="units")
     if rpm is not None and tacho is not None:
-        raise InputError("--tacho: give --rpm or --tacho, not both")
+        raise InputError("tacho: give --rpm or --tacho, not both", field="tacho")
     table = None if rpm is None else _speed_given(rpm)
     _check_file(path)
     raw = reader_for(path)(path)
@@ -181,7 +190,7 @@ def read_record(path: str | Path, *, fs: float | None = None, channel: str | Non
     if channel is not None:
         keep = [pick_channel(record, channel)]
         if tacho is not None:
-            keep.append(pick_channel(record, tacho, "--tacho"))
+            keep.append(pick_channel(record, tacho, "tacho"))
         record = record[list(dict.fromkeys(keep)) + ([SPEED] if SPEED in record else [])]
     return _with_speed(record, raw, table, tacho)
 
@@ -192,22 +201,29 @@ def _nonzero_scale(scale: Any) -> float:
     except (TypeError, ValueError):
         number = math.nan
     if not math.isfinite(number) or number == 0:
-        raise InputError(f"--scale: must be a finite number other than 0, got {scale!r}")
+        raise InputError(f"scale: must be a finite number other than 0, got {scale!r}",
+                         field="scale")
     return number
 
 
 def _speed_given(rpm: float | str) -> Any:
-    """``--rpm``: a speed (rpm, a number) or a speed table (``SpeedProfile`` of a CSV)."""
+    """``rpm``: a speed (rpm, a number) or a speed table (``SpeedProfile`` of a CSV); a
+    table's errors name ``rpm``, the parameter that gave it."""
     if isinstance(rpm, str):
         try:
             number = float(rpm)
         except ValueError:
             from analysis.integrate.speed_profile import read_table
 
-            return read_table(rpm)
-        return _positive(number, "--rpm", "rpm") if math.isfinite(number) and number > 0 \
-            else _positive(rpm, "--rpm", "rpm")
-    return _positive(rpm, "--rpm", "rpm")
+            try:
+                return read_table(rpm)
+            except InputError as exc:
+                if exc.field != "speed_rpm":
+                    raise
+                raise InputError("rpm" + str(exc)[len(exc.field):], field="rpm") from None
+        return _positive(number, "rpm", "rpm", field="rpm") \
+            if math.isfinite(number) and number > 0 else _positive(rpm, "rpm", "rpm", field="rpm")
+    return _positive(rpm, "rpm", "rpm", field="rpm")
 
 
 def _rate(raw: Raw, fs: float | None, path: Path) -> tuple[float, str]:
@@ -232,8 +248,8 @@ def _rate(raw: Raw, fs: float | None, path: Path) -> tuple[float, str]:
     if stated:
         rate = _positive(raw.fs, f"record: '{path}': its sampling rate", "Hz")
         if fs is not None and abs(fs - rate) > 1e-6 * rate:
-            raise InputError(f"--fs: the file states {rate:g} Hz ({raw.fs_source}), got "
-                             f"--fs {fs:g}; leave --fs out")
+            raise InputError(f"fs: the file states {rate:g} Hz ({raw.fs_source}), got "
+                             f"--fs {fs:g}; leave --fs out", field="fs")
         return rate, raw.fs_source
     if fs is not None:
         return fs, "--fs"
@@ -303,7 +319,7 @@ def _with_speed(record: xr.Dataset, raw: Raw, table: Any, tacho: str | None) -> 
     elif table is not None:
         record = _speed_table(record, table)
     elif tacho is not None:
-        record = tacho_speed(record, pick_channel(record, tacho, "--tacho"))
+        record = tacho_speed(record, pick_channel(record, tacho, "tacho"))
     elif raw.speed_curve is not None:
         record[SPEED] = ("t", raw.speed_curve, {"units": "rpm"})
     elif raw.speed_rpm is not None:
@@ -328,8 +344,8 @@ def _speed_table(record: xr.Dataset, profile: Any) -> xr.Dataset:
     t = record["t"].values
     times, rpm = profile.knots(float(t[-1]))
     if times[-1] < t[-1] * (1 - 1e-9):
-        raise InputError(f"--rpm: the speed table's last t_s ({times[-1]:g} s) must reach the "
-                         f"end of the record ({t[-1]:g} s)")
+        raise InputError(f"rpm: the speed table's last t_s ({times[-1]:g} s) must reach the "
+                         f"end of the record ({t[-1]:g} s)", field="rpm")
     record[SPEED] = ("t", np.interp(t, times, rpm), {"units": "rpm"})
     record.attrs.update(speed_rpm=float(np.mean(record[SPEED].values)),
                         speed_source="speed table", speed_table_t=times, speed_table_rpm=rpm,
@@ -370,16 +386,16 @@ def tacho_speed(record: xr.Dataset, channel: str) -> xr.Dataset:
     fs = float(record.attrs["sample_rate_hz"])
     pulses = tacho_pulses(record[channel].values, fs)
     if pulses.size < 2:
-        raise InputError(f"--tacho: channel {channel} has {pulses.size} pulse(s) (rising "
+        raise InputError(f"tacho: channel {channel} has {pulses.size} pulse(s) (rising "
                          "edges through 70 % of its range); a once-per-revolution tacho needs "
-                         "at least two")
+                         "at least two", field="tacho")
     intervals = np.diff(pulses)
     if intervals.size > 2:  # a shaft's speed changes little from one turn to the next
         jumps = float(np.median(np.abs(np.diff(intervals)) / intervals[:-1]))
         if jumps > IRREGULAR:
-            raise InputError(f"--tacho: channel {channel}'s {pulses.size} pulses are not "
+            raise InputError(f"tacho: channel {channel}'s {pulses.size} pulses are not "
                              f"regular (successive intervals differ by {jumps:.0%} in the "
-                             "median); is it a once-per-revolution tacho?")
+                             "median); is it a once-per-revolution tacho?", field="tacho")
     middle = 0.5 * (pulses[1:] + pulses[:-1])
     rpm = 60.0 / intervals
     record[SPEED] = ("t", _extended(record["t"].values, middle, rpm), {"units": "rpm"})

@@ -272,7 +272,7 @@ def test_a_speed_table(tmp_path):
     np.testing.assert_allclose(rec["speed_rpm"].values, 1000 + 2000 * rec["t"].values)
     short = tmp_path / "short.csv"
     short.write_text("t_s,speed_rpm\n0,1000\n0.2,2000\n")
-    with pytest.raises(InputError, match=r"^--rpm: the speed table's last t_s \(0.2 s\) must "
+    with pytest.raises(InputError, match=r"^rpm: the speed table's last t_s \(0.2 s\) must "
                                          r"reach the end of the record \(0.4995 s\)$"):
         read_record(path, fs=FS, rpm=str(short))
 
@@ -287,26 +287,27 @@ def _csv(tmp_path, k=2):
 
 
 @pytest.mark.parametrize("options, message", [
-    (dict(channel="XY"), r"^--channel: no channel 'XY' in '.*rec.csv'; channels: DE, FE$"),
-    (dict(channel="*"), r"^--channel: '\*' matches 2 channels .*; give one of DE, FE$"),
-    (dict(rpm=0), r"^--rpm: must be a finite number > 0 rpm, got 0$"),
-    (dict(rpm="nan"), r"^--rpm: must be a finite number > 0 rpm, got nan$"),
-    (dict(rpm=math.inf), r"^--rpm: must be a finite number > 0 rpm, got inf$"),
-    (dict(fs=0), r"^--fs: must be a finite number > 0 Hz, got 0$"),
-    (dict(tacho="FE", rpm=1000), r"^--tacho: give --rpm or --tacho, not both$"),
-    (dict(units="furlong"), r"^--units: units must be one of g, m/s\^2, .*got 'furlong'$"),
-    (dict(scale=0), r"^--scale: must be a finite number other than 0, got 0$"),
+    (dict(channel="XY"), r"^channel: no channel 'XY' in '.*rec.csv'; channels: DE, FE$"),
+    (dict(channel="*"), r"^channel: '\*' matches 2 channels .*; give one of DE, FE$"),
+    (dict(rpm=0), r"^rpm: must be a finite number > 0 rpm, got 0$"),
+    (dict(rpm="nan"), r"^rpm: must be a finite number > 0 rpm, got nan$"),
+    (dict(rpm=math.inf), r"^rpm: must be a finite number > 0 rpm, got inf$"),
+    (dict(fs=0), r"^fs: must be a finite number > 0 Hz, got 0$"),
+    (dict(tacho="FE", rpm=1000), r"^tacho: give --rpm or --tacho, not both$"),
+    (dict(units="furlong"), r"^units: units must be one of g, m/s\^2, .*got 'furlong'$"),
+    (dict(scale=0), r"^scale: must be a finite number other than 0, got 0$"),
 ])
 def test_bad_options_are_one_line_naming_the_option(tmp_path, options, message):
-    with pytest.raises(InputError, match=message):
+    with pytest.raises(InputError, match=message) as err:
         read_record(_csv(tmp_path), fs=options.pop("fs", FS), **options)
+    assert err.value.field == message[1:].partition(":")[0]  # the command line names its option
 
 
 def test_a_tacho_without_pulses(tmp_path):
     path = tmp_path / "rec.csv"
     np.savetxt(path, np.column_stack([signals(1)[:, 0], np.full(N, 2.5)]), delimiter=",",
                header="acc,tacho", comments="")
-    with pytest.raises(InputError, match=r"^--tacho: channel tacho has 0 pulse\(s\)"):
+    with pytest.raises(InputError, match=r"^tacho: channel tacho has 0 pulse\(s\)"):
         read_record(path, fs=FS, tacho="tacho")
 
 
@@ -593,7 +594,7 @@ def test_a_noise_channel_is_not_a_tacho(tmp_path):
     path = tmp_path / "rec.csv"
     noise = np.random.default_rng(0).standard_normal((N, 2))
     np.savetxt(path, noise, delimiter=",", header="acc,tacho", comments="")
-    with pytest.raises(InputError, match=r"^--tacho: channel tacho's \d+ pulses are not "
+    with pytest.raises(InputError, match=r"^tacho: channel tacho's \d+ pulses are not "
                                          r"regular .*is it a once-per-revolution tacho\?$"):
         read_record(path, fs=FS, tacho="tacho")
 

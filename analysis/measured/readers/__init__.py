@@ -29,13 +29,15 @@ UNIT_ALIASES = {"m/s2": "m/s^2", "m/s²": "m/s^2", "ms^-2": "m/s^2", "µm": "um"
                 "v": "V", "": "1", "-": "1", "none": "1", "g": "g", "gs": "g"}
 
 
-def unit_of(text: Any, where: str) -> str:
+def unit_of(text: Any, where: str, *, field: str | None = None) -> str:
     """``text`` as one of :data:`UNITS` (aliases such as ``m/s2``, ``µm`` accepted), or
-    ``InputError`` naming ``where`` (``--units``, a file's channel)."""
+    ``InputError`` naming ``where`` (the parameter ``units``, a file's channel; ``field``:
+    ``where`` when it is a parameter)."""
     raw = "" if text is None else str(text).strip()
     unit = raw if raw in UNITS else UNIT_ALIASES.get(raw.lower(), raw)
     if unit not in UNITS:
-        raise InputError(f"{where}: units must be one of {', '.join(UNITS)}, got {raw!r}")
+        raise InputError(f"{where}: units must be one of {', '.join(UNITS)}, got {raw!r}",
+                         field=field)
     return unit
 
 
