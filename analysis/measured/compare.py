@@ -428,8 +428,8 @@ def record_signal(record: xr.Dataset, channel: str | None, bearing: Bearing,
     fs = float(record.attrs["sample_rate_hz"])
     if rpm is not None:
         if not (math.isfinite(rpm) and rpm > 0):
-            raise InputError(f"--rpm: the shaft speed must be a finite number > 0 rpm, got "
-                             f"{rpm}")
+            raise InputError(f"rpm: the shaft speed must be a finite number > 0 rpm, got "
+                             f"{rpm}", field="rpm")
         nominal, source = rpm / 60.0, "--rpm"
     else:
         nominal = record_speed_hz(record)
@@ -461,7 +461,8 @@ def model_signal(result: xr.Dataset, var: str | None, max_order: float
     names = state_names(result)
     var = displacement_names(result)[0] if var is None else var
     if var not in names:
-        raise InputError(f"--var: the run has no state '{var}'; states: {', '.join(names)}")
+        raise InputError(f"var: the run has no state '{var}'; states: {', '.join(names)}",
+                         field="var")
     shaft = float(result.attrs.get("shaft_hz", 0.0))
     if not shaft > 0:
         raise InputError("result: the run has no turning shaft (shaft_hz 0); orders need one")
@@ -500,7 +501,7 @@ def compare(record: xr.Dataset, result: xr.Dataset, *, channel: str | None = Non
     analysis.errors.InputError: record: not a measured record (read it with read_record)
     """
     if not (math.isfinite(max_order) and 1.0 <= max_order <= 1000.0):
-        raise InputError(f"--max-order: must be in [1, 1000], got {max_order}")
+        raise InputError(f"max_order: must be in [1, 1000], got {max_order}", field="max_order")
     if not (math.isfinite(tolerance) and 0 < tolerance < 0.5):
         raise InputError(f"tolerance: must be in (0, 0.5), got {tolerance}")
     if not is_record(record):

@@ -365,8 +365,8 @@ def _record_speed(record: xr.Dataset, rpm: float | None) -> tuple[float, str]:
     if rpm is not None:
         value = float(rpm)
         if not (math.isfinite(value) and value > 0):
-            raise InputError(f"--rpm: the shaft speed must be a finite number > 0 rpm, "
-                             f"got {rpm}")
+            raise InputError(f"rpm: the shaft speed must be a finite number > 0 rpm, "
+                             f"got {rpm}", field="rpm")
         return value / 60.0, "--rpm"
     from analysis.measured.records import record_speed_hz
 
@@ -397,10 +397,10 @@ def diagnose(record: xr.Dataset, *, channel: str | None, bearing: str | Bearing,
     bearing = lookup(bearing) if isinstance(bearing, str) else bearing
     pw.check_method(prewhiten)
     if rpm is not None and tacho is not None:
-        raise InputError("--tacho: give --rpm or --tacho, not both")
+        raise InputError("tacho: give --rpm or --tacho, not both", field="tacho")
     name = pick_channel(record, channel)
     if tacho is not None:
-        record = tacho_speed(record.copy(), pick_channel(record, tacho, "--tacho"))
+        record = tacho_speed(record.copy(), pick_channel(record, tacho, "tacho"))
     shaft_hz, source = _record_speed(record, rpm)
     values = np.asarray(record[name].values, dtype=float)
     fs = float(record.attrs.get("sample_rate_hz", 0.0))

@@ -59,8 +59,8 @@ def matching_run(verdict: str, record: xr.Dataset, model: str | None = None, *,
 
     if model is None:
         if verdict not in DEFECT_MODELS:
-            raise InputError(f"--model: no defect model for the verdict '{verdict}'; name "
-                             f"one of {', '.join(DEFECT_MODELS.values())}")
+            raise InputError(f"model: no defect model for the verdict '{verdict}'; name "
+                             f"one of {', '.join(DEFECT_MODELS.values())}", field="model")
         model = DEFECT_MODELS[verdict]
     names = set(load_model(model).parameter_names)
     shaft = record_speed_hz(record) if shaft_hz is None else shaft_hz
@@ -97,7 +97,7 @@ def simulate_matching(diagnosis_or_verdict: Any, record: xr.Dataset, model: str 
     >>> simulate_matching("none", xr.Dataset())  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    analysis.errors.InputError: --model: no defect model for the verdict 'none'; name one ...
+    analysis.errors.InputError: model: no defect model for the verdict 'none'; name one ...
     """
     from analysis.integrate.plan import steps_for_rate
     from analysis.integrate.simulate import simulate

@@ -42,10 +42,11 @@ AR_MAX_ORDER = 200
 
 
 def check_method(method: str) -> str:
-    """``method`` when it is one of :data:`METHODS`; InputError naming ``--prewhiten``."""
+    """``method`` when it is one of :data:`METHODS`; InputError naming ``prewhiten`` (the
+    parameter of ``diagnose`` that gives it) otherwise."""
     if method not in METHODS:
-        raise InputError(f"--prewhiten: must be {', '.join(METHODS[:-1])} or {METHODS[-1]}, "
-                         f"got {method!r}")
+        raise InputError(f"prewhiten: must be {', '.join(METHODS[:-1])} or {METHODS[-1]}, "
+                         f"got {method!r}", field="prewhiten")
     return method
 
 
