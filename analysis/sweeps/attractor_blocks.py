@@ -357,7 +357,7 @@ class AttractorPlan:
     unit: str = "states"
 
     @property
-    def placement(self) -> Placement | str:
+    def placement(self) -> Placement:
         """Where the featurizing mapper's members run, judged once (the first study's)."""
         return self.studies[0].placement
 
