@@ -305,16 +305,16 @@ def target_path(name: str | Path) -> Path:
     path = Path(name)
     allowed = f"must be a built-in target ({', '.join(BUILT_IN)}) or a .toml file"
     if not path.exists():
-        raise InputError(f"--target: {allowed}; there is no file {str(name)!r}")
+        raise InputError(f"target: {allowed}; there is no file {str(name)!r}", field="target")
     if path.is_dir():
-        raise InputError(f"--target: {allowed}; {str(name)!r} is a folder")
+        raise InputError(f"target: {allowed}; {str(name)!r} is a folder", field="target")
     if not path.is_file():  # a FIFO, a device (/dev/zero): never read
-        raise InputError(f"--target: {allowed}; {str(name)!r} is not a regular file")
+        raise InputError(f"target: {allowed}; {str(name)!r} is not a regular file", field="target")
     if path.suffix != ".toml":
-        raise InputError(f"--target: {allowed}, got {str(name)!r}")
+        raise InputError(f"target: {allowed}, got {str(name)!r}", field="target")
     if path.stat().st_size > MAX_TARGET_BYTES:
-        raise InputError(f"--target: {str(name)!r} holds {path.stat().st_size} bytes; a "
-                         f"target file has at most {MAX_TARGET_BYTES}")
+        raise InputError(f"target: {str(name)!r} holds {path.stat().st_size} bytes; a "
+                         f"target file has at most {MAX_TARGET_BYTES}", field="target")
     return path
 
 
@@ -329,9 +329,10 @@ def load_target(name: str | Path, model: Model) -> Target:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except UnicodeDecodeError:
-        raise InputError(f"--target: {path} is not UTF-8 text") from None
+        raise InputError(f"target: {path} is not UTF-8 text", field="target") from None
     except OSError as exc:
-        raise InputError(f"--target: cannot read {path} ({exc.strerror or exc})") from None
+        raise InputError(f"target: cannot read {path} ({exc.strerror or exc})",
+                         field="target") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"--target: {path} is not valid TOML ({exc})") from None
+        raise InputError(f"target: {path} is not valid TOML ({exc})", field="target") from None
     return parse_target(data, model, path.stem, str(path))
