@@ -51,8 +51,9 @@ def test_section_points_are_the_value_by_value_points(both):
 
 
 def test_a_followed_diagram_refuses_a_device(tmp_path):
-    with pytest.raises(InputError, match="--device"):
+    with pytest.raises(InputError, match=r"^device: ") as refused:  # the parameter named
         bifurcation_diagram(SETTING, AXIS, tmp_path / "c.nc", follow=True, device="cpu")
+    assert refused.value.field == "device"
     assert not (tmp_path / "c.nc").exists()
 
 
