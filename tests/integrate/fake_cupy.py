@@ -81,7 +81,9 @@ class FakeCupy:
     asarray = staticmethod(lambda a: np.ascontiguousarray(np.array(a)))
     empty = staticmethod(lambda shape, dtype: np.empty(shape, dtype=dtype))
     asnumpy = staticmethod(lambda a: np.asarray(a))
-
+    # the reductions of ``members.section_features`` on the device
+    minimum, maximum = staticmethod(np.minimum), staticmethod(np.maximum)
+    concatenate = staticmethod(np.concatenate)
 
 
 def cuda_twin(code: str, name: str, folder: Path):

@@ -3,8 +3,9 @@
 ``cupy`` is imported here only, lazily (``pip install bearingdyn[gpu]``; the extra names
 ``cupy-cuda12x``, CuPy's wheel for CUDA 12). The text is ``source.model_source(…,
 target="cuda")``: the member function of the CPU build and a ``__global__`` wrapper, one
-member per thread, the whole time loop inside the kernel, only the sections (or none), the
-logs, the final state, the blow-up step and the extremes copied back.
+member per thread, the whole time loop inside the kernel, only the sections (or none, or
+their reduction on the device: ``CudaKernel.run``'s ``reduce``), the logs, the final
+state, the blow-up step and the extremes copied back.
 
 NVRTC options (``NVRTC_OPTIONS``): ``-std=c++11``; ``--fmad=false`` so that a·b + c stays
 two roundings as in the CPU build (``-ffp-contract=off``): the two builds then differ only
@@ -26,6 +27,7 @@ two-bearing-rotor 200 | 214, the 6205 defect models 166-168 | 216-220, nu205-rol
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -80,15 +82,24 @@ class CudaKernel:
     fn: Any
 
     def run(self, count: int, inputs: list[np.ndarray], kmax: int, keep: bool,
-            outputs: list[np.ndarray]) -> None:
+            outputs: list[np.ndarray], reduce: Callable[[Any, Any], Any] | None = None) -> None:
         """One launch over ``count`` members (the arrays of ``cpu.CpuLibrary.run``, host
-        NumPy: inputs copied to the GPU, outputs copied back into them)."""
+        NumPy: inputs copied to the GPU, outputs copied back into them). ``reduce(cupy,
+        sections)`` (``members.section_features``): the sections (count, kmax, n) stay on
+        the device and only ``reduce``'s array of them is copied back, into ``outputs[0]``
+        (its shape, e.g. (count, 2n)); the device's sections are freed with the launch."""
         cupy = cupy_module()
         dev_in = [cupy.asarray(a) for a in inputs]
-        dev_out = [cupy.empty(a.shape, dtype=a.dtype) for a in outputs]
+        shapes = [a.shape for a in outputs]
+        if reduce is not None:
+            shapes[0] = (count, kmax, outputs[2].shape[1])  # outputs[2]: final, (count, n)
+        dev_out = [cupy.empty(shape, dtype=a.dtype) for shape, a in zip(shapes, outputs,
+                                                                         strict=True)]
         grid = ((count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK,)
         self.fn(grid, (THREADS_PER_BLOCK,),
                 (np.int64(count), *dev_in, np.int64(kmax), np.int32(int(keep)), *dev_out))
+        if reduce is not None:
+            dev_out[0] = reduce(cupy, dev_out[0])
         for host, dev in zip(outputs, dev_out, strict=True):
             host[...] = cupy.asnumpy(dev)
 

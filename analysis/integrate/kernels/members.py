@@ -10,6 +10,14 @@ A member whose state is not finite or whose centre displacement leaves its blow-
 (``simulate.blow_up_limit``, the predicate of ``simulate.bad_states``) stops there: its
 ``diverged_at`` is that step, its later sections and logs NaN; its neighbours are unaffected.
 
+With ``features`` a run on the GPU reduces each member's sections on the device
+(``section_features``: the mean and the extent, max − min, of every state over the K
+sections, 2n numbers) and copies back only those, not the K × n section points (with the
+final state, the blow-up step and the extremes, as always): 8 · 2n bytes of sections' worth
+per member instead of 8 · K · n. A member's run does not depend on the other members of
+its call, so the sections of a few members are had again, exactly, by running those
+members alone.
+
 The state variant on the CPU is the compiled path's RK4 (``simulate``, ``ensemble``) bit for
 bit; the CUDA build agrees with it to the last bits of CUDA's libm.
 """
@@ -52,6 +60,25 @@ CHUNK_PER_THREAD = 4
 """Least members per thread in such a sub-chunk (OpenMP still fills every core)."""
 GPU_BLOCK_SHARE = 0.5
 """Share of the GPU's free memory one block of members may take."""
+
+
+def section_features(xp, sections):
+    """(M, 2n) the sections (M, K, n; SI units) of each member reduced over K: the mean
+    (the sum in section order, divided by K) and the extent (max − min) of every state,
+    NaN where a section is NaN. ``xp``: ``numpy`` for host arrays, ``cupy`` for device
+    arrays (``cuda.CudaKernel.run``), the same operations in the same order, so a device's
+    reduction equals the host's bit for bit (IEEE sums and quotients; no (M, K, n)
+    temporaries: one section at a time)."""
+    first = sections[:, 0]
+    low, high, total = first.copy(), first.copy(), first.copy()
+    for k in range(1, sections.shape[1]):
+        point = sections[:, k]
+        xp.minimum(low, point, out=low)
+        xp.maximum(high, point, out=high)
+        total += point
+    return xp.concatenate([total / sections.shape[1], high - low], axis=1)
+
+
 def section_step(period_s: float, dt: float) -> tuple[float, int]:
     """(h, N): the largest RK4 step h <= ``dt`` (s) that divides the section period
     ``period_s`` (s) into N whole steps, N = ceil(T/dt − 1e-9), h = T/N: sections then fall
@@ -93,6 +120,10 @@ class MemberResult:
     """(M, n) largest value, likewise."""
     device: str
     """``"cpu"`` or ``"gpu"`` (``Placement.kind``)."""
+    features: np.ndarray | None = None
+    """(M, 2n) ``section_features`` of the sections (mean, then max − min, per state; SI
+    units), when ``run_members`` was asked for them (None otherwise); NaN after a
+    blow-up."""
 
 
 def _per_member(name: str, value: np.ndarray | float, m: int, positive: bool) -> np.ndarray:
@@ -107,21 +138,24 @@ def _per_member(name: str, value: np.ndarray | float, m: int, positive: bool) ->
     return np.ascontiguousarray(out)
 
 
-def _bytes_per_member(schedule: Schedule, n: int, n_par: int) -> int:
-    """Bytes of one member's inputs and outputs in a call."""
+def _bytes_per_member(schedule: Schedule, n: int, n_par: int, reduced: bool = False) -> int:
+    """Bytes of one member's inputs and outputs in a call (``reduced``: its sections as
+    the 2n features, as they reach the host from a device reduction)."""
     k = schedule.max_sections
-    kept = k * n if schedule.keep_sections else 0
+    kept = (2 * n if reduced else k * n) if schedule.keep_sections else 0
     return 8 * (n + 1 + n_par + 3 + kept + (k if schedule.tangent else 0) + 3 * n + 1)
 
 
 def check_fits(device: str | Placement, members: int, schedule: Schedule, n: int,
-               n_par: int = 0) -> None:
+               n_par: int = 0, features: bool = False) -> None:
     """``InputError`` before anything is allocated when the results of ``members``
     members do not fit the host's budget (``RUN_MEMORY``; the device streams blocks, so
     only the kept results count), or when one member does not fit the GPU's free memory
-    (``device``: a ``Placement``, or a resolved name ``"cpu"`` or ``"gpu"``)."""
+    (``device``: a ``Placement``, or a resolved name ``"cpu"`` or ``"gpu"``). ``features``:
+    the run asks for ``run_members``'s ``features``, so a GPU's results reach the host as
+    2n features per member (its sections still live on the device)."""
     per = _bytes_per_member(schedule, n, n_par)
-    kept = members * per
+    kept = members * _bytes_per_member(schedule, n, n_par, features and on_gpu(device))
     if kept > RUN_MEMORY:
         raise InputError(f"members: {members} members with {schedule.max_sections} sections "
                          f"of {n} states need {kept / 2**30:.3g} GiB of results; at most "
@@ -158,7 +192,7 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
                 t0: np.ndarray | float = 0.0, k0: np.ndarray | int = 0,
                 device: str | Placement = CPU, block: int | None = None,
                 progress: Callable[[int, int], None] | None = None,
-                threads: int | None = None) -> MemberResult:
+                threads: int | None = None, features: bool = False) -> MemberResult:
     """Run M members of ``system``'s model and balls by ``schedule``.
 
     ``states`` (M, n): initial states (SI units; a state that is not finite diverges at
@@ -173,7 +207,11 @@ def run_members(system: System, states: np.ndarray, parameters: np.ndarray | Non
 without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, at least
 ``CHUNK_PER_THREAD`` members per thread, sized from the chunks before); ``threads``:
     CPU threads (None: the placement's ``threads``, else ``cpu.cores()``, every core; a
-    worker process of a pool of W takes cores / W).
+    worker process of a pool of W takes cores / W). ``features`` (with
+    ``schedule.keep_sections``): ``MemberResult.features``, the sections reduced over K
+    (``section_features``): on the GPU on the device, only they are copied back and
+    ``sections`` is None; on the CPU the sections are in host memory already and are kept
+    (``features`` are computed from them, per block).
 
     Each member's blow-up limit is ``simulate.blow_up_limit`` of its parameters. Bad input
     raises ``InputError`` before anything runs; a model whose kernel cannot be written or
@@ -199,16 +237,23 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
     placed = device if isinstance(device, Placement) else \
         place(device, m, steps=schedule.total_steps)
     threads = threads or placed.threads
-    check_fits(placed, m, schedule, n, n_par)
+    if features and not schedule.keep_sections:
+        raise InputError("features: the reduction of the sections needs a schedule that "
+                         "keeps them (keep_sections)")
+    reduce = features and placed.gpu
+    check_fits(placed, m, schedule, n, n_par, features)
     limits = _limits(system, p, parameters is None)
     kern = placed.row.kernel(system, schedule.tangent)
     counts = schedule.per_member(m)
     k = schedule.max_sections
-    sections = np.full((m, k, n), np.nan) if schedule.keep_sections else None
+    sections = np.full((m, k, n), np.nan) if schedule.keep_sections and not reduce else None
+    reduced = np.full((m, 2 * n), np.nan) if features else None
     logs = np.full((m, k), np.nan) if schedule.tangent else None
     final, low, high = np.empty((m, n)), np.empty((m, n)), np.empty((m, n))
     diverged = np.empty(m, dtype=np.int64)
-    size = _block_size(placed, m, _bytes_per_member(schedule, n, n_par), block)
+    # a device reduction's temporaries: low, high, total, mean, extent and the features
+    size = _block_size(placed, m, _bytes_per_member(schedule, n, n_par)
+                       + (8 * 7 * n if reduce else 0), block)
     z0, p = np.ascontiguousarray(z0), np.ascontiguousarray(p)
     width = min(threads or cores(), m)
     chunks = _Chunks(size, width if progress is not None and not placed.gpu
@@ -218,18 +263,25 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
         part = slice(start, min(m, start + chunks.size))
         count = part.stop - start
         began = time.perf_counter()
-        outs = [np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n)),
+        outs = [np.empty((count, 2 * n)) if reduce else
+                np.empty((count, k, n)) if sections is not None else np.empty((1, 1, n)),
                 np.empty((count, k)) if logs is not None else np.empty((1, 1)),
                 np.empty((count, n)), np.empty(count, dtype=np.int64),
                 np.empty((count, n)), np.empty((count, n))]
         ins = [np.ascontiguousarray(a[part]) for a in (z0, k0s, p, hs, t0s, limits, *counts)]
-        if placed.gpu:
+        if reduce:  # outs[0] receives the device's section_features
+            kern.run(count, ins, k, schedule.keep_sections, outs, section_features)
+        elif placed.gpu:
             kern.run(count, ins, k, schedule.keep_sections, outs)
         else:
             kern.run(count, min(threads or cores(), count), ins, k, schedule.keep_sections,
                      outs)
-        if sections is not None:
+        if reduce:
+            reduced[part] = outs[0]
+        elif sections is not None:
             sections[part] = outs[0]
+            if reduced is not None:
+                reduced[part] = section_features(np, outs[0])
         if logs is not None:
             logs[part] = outs[1]
         final[part], diverged[part], low[part], high[part] = outs[2:]
@@ -243,7 +295,8 @@ without ``block``, after each sub-chunk of about ``PROGRESS_SECONDS`` of work, a
         used = (np.arange(k)[None, :] >= skip[:, None]) & (np.arange(k)[None, :] < n_sec[:, None])
         with np.errstate(invalid="ignore"):
             lambda1 = np.where(used, logs, 0.0).sum(axis=1) / (n_sec - skip) / (every * hs)
-    return MemberResult(sections, logs, lambda1, diverged, final, low, high, placed.kind)
+    return MemberResult(sections, logs, lambda1, diverged, final, low, high, placed.kind,
+                        reduced)
 
 
 class _Chunks:

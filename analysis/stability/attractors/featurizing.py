@@ -6,8 +6,16 @@ Where the recurrence mapper (``mapper``) walks every trajectory on the host one 
 periods at a time, this mapper integrates a whole block of initial states in one call of
 the member kernel (``analysis.integrate.kernels.run_members``: every core, or the GPU),
 for a fixed time: ``transient`` forcing periods dropped, then ``sections`` section points
-recorded per member. Only those points come back; on the host each member becomes a
-feature vector and the vectors are clustered:
+recorded per member. Each member becomes a feature vector and the vectors are clustered on
+the host. On the cores the section points are in host memory and reduced there
+(``features``); on a GPU (``DEVICE_FEATURES``) they are reduced on the device
+(``members.section_features``, the same operations in the same order, so the same
+numbers) and only the 2n features per member come back, not its K × n points (48 sections
+of 4 states: 64 bytes instead of 1536). The few members whose points are still needed,
+the first of each cluster (its ``Found.points``) and up to ``PERIOD_SAMPLE`` per cluster
+(``periods``), are run again alone with their sections kept: a member's run does not depend
+on the other members of its launch, so those are its points exactly, for at most
+``PERIOD_SAMPLE`` × clusters members more per block.
 
 - **features** (each coordinate divided by the study's ``Scale``, so in orbit sizes): the
   centroid of the member's section points and their extent (max − min) along every state
@@ -70,6 +78,10 @@ PERIOD_SAMPLE = 64
 one; every member's would cost a pass over all section points per period tried)."""
 FEATURE_CHUNK = 1 << 15
 """Members per thread's block in ``features``."""
+DEVICE_FEATURES = True
+"""Whether a featurizing run on a GPU reduces its sections to features on the device and
+copies back only those (False: every section point comes back and is reduced on the host,
+the path before; the tests run both)."""
 TRANSIENT_CHUNK = 64
 """Periods per call of the map when no member kernel is at hand (the transient's points
 are checked for blow-up chunk by chunk, then dropped)."""
@@ -127,18 +139,22 @@ def choose(mapper: str, device: str | Placement, members: int) -> str:
 
 @dataclass
 class Record:
-    """What a block's fixed-time run returns: section points (M, K, n; SI units), a
-    blow-up flag (M,) and the final state (M, n) at step ``steps``."""
+    """What a block's fixed-time run returns: section points (M, K, n; SI units; None when
+    only their features came back), a blow-up flag (M,), the final state (M, n) at step
+    ``steps`` and, from a device's reduction, the features (M, 2n; SI units, not yet
+    divided by the scale: ``members.section_features``)."""
 
-    sections: np.ndarray
+    sections: np.ndarray | None
     diverged: np.ndarray
     final: np.ndarray
     steps: int
+    features: np.ndarray | None = None
 
 
 Recorder = Callable[..., Record]
-"""``record(smap, states, options, progress=None)``: a block's fixed-time run;
-``progress(done, total)`` (members) while it runs."""
+"""``record(smap, states, options, progress=None, sections=False)``: a block's fixed-time
+run; ``progress(done, total)`` (members) while it runs; ``sections``: the section points
+are wanted (otherwise a recorder may return the features only)."""
 
 
 def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
@@ -153,29 +169,36 @@ def schedule_of(smap: StroboscopicMap, options: FeatureOptions):
 
 def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
                   device: str | Placement = "cpu",
-                  progress: Callable[[int, int], None] | None = None) -> Record:
+                  progress: Callable[[int, int], None] | None = None,
+                  features: bool = False) -> Record:
     """The fixed-time run of ``states`` (M, n; t = 0) on the member kernel
     (``analysis.integrate.kernels.run_members`` on ``device``, a ``Placement`` taken as it
-    is; on the CPU ``progress``
-    moves every ~0.5 s of work, ``members.PROGRESS_SECONDS``)."""
+    is; on the CPU ``progress`` moves every ~0.5 s of work, ``members.PROGRESS_SECONDS``).
+    ``features`` on a GPU: the sections reduced on the device, only the features come back
+    (``Record.sections`` None); on the CPU ``features`` is ignored (the sections are on the
+    host already: ``features`` reduces them there)."""
     from analysis.integrate.kernels import run_members
+    from analysis.integrate.kernels.placement import Placement as Placed
 
+    reduce = features and isinstance(device, Placed) and device.gpu
     out = run_members(smap.system, states, None, smap.dt, schedule_of(smap, options),
-                      device=device, progress=progress)
-    sections = np.asarray(out.sections, dtype=float)
+                      device=device, progress=progress, features=reduce)
+    sections = None if reduce else np.asarray(out.sections, dtype=float)
     # the kernel checks every step by the blow-up predicate of simulate (its sections after
     # a blow-up are NaN): no pass over the sections here
     bad = np.asarray(out.diverged_at) >= 0
     steps = (options.transient + options.sections) * smap.steps
-    return Record(sections, bad, np.asarray(out.final, dtype=float), steps)
+    return Record(sections, bad, np.asarray(out.final, dtype=float), steps, out.features)
 
 
 def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
-               progress: Callable[[int, int], None] | None = None) -> Record:
+               progress: Callable[[int, int], None] | None = None,
+               sections: bool = True) -> Record:
     """The same run through ``StroboscopicMap.advance`` (the lane kernel or the RK4 blocks,
     one process): the path of a model whose member kernel cannot be built on the CPU.
     Every member advances together: ``progress`` counts the members times the share of
-    the periods run, after each ``TRANSIENT_CHUNK`` periods."""
+    the periods run, after each ``TRANSIENT_CHUNK`` periods. Its section points always
+    come back (``sections`` is the ``Recorder``'s keyword)."""
     s = np.ascontiguousarray(np.column_stack([states, np.zeros(len(states))]))
     bad = np.zeros(len(states), dtype=bool)
     left, periods = options.transient, options.transient + options.sections
@@ -185,9 +208,9 @@ def map_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOption
         left -= chunk
         if progress is not None:
             progress(len(states) * (options.transient - left) // periods, len(states))
-    sections = smap.advance(s, options.sections)
-    bad |= smap.diverged(sections)
-    return Record(sections, bad, s[:, :-1].copy(), int(s[0, -1]) if len(s) else 0)
+    points = smap.advance(s, options.sections)
+    bad |= smap.diverged(points)
+    return Record(points, bad, s[:, :-1].copy(), int(s[0, -1]) if len(s) else 0)
 
 
 def resolve(device: str | Placement, members: int, smap: StroboscopicMap,
@@ -204,15 +227,18 @@ def recorder(smap: StroboscopicMap, device: str | Placement, block: int,
     before any work: ``block`` members' results must fit (``kernels.check_fits``,
     ``InputError``) and the model's member kernel must build (a one-step run). On the CPU a
     model whose kernel cannot be written or built falls back to ``map_record``; on the GPU
-    that is an ``InputError`` with the reason (``members.unbuildable``)."""
+    that is an ``InputError`` with the reason (``members.unbuildable``). On a GPU with
+    ``DEVICE_FEATURES`` the recorder returns the device's features only, unless asked for
+    the sections (a few members run again: ``FeaturizingMapper.map``)."""
     from analysis.integrate.compiled import CompileError
     from analysis.integrate.kernels import Schedule, Unsupported, check_fits, run_members
     from analysis.integrate.kernels.members import unbuildable
 
     system = smap.system
     device = place(device, block)  # a Placement as it is; a name placed once, here
+    reduce = device.gpu and DEVICE_FEATURES
     check_fits(device, block, schedule_of(smap, options), system.n_state,
-               len(system.model.parameter_names))
+               len(system.model.parameter_names), reduce)
     try:
         run_members(system, system.state[None, :], None, smap.dt, Schedule(0, 1, 1),
                     device=device)
@@ -220,8 +246,13 @@ def recorder(smap: StroboscopicMap, device: str | Placement, block: int,
         if device.gpu:
             raise unbuildable(system, device.kind, exc) from None
         return map_record
-    return lambda smap, states, options, progress=None: kernel_record(smap, states, options,
-                                                                        device, progress)
+    def record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOptions,
+               progress: Callable[[int, int], None] | None = None,
+               sections: bool = False) -> Record:
+        return kernel_record(smap, states, options, device, progress,
+                             features=reduce and not sections)
+
+    return record
 
 
 def features(sections: np.ndarray, scale: Scale) -> np.ndarray:
@@ -246,16 +277,16 @@ def features(sections: np.ndarray, scale: Scale) -> np.ndarray:
 
 
 def block_features(sections: np.ndarray, scale: Scale) -> np.ndarray:
-    """``features`` of one block, in this thread."""
-    first = sections[:, 0]
-    low, high, total = first.copy(), first.copy(), first.copy()
-    for k in range(1, sections.shape[1]):  # one section at a time: no (M, K, n) temporaries
-        point = sections[:, k]
-        np.minimum(low, point, out=low)
-        np.maximum(high, point, out=high)
-        total += point
-    return np.concatenate([total / sections.shape[1] / scale.size, (high - low) / scale.size],
-                          axis=1)
+    """``features`` of one block, in this thread: ``members.section_features`` (what a GPU
+    computes on the device) divided by the scale (``scaled``)."""
+    from analysis.integrate.kernels.members import section_features
+
+    return scaled(section_features(np, sections), scale)
+
+
+def scaled(reduced: np.ndarray, scale: Scale) -> np.ndarray:
+    """Features (M, 2n; SI units, ``members.section_features``) in orbit sizes."""
+    return reduced / np.concatenate([scale.size, scale.size])
 
 
 def periods(sections: np.ndarray, scale: Scale, options: FeatureOptions) -> np.ndarray:
@@ -325,6 +356,9 @@ class FeaturizingMapper:
         """Label -> the most common detected period of its members (0: not periodic)."""
         self.spent = np.zeros(0, dtype=np.int64)
         """Periods integrated per initial state in the last ``map`` call."""
+        self.rerun = 0
+        """Members run again in the last ``map`` call for their section points (none when
+        the block's run brought its sections back; ``points_of``)."""
 
     def map(self, states: np.ndarray,
             progress: Callable[[int, int], None] | None = None) -> np.ndarray:
@@ -338,29 +372,52 @@ class FeaturizingMapper:
         run = self.record(self.smap, states, opts, running)
         labels = np.full(len(states), DIVERGED, dtype=np.int64)
         ok = np.flatnonzero(~run.diverged)
-        kept = run.sections if len(ok) == len(states) else run.sections[ok]  # no copy if all
-        cells = feature_cells(features(kept, self.scale), opts.resolution)
+        if run.sections is None:  # the device's features: only the scale is applied here
+            values = scaled(run.features[ok], self.scale)
+        else:
+            kept = run.sections if len(ok) == len(states) else run.sections[ok]  # no copy
+            values = features(kept, self.scale)
+        cells = feature_cells(values, opts.resolution)
         groups = touching_groups(cells)
         labels[ok] = groups + 1
         self.found, self.period_of = {}, {}
         order = np.argsort(groups, kind="stable")  # each group's members, in index order
         ends = np.cumsum(np.bincount(groups))
-        for g, end in enumerate(ends):
-            members = order[(ends[g - 1] if g else 0):end]
-            i = int(ok[members[0]])
+        clusters = [order[(ends[g - 1] if g else 0):end] for g, end in enumerate(ends)]
+        samples = [ok[members[:PERIOD_SAMPLE]] for members in clusters]  # first one first
+        points, at = self.points_of(states, run, samples)
+        for g, (members, sample) in enumerate(zip(clusters, samples, strict=True)):
+            i = int(sample[0])
             label = g + 1
             self.found[label] = Found(
                 label=label, cells={row.tobytes() for row in distinct_rows(cells[members])[0]},
-                points=list(run.sections[i]), finder=i,
+                points=list(points[at(i)]), finder=i,
                 finder_state=np.append(states[i], 0.0), found_step=run.steps,
                 last_state=np.append(run.final[i], float(run.steps)))
-            sample = ok[members[:PERIOD_SAMPLE]]
-            detected = periods(run.sections[sample], self.scale, opts)
+            detected = periods(points[at(sample)], self.scale, opts)
             self.period_of[label] = int(np.bincount(detected).argmax())
         self.spent = np.full(len(states), opts.transient + opts.sections, dtype=np.int64)
         if progress is not None:
             progress(len(states), len(states))
         return labels
+
+
+    def points_of(self, states: np.ndarray, run: Record, samples: list[np.ndarray]):
+        """(sections, at): section points of the members in ``samples`` (one index array
+        per cluster) and their rows in it (``at(indices)``). A run that brought its
+        sections back gives them all; one that brought only features (a GPU's reduction)
+        runs just these members again with their sections kept: at most ``PERIOD_SAMPLE``
+        × clusters members (``rerun`` counts them), exactly the points they had in the
+        block's run (a member's run does not depend on the other members of its launch)."""
+        if run.sections is not None:
+            self.rerun = 0
+            return run.sections, lambda i: i
+        wanted = np.unique(np.concatenate(samples)) if samples else np.zeros(0, dtype=int)
+        self.rerun = len(wanted)
+        if not len(wanted):
+            return np.zeros((0, self.options.sections, states.shape[1])), lambda i: i
+        again = self.record(self.smap, states[wanted], self.options, sections=True)
+        return again.sections, lambda i: np.searchsorted(wanted, i)
 
 
 def merge_groups(cell_sets: Sequence[np.ndarray]) -> np.ndarray:
