@@ -53,7 +53,8 @@ def parse_prior(text: str) -> Prior:
     wrong: LO >= HI, a log prior with LO <= 0, a non-number)."""
     parts = str(text).split(":")
     if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] not in ("log", "lin")):
-        raise InputError(f"--prior: must be NAME:LO:HI or NAME:LO:HI:log, got {text!r}")
+        raise InputError(f"prior: must be NAME:LO:HI or NAME:LO:HI:log, got {text!r}",
+                         field="prior")
     name = parts[0].strip()
     try:
         lo, hi = float(parts[1]), float(parts[2])
@@ -73,7 +74,7 @@ def check_priors(priors: Sequence[Prior], model: Model) -> tuple[Prior, ...]:
     """The priors checked against ``model``: each names one of its runtime parameters,
     once, and its range lies within the parameter's allowed range (``InputError``)."""
     if not priors:
-        raise InputError("--prior: give at least one, NAME:LO:HI[:log]")
+        raise InputError("prior: give at least one, NAME:LO:HI[:log]", field="prior")
     seen: set[str] = set()
     for prior in priors:
         if prior.name in STRUCTURAL:

@@ -101,7 +101,7 @@ def parse_dist(text: str) -> Dist:
     parts = rest.split(":")
     form = "NAME=uniform:LO:HI, NAME=normal:MEAN:SD or NAME=lognormal:MEDIAN:FACTOR"
     if not eq or not name or len(parts) != 3:
-        raise InputError(f"--dist: must be {form}, got {text!r}")
+        raise InputError(f"dist: must be {form}, got {text!r}", field="dist")
     kind = parts[0].strip().lower()
     if kind not in KINDS:
         raise InputError(f"--dist {name}: unknown distribution {parts[0]!r}; "
@@ -173,8 +173,8 @@ def check_dists(dists: Sequence[Dist | str], model: Model,
     once, none also given a fixed value (``sets``, ``--set``) or swept (``swept``)."""
     parsed = [d if isinstance(d, Dist) else parse_dist(d) for d in dists]
     if not parsed:
-        raise InputError("--dist: give at least one, NAME=uniform:LO:HI|normal:MEAN:SD|"
-                         "lognormal:MEDIAN:FACTOR")
+        raise InputError("dist: give at least one, NAME=uniform:LO:HI|normal:MEAN:SD|"
+                         "lognormal:MEDIAN:FACTOR", field="dist")
     seen: set[str] = set()
     out = []
     for dist in parsed:

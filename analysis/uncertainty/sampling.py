@@ -79,7 +79,7 @@ def draw(dists: Sequence[Dist], samples: int, seed: int = 0) -> Design:
     unit = unit_design(len(dists), samples, seed)
     values = np.column_stack([d.ppf(unit[:, j]) for j, d in enumerate(dists)])
     if not np.all(np.isfinite(values)):
-        raise InputError("--dist: a draw is not finite")
+        raise InputError("dist: a draw is not finite", field="dist")
     return Design(tuple(d.name for d in dists), unit, values, samples)
 
 
