@@ -208,3 +208,16 @@ def test_cpu_features_are_the_reduction_written_before_bit_for_bit():
     now = features(sections, scale)
     assert np.isnan(now[5]).all()
     assert now.tobytes() == before(sections).tobytes()
+
+
+def test_the_memory_check_counts_a_gpu_blocks_features_not_its_sections():
+    """45·10⁶ states of a 4-state rotor in blocks of 2²⁰: refused when a block's 48
+    sections come back (their 1.9 GB and 8 (n + 3) B per state pass the 4 GiB budget),
+    allowed when only its features do (0.34 GB)."""
+    from analysis.stability.attractors.mapper import MapperOptions
+    from analysis.stability.attractors.study import check_memory
+
+    args = (45_000_000, 4, MapperOptions(), FeatureOptions(), 1 << 20)
+    with pytest.raises(InputError, match=r"^samples: .* or a smaller block$"):
+        check_memory(*args)
+    check_memory(*args, device_features=True)

@@ -15,6 +15,8 @@ periods and ``FAILED`` (−3) for the states of a block whose integration raised
 ``BLOCK``, in order). Each block is mapped by a fresh mapper with the study's scale and
 options (``RecurrenceMapper``, or ``featurizing.FeaturizingMapper`` with
 ``mapper="features"``, whose blocks' clusters are merged when their feature cells touch;
+on a GPU its sections are reduced on the device and only features come back, a few
+members run again for their section points: see ``featurizing``;
 ``map_block``, a ``Block``: what a worker computes and a store keeps);
 then ``merge`` joins the attractors of all blocks whose cell sets overlap (union–find; the
 attractor of the lowest-numbered block, then the lowest label, is kept as the
@@ -33,11 +35,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import analysis.stability.attractors.featurizing as featurizing
 from analysis.budgets import STUDY_MEMORY
 from analysis.errors import InputError, SimulationError
 from analysis.integrate.ensemble import StroboscopicMap
 from analysis.integrate.flow import Period
-from analysis.integrate.kernels.placement import Placement
+from analysis.integrate.kernels.placement import Placement, on_gpu
 from analysis.integrate.simulate import simulate
 from analysis.model import System
 from analysis.stability.attractors.featurizing import (
@@ -98,27 +101,33 @@ def section_name(period: Period) -> str:
 
 
 def check_memory(members: int, n_state: int, options: MapperOptions,
-                 features: FeatureOptions | None = None, block: int = BLOCK) -> None:
+                 features: FeatureOptions | None = None, block: int = BLOCK,
+                 device_features: bool = False) -> None:
     """``InputError`` before any work when ``members`` initial states would need more than
     ``STUDY_MEMORY``. Recurrence mapper: their labels and states, a chunk of section points
     each and, per member, up to ``revisits`` + ``record`` cells of ``n_state`` indices.
     Featurizing mapper (``features`` given): per member its state, label and periods, and
     per block of ``block`` members their recorded section points, features and cells (only
-    features leave a block, so the sections of one block at a time)."""
+    features leave a block, so the sections of one block at a time); with
+    ``device_features`` (a GPU's reduction, ``featurizing.DEVICE_FEATURES``) the block's
+    sections never reach the host: 2n features per member instead of K × n points (the
+    few members run again for their points, at most ``PERIOD_SAMPLE`` per cluster, are
+    not counted)."""
     if features is None:
         per_member = 8 * (3 * (n_state + 1) + options.chunk * n_state
                           + (options.revisits + options.record) * (n_state + 8))
         fixed = 0
     else:
         per_member = 8 * (n_state + 3)
-        fixed = 8 * min(block, members) * ((features.sections + 2) * n_state + 6 * n_state)
+        kept = 2 if device_features else features.sections
+        fixed = 8 * min(block, members) * ((kept + 2) * n_state + 6 * n_state)
     need = members * per_member + fixed
     if need > STUDY_MEMORY:
         most = max((STUDY_MEMORY - fixed) // per_member, 0)
         raise InputError(f"samples: {members} initial states would need about "
                          f"{need / 2**30:.3g} GiB; at most {STUDY_MEMORY / 2**30:g} GiB "
                          f"({most} states with these settings): use fewer"
-                         + (" or a smaller --block" if features is not None else ""))
+                         + (" or a smaller block" if features is not None else ""))
 
 
 @dataclass
@@ -312,9 +321,12 @@ class AttractorStudy:
             self._record = recorder(self.map, self.placement, block, self.feature_options)
 
     def check_memory(self, members: int, block: int) -> None:
-        """``check_memory`` of ``members`` states in blocks of ``block`` by this mapper."""
+        """``check_memory`` of ``members`` states in blocks of ``block`` by this mapper
+        (on a GPU with ``featurizing.DEVICE_FEATURES``: the device's features)."""
+        feature = self.mapper_kind == "features"
         check_memory(members, self.system.n_state, self.options,
-                     self.feature_options if self.mapper_kind == "features" else None, block)
+                     self.feature_options if feature else None, block,
+                     feature and on_gpu(self.placement) and featurizing.DEVICE_FEATURES)
 
     @property
     def default_block(self) -> int:
