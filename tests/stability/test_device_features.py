@@ -218,6 +218,6 @@ def test_the_memory_check_counts_a_gpu_blocks_features_not_its_sections():
     from analysis.stability.attractors.study import check_memory
 
     args = (45_000_000, 4, MapperOptions(), FeatureOptions(), 1 << 20)
-    with pytest.raises(InputError, match=r"^samples: .* or a smaller block$"):
+    with pytest.raises(InputError, match=r"^samples: .* or a smaller --block$"):
         check_memory(*args)
     check_memory(*args, device_features=True)

@@ -178,9 +178,8 @@ def kernel_record(smap: StroboscopicMap, states: np.ndarray, options: FeatureOpt
     (``Record.sections`` None); on the CPU ``features`` is ignored (the sections are on the
     host already: ``features`` reduces them there)."""
     from analysis.integrate.kernels import run_members
-    from analysis.integrate.kernels.placement import Placement as Placed
 
-    reduce = features and isinstance(device, Placed) and device.gpu
+    reduce = features and on_gpu(device)
     out = run_members(smap.system, states, None, smap.dt, schedule_of(smap, options),
                       device=device, progress=progress, features=reduce)
     sections = None if reduce else np.asarray(out.sections, dtype=float)

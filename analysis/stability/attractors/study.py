@@ -127,7 +127,7 @@ def check_memory(members: int, n_state: int, options: MapperOptions,
         raise InputError(f"samples: {members} initial states would need about "
                          f"{need / 2**30:.3g} GiB; at most {STUDY_MEMORY / 2**30:g} GiB "
                          f"({most} states with these settings): use fewer"
-                         + (" or a smaller block" if features is not None else ""))
+                         + (" or a smaller --block" if features is not None else ""))
 
 
 @dataclass
