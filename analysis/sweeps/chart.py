@@ -12,6 +12,11 @@ holding the group's keys and each field stacked, written by the calling process 
 arrive; a block is whole or absent): re-running an interrupted command computes only the
 missing points. Entries of one point (charts stored before blocks) are read as well.
 
+A chart is a study plan (``analysis.integrate.study``): ``plan_chart`` runs its every check
+once (the grid, the box of its initial states, the device judged once) and returns a
+``ChartPlan``, which the one runner (``analysis.sweeps.runner.run_study``) runs;
+``stability_chart`` is the two in one call.
+
 A setting without a section classifies each point on its model's own section
 (``classify.default_section``: vc for a balanced rotor in one bearing) and records
 ``samples`` shaft revolutions (``classify.GRID_RECORD_SECTION``); with a section, both are

@@ -39,6 +39,11 @@ from the worker (a Dask cluster on several machines needs a shared file system f
 A brute-force diagram on the member kernels (``device``) stores each call's
 ``ENSEMBLE_BLOCK`` values as one entry (``PointStore.save_block``) and resumes from the
 last stored block.
+
+A diagram is a study plan (``analysis.integrate.study``): ``plan_diagram`` runs its every
+check once (the direction, the grid, a device only without following, the device judged
+once) and returns a ``DiagramPlan``, which the one runner
+(``analysis.sweeps.runner.run_study``) runs; ``bifurcation_diagram`` is the two in one call.
 """
 
 from __future__ import annotations
