@@ -170,7 +170,7 @@ def continue_circle(
     if prob.tail(first.circle) > tail_limit:
         raise InputError(f"points: the circle at {param} = {start:g} has a Fourier tail "
                          f"{prob.tail(first.circle):.2e} above tail_limit = {tail_limit:g}; "
-                         "give more points")
+                         "give more points", field="points")
     with blas_threads():
         out = trace_from(prob, first.circle.reshape(-1), stop, options,
                          hooks=Hooks(accept=prob.too_rough), progress=progress)

@@ -112,7 +112,7 @@ def check_points(points: object, n_state: int, what: str = "points") -> int:
         raise InputError(f"{what}: {points} circle points of {n_state} states need about "
                          f"{CIRCLE_MATRICES * 8 * (n_state * points) ** 2 / 2**30:.1f} GiB of "
                          f"dense matrices (at most {DENSE_MEMORY / 2**30:g} GiB): at most "
-                         f"{most} for this model")
+                         f"{most} for this model", field=what)
     return int(points)
 
 
@@ -539,10 +539,12 @@ def solve_circle(
     system, freqs, _ = prepare_torus(system, frequencies, (1, 1))
     if freqs[0].kind == "vc" or freqs[1].kind != "vc":
         raise InputError(f"frequencies: the shaft map needs F1 the explicit time's (shaft or "
-                         f"param:NAME) and F2 a VC, got {freqs[0]},{freqs[1]}")
+                         f"param:NAME) and F2 a VC, got {freqs[0]},{freqs[1]}",
+                         field="frequencies")
     points = check_points(points, system.n_state)
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
-        raise InputError(f"samples: must be a whole number >= 3, got {samples!r}")
+        raise InputError(f"samples: must be a whole number >= 3, got {samples!r}",
+                         field="samples")
     w1, w2 = omegas_of(system, freqs)
     dt_max = RunPlan.step(system, dt).dt
     steps, n1 = shaft_steps(2 * math.pi / w1, dt_max, int(samples))

@@ -63,7 +63,7 @@ def fast_samples(harmonics: int, samples: int | None = None) -> int:
         return int(scipy.fft.next_fast_len(max(4 * harmonics + 1, 64)))
     if not (isinstance(samples, int) and samples >= 2 * harmonics + 1):
         raise InputError(f"samples: must be a whole number >= 2H + 1 = {2 * harmonics + 1}, "
-                         f"got {samples!r}")
+                         f"got {samples!r}", field="samples")
     return samples
 
 
@@ -78,7 +78,7 @@ def check_harmonics(harmonics: object, n_state: int, what: str = "harmonics") ->
     and ``MAX_UNKNOWNS``; ``InputError`` (one line) before any work otherwise."""
     if isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) \
             or harmonics < 1:
-        raise InputError(f"{what}: must be a whole number >= 1, got {harmonics!r}")
+        raise InputError(f"{what}: must be a whole number >= 1, got {harmonics!r}", field=what)
     harmonics = int(harmonics)
     unknowns = n_state * (2 * harmonics + 1)
     need = matrix_bytes(n_state, harmonics)
@@ -88,7 +88,7 @@ def check_harmonics(harmonics: object, n_state: int, what: str = "harmonics") ->
         raise InputError(f"{what}: H = {harmonics} gives {unknowns} Fourier unknowns for "
                          f"{n_state} states, whose dense matrices need about "
                          f"{need / 2**30:.1f} GiB (at most {DENSE_MEMORY / 2**30:g} GiB); "
-                         f"at most H = {most} for this model")
+                         f"at most H = {most} for this model", field=what)
     return harmonics
 
 

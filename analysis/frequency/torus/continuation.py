@@ -128,7 +128,7 @@ def continue_torus(
     if isinstance(stability_every, bool) or not isinstance(stability_every, int) or \
             stability_every < 1:
         raise InputError(f"stability_every: must be a whole number >= 1, got "
-                         f"{stability_every!r}")
+                         f"{stability_every!r}", field="stability_every")
     system = as_system(system, n_balls, **parameters)
     model = system.model
     span = ContinuedRange.check(model, param, start, stop)

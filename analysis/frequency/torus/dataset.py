@@ -200,13 +200,15 @@ def check_torus_run(system: System, duration: float, dt: float | None = None,
     dt = float(system.model.simulation_defaults["dt"] if dt is None else dt)
     for name, value, low in (("duration", duration, 0.0), ("dt", dt, 0.0)):
         if not (math.isfinite(value) and value > low):
-            raise InputError(f"{name}: must be a finite number > 0 s, got {value!r}")
+            raise InputError(f"{name}: must be a finite number > 0 s, got {value!r}",
+                             field=name)
     if not math.isfinite(t_start):
-        raise InputError(f"t_start: must be a finite number of s, got {t_start!r}")
+        raise InputError(f"t_start: must be a finite number of s, got {t_start!r}",
+                         field="t_start")
     steps = round(duration / dt)
     if steps < 2 or steps > 50_000_000:
         raise InputError(f"duration: {duration:g} s at dt = {dt:g} s gives {steps} samples; "
-                         "give between 2 and 5e7")
+                         "give between 2 and 5e7", field="duration")
     return dt, steps
 
 

@@ -81,30 +81,32 @@ def parse_frequencies(text: str | tuple, model: Model) -> tuple[Period, Period]:
     parts = [s.strip() for s in text.split(",")] if isinstance(text, str) else list(text)
     if len(parts) != 2 or not all(parts):
         raise InputError(f"frequencies: give two base frequencies F1,F2 (each shaft, vc, "
-                         f"vc[name] or param:NAME), got {text!r}")
+                         f"vc[name] or param:NAME), got {text!r}", field="frequencies")
     out = []
     for part in parts:
         try:
             per = part if isinstance(part, Period) else Period.parse(part)
         except InputError as err:
-            raise InputError(f"frequencies: {err}".replace("period: ", "")) from None
+            raise InputError(f"frequencies: {err}".replace("period: ", ""),
+                             field="frequencies") from None
         if per.kind == "ratio" or per.count != 1:
             raise InputError(f"frequencies: {part} is not a base frequency; use shaft, vc, "
-                             "vc[name] or param:NAME")
+                             "vc[name] or param:NAME", field="frequencies")
         try:
             per.check(model)
         except InputError as err:
-            raise InputError(str(err).replace("period: ", "frequencies: ", 1)) from None
+            raise InputError(str(err).replace("period: ", "frequencies: ", 1),
+                             field="frequencies") from None
         out.append(per)
     same_name = out[0].name == out[1].name or out[0].kind == "vc"
     if out[0].kind == out[1].kind and same_name and \
             _bearing_index(model, out[0]) == _bearing_index(model, out[1]):
         raise InputError(f"frequencies: {parts[0]} and {parts[1]} are the same frequency; "
-                         "a torus needs two incommensurate ones")
+                         "a torus needs two incommensurate ones", field="frequencies")
     if all(per.kind != "vc" for per in out):
         raise InputError(f"frequencies: {parts[0]},{parts[1]}: at most one may be shaft or "
                          "param:NAME (the model's explicit time goes to it); name a bearing's "
-                         "vc as the other")
+                         "vc as the other", field="frequencies")
     return out[0], out[1]
 
 
@@ -137,12 +139,12 @@ def check_torus_harmonics(harmonics: object, n_state: int,
         pair = ()
     if len(pair) != 2:
         raise InputError(f"{what}: give two numbers of harmonics H1,H2 (each >= 1), got "
-                         f"{harmonics!r}")
+                         f"{harmonics!r}", field=what)
     try:
         h1, h2 = (check_count(what, h, 1, text=True) for h in pair)
     except InputError:
         raise InputError(f"{what}: each of H1,H2 must be a whole number >= 1, got "
-                         f"{harmonics!r}") from None
+                         f"{harmonics!r}", field=what) from None
     unknowns = torus_size(n_state, (h1, h2))
     need = torus_bytes(n_state, (h1, h2))
     if unknowns > MAX_UNKNOWNS or need > DENSE_MEMORY:
@@ -150,7 +152,8 @@ def check_torus_harmonics(harmonics: object, n_state: int,
         raise InputError(f"{what}: H1,H2 = {h1},{h2} give {unknowns} Fourier unknowns for "
                          f"{n_state} states, whose dense matrices need about "
                          f"{need / 2**30:.1f} GiB (at most {DENSE_MEMORY / 2**30:g} GiB): "
-                         f"(2H1 + 1)(2H2 + 1) must be at most {most} for this model")
+                         f"(2H1 + 1)(2H2 + 1) must be at most {most} for this model",
+                         field=what)
     return h1, h2
 
 
@@ -164,7 +167,8 @@ def torus_samples(harmonics: tuple[int, int],
     if len(pair) != 2 or not all(isinstance(s, (int, np.integer)) and s >= 2 * h + 1
                                  for s, h in zip(pair, harmonics, strict=False)):
         raise InputError(f"samples: give N1,N2 with N_i >= 2H_i + 1 = "
-                         f"{2 * harmonics[0] + 1},{2 * harmonics[1] + 1}, got {samples!r}")
+                         f"{2 * harmonics[0] + 1},{2 * harmonics[1] + 1}, got {samples!r}",
+                         field="samples")
     return int(pair[0]), int(pair[1])
 
 
@@ -360,7 +364,7 @@ def omegas_of(system: System, frequencies: tuple[Period, Period],
         period = float(per.seconds(system.model, system.structure, p))
         if not (math.isfinite(period) and period > 0):
             raise InputError(f"frequencies: {per} is not defined for these parameters "
-                             f"(T = {period!r} s; is the speed zero?)")
+                             f"(T = {period!r} s; is the speed zero?)", field="frequencies")
         out.append(2 * math.pi / period)
     return out[0], out[1]
 
@@ -384,7 +388,8 @@ def check_frequencies(system: System, frequencies: tuple[Period, Period],
         raise InputError(f"frequencies: {frequencies[0]} ({w1 / (2 * math.pi):.6g} Hz) and "
                          f"{frequencies[1]} ({w2 / (2 * math.pi):.6g} Hz) are {what} "
                          f"({a}·F1 {'+' if b > 0 else '-'} {abs(b)}·F2 = 0 to "
-                         f"{RESONANCE_TOL:g}): the response is periodic; use hb --period")
+                         f"{RESONANCE_TOL:g}): the response is periodic; use hb --period",
+                         field="frequencies")
 
 
 def check_phases(system: System, frequencies: tuple[Period, Period], f: ca.Function,
@@ -403,11 +408,13 @@ def check_phases(system: System, frequencies: tuple[Period, Period], f: ca.Funct
         raise InputError(f"frequencies: {frequencies[0]},{frequencies[1]} do not carry all of "
                          f"model '{system.model.name}''s time dependence (its right-hand side "
                          f"differs from the torus forcing by {worst:.1e} of its size); the "
-                         "forcing needs other frequencies too")
+                         "forcing needs other frequencies too",
+                         field="frequencies")
     for axis in range(2):
         if not _depends(f, axis, system):
             raise InputError(f"frequencies: the model's forcing does not depend on "
-                             f"{frequencies[axis]}; the response is periodic: use hb")
+                             f"{frequencies[axis]}; the response is periodic: use hb",
+                             field="frequencies")
 
 
 def _depends(f: ca.Function, axis: int, system: System) -> bool:

@@ -238,7 +238,8 @@ def torus_lambda1(ts: TorusSystem, coeffs: np.ndarray, duration: float,
     from analysis.stability.lyapunov import lyapunov
 
     if not (math.isfinite(duration) and duration > 0):
-        raise InputError(f"lyapunov_duration: must be a finite number > 0 s, got {duration!r}")
+        raise InputError(f"lyapunov_duration: must be a finite number > 0 s, got {duration!r}",
+                         field="lyapunov_duration")
     system, z0, step = _run_from(ts, coeffs, dt, p)
     res = lyapunov(system.replace(state=z0), duration=duration, transient=duration / 10,
                    tangent_transient=duration / 10, dt=step, n_exponents=1)
