@@ -62,33 +62,15 @@ def calibrate(
     quiet: QuietOption = False,
 ):
     """Calibrate unknown parameters against a target table (SMC-ABC; resumable)."""
-    from analysis.inference.abc import prepare
-    from analysis.inference.results import calibrate_to_file, to_dataset, to_json
+    from analysis.inference.results import plan_calibration, to_dataset, to_json
     from analysis.inference.simulate import RunSettings
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.executors import workers_of
 
-    problem = prepare(model, target, prior, samples=samples, rounds=rounds, seed=seed,
-                      device=device, block=block,
-                      settings=RunSettings(transient_revolutions=transient,
-                                           revolutions=revolutions, dt=dt))
-    ex = executor_of(executor, workers, scheduler)
-    say = (lambda text: typer.echo(text, err=True)) if not quiet else (lambda text: None)
-    rows = len(problem.target.rows)
-    say(f"calibrate: {samples} sets × {rounds} rounds × {rows} rows = "
-        f"{samples * rounds * rows} runs ({ex.name})")
-    if not quiet:  # the estimate and its advice, from a timed probe, before the work
-        for line in problem.cost(host_workers=workers_of(ex)).lines():
-            say(line)
-        if device != "cpu":
-            say("note: the probe times the CPU's RK4; the member kernels on a GPU run "
-                "faster than this estimate")
-    try:
-        cal = calibrate_to_file(problem, output, executor=ex,
-                                progress=ProgressReporter("calibrate", quiet, unit="runs"),
-                                log=say, on_damaged=_recomputing)
-    finally:
-        ex.close()
+    plan = plan_calibration(model, target, prior, output, samples=samples, rounds=rounds,
+                            seed=seed, device=device, block=block,
+                            settings=RunSettings(transient_revolutions=transient,
+                                                 revolutions=revolutions, dt=dt))
+    _run_plan(plan, executor, workers, scheduler, quiet=quiet)
+    cal = plan.calibration
     if as_json:
         echo_json(to_json(cal, str(output)), indent=1)
     else:
@@ -97,6 +79,27 @@ def calibrate(
         from analysis.reports.calibration_plots import corner_figure
 
         write_figure(corner_figure(to_dataset(cal)), plot, err=as_json)
+
+
+def _run_plan(plan, executor: str, workers: int | None, scheduler: str | None, *,
+              quiet: bool):
+    """``analysis.cli.plans.run_plan``'s path (the executor made, the cost said, the plan
+    run by ``run_study``, the executor closed) with the plan's ``head`` line (the runs and
+    the executor's name) said first: ``run_plan`` does not say it yet."""
+    from analysis.cli.plans import recomputing
+    from analysis.reports.progress import ProgressReporter
+    from analysis.sweeps.runner import run_study
+
+    say = None if quiet else (lambda text: typer.echo(text, err=True))
+    progress = ProgressReporter(plan.kind, quiet, unit=plan.unit)
+    ex = executor_of(executor, workers, scheduler)
+    try:
+        if say is not None:
+            say(plan.head(ex))
+        return run_study(plan, ex, progress=progress, say=say,
+                         on_damaged=recomputing("block"))
+    finally:
+        ex.close()
 
 
 def _print(cal, output: Path) -> None:
@@ -124,7 +127,3 @@ def _print(cal, output: Path) -> None:
     if verdict:
         typer.echo(f"too small to conclude: {verdict}; give more --samples or --rounds")
 
-
-def _recomputing(key: str) -> None:
-    typer.echo(f"warning: stored block {key} could not be read; computing it again",
-               err=True)

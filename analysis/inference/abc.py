@@ -69,6 +69,7 @@ from analysis.integrate.cost import (
     estimate_cost,
     process_seconds,
 )
+from analysis.integrate.kernels.placement import Placement
 from analysis.model import Model, load_model
 
 MAX_SAMPLES = 200_000
@@ -122,7 +123,8 @@ class Options:
         if not 0 < self.quantile < 1:
             raise InputError(f"quantile: must be in (0, 1), got {self.quantile!r}")
         if self.device not in ("cpu", "gpu", "auto"):
-            raise InputError(f"--device: must be cpu, gpu or auto, got {self.device!r}")
+            raise InputError(f"device: must be cpu, gpu or auto, got {self.device!r}",
+                             field="device")
         self.settings.check()
 
 
@@ -401,6 +403,14 @@ class Problem:
     target: Target
     priors: tuple[Prior, ...]
     options: Options
+    placement: Placement | None = None
+    """Where every ensemble call runs (``check_row_kernels``: judged once); None: each call
+    places ``options.device`` itself."""
+
+    @property
+    def device(self) -> str | Placement:
+        """What the ensemble calls take: the placement, else the device's name."""
+        return self.placement if self.placement is not None else self.options.device
 
     @property
     def names(self) -> list[str]:
@@ -454,13 +464,13 @@ def prepare(
     check_fixed(pri, tgt)
     cost = estimate(mdl, tgt, options)
     if cost["core_seconds"] > MAX_CORE_HOURS * 3600:
-        raise InputError(f"--samples: {samples} sets × {rounds} rounds × {len(tgt.rows)} "
+        raise InputError(f"samples: {samples} sets × {rounds} rounds × {len(tgt.rows)} "
                          f"rows is estimated at {cost['core_seconds'] / 3600:.3g} "
                          f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or "
-                         "rounds")
+                         "rounds", field="samples")
     check_steps(mdl, tgt, prior_corners(pri), options.settings)
-    check_row_kernels(mdl, tgt, options.device)
-    return Problem(mdl, tgt, pri, options)
+    placement = check_row_kernels(mdl, tgt, options)
+    return Problem(mdl, tgt, pri, options, placement)
 
 
 def prior_corners(priors: Sequence[Prior]) -> list[dict[str, float]]:
@@ -505,18 +515,21 @@ def check_fixed(priors: Sequence[Prior], target: Target) -> None:
                              "calibrate a parameter the target leaves free")
 
 
-def check_row_kernels(model: Model, target: Target, device: str) -> None:
-    """Before the estimate: the member kernels (tangent variant) of every row's balls are
-    built, or loaded and self-tested, on the device that may run them (``auto``: the cores,
-    and the GPU too where one can be used), so that a kernel or a cache that cannot be
-    built or written is one ``InputError`` (``placement.place``: the device judged once)
-    before any work."""
-    from analysis.integrate.kernels.placement import TABLE, build, place
+def check_row_kernels(model: Model, target: Target, options: Options) -> Placement:
+    """Before the estimate: the calibration's device judged once (``placement.place``: the
+    name, its availability, ``auto``'s choice for an ensemble call of ``block`` sets of the
+    longest row's RK4 steps) and the member kernels (tangent variant) of every row's balls
+    built, or loaded and self-tested, on it, so that a kernel or a cache that cannot be
+    built or written is one ``InputError`` before any work. Every ensemble call of the
+    calibration runs on the ``Placement`` returned (not judged again)."""
+    from analysis.integrate.kernels.placement import place
 
+    settings = options.settings
     systems = [row_system(model, row) for row in target.rows]
-    place(device, 1, systems, "tangent")  # the name, the GPU (gpu), the cores' kernels
-    if device == "auto" and TABLE["gpu"].problem() is None:  # auto may take the GPU too
-        build(TABLE["gpu"], systems, ["tangent"])
+    steps = max(settings.samples_per_revolution * settings.steps(system)[1]
+                * (settings.transient_revolutions + settings.revolutions) for system in systems)
+    return place(options.device, min(options.block, options.samples), systems, "tangent",
+                 steps)
 
 
 @dataclass(frozen=True)
@@ -530,6 +543,8 @@ class CalibrationCost:
     runs: int
     host_seconds: float
     host_workers: int = 1
+    notes: tuple[str, ...] = ()
+    """Lines said after the advice (the GPU's: the probe times the CPU's RK4)."""
 
     @property
     def host_total(self) -> float:
@@ -548,15 +563,15 @@ class CalibrationCost:
         return self.kernels.spent + self.seconds + FILE_SECONDS
 
     def lines(self) -> list[str]:
-        """The kernels' estimate line, the host's line with the whole command's total, then
-        the advice."""
+        """The kernels' estimate line, the host's line with the whole command's total, the
+        advice, then the ``notes``."""
         head = self.kernels.lines()[0]
         host = (f"estimate: {self.runs:,} runs x {self.host_seconds:.3g} s of classification "
                 f"and spectra on the host (probed) on {min(self.host_workers, self.runs)} "
                 f"worker(s) = {duration_text(self.host_total)}; in all "
                 f"{duration_text(self.whole_seconds)} with the start-up and probes "
                 f"({self.kernels.spent:.2g} s so far) and the file")
-        return [head, host, *self.kernels.load_lines(), *self.kernels.advice()]
+        return [head, host, *self.kernels.load_lines(), *self.kernels.advice(), *self.notes]
 
 
 def kernel_steps(target: Target, settings: RunSettings, model: Model) -> tuple[int, int]:
@@ -670,8 +685,8 @@ def run(problem: Problem, *, executor=None, store=None,
         u = sobol_round(len(pri), samples, options.seed) if r == 0 else \
             propose(population, weights, samples, rng)
         values = box(pri, u)
-        rows = _run_round(r, values, tgt, names, options, coordinates, model_ref, executor,
-                          store, progress, done_count, total)
+        rows = _run_round(r, values, tgt, names, options, problem.device, coordinates,
+                          model_ref, executor, store, progress, done_count, total)
         marks = [[row_marks(row, res) for row, res in zip(tgt.rows, member, strict=True)]
                  for member in rows]
         unsure = np.array([sum(doubtful_match(row, res) for row, res in
@@ -701,13 +716,15 @@ RECHECK_SETS = 10
 """The best sets whose matched rows ``recheck_halved`` runs again with the step halved."""
 
 
-def recheck_halved(cal: Calibration, sets: int = RECHECK_SETS) -> tuple[int, int]:
+def recheck_halved(cal: Calibration, sets: int = RECHECK_SETS, *,
+                   device: str | Placement | None = None) -> tuple[int, int]:
     """Run the ``sets`` best distinct sets (fewest rows missed over every round) again at
     each row whose class they firmly match, with the RK4 step halved (the same record, in
     twice the steps), and keep that class as ``MemberRow.halved``: a row whose class changes
     becomes doubtful and leaves its member's ``matched`` (``doubtful`` gains it). The
     rounds' discrepancies and weights are left as they were. Returns (rows rechecked, rows
-    whose class changed)."""
+    whose class changed). ``device``: where they run (a ``Placement`` judged once by
+    ``prepare``; None: ``cal.options.device``)."""
     tgt, names = cal.target, [p.name for p in cal.priors]
     everyone = sorted(((r, i) for r in cal.rounds for i in range(len(r.values))),
                       key=lambda ri: (ri[0].discrepancy[ri[1]], -ri[0].index))
@@ -730,7 +747,7 @@ def recheck_halved(cal: Calibration, sets: int = RECHECK_SETS) -> tuple[int, int
         halved = dataclasses.replace(settings, dt=h / 2)
         thetas = np.array([r.values[i] for r, i in members])
         again = evaluate_row(cal.model, row, names, thetas, halved, coordinates,
-                             cal.options.device)
+                             cal.options.device if device is None else device)
         for (r, i), res in zip(members, again, strict=True):
             r.rows[i][j] = dataclasses.replace(r.rows[i][j], halved=res.nature)
             checked += 1
@@ -754,9 +771,11 @@ def model_reference(model: Model) -> str:
 
 
 def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
-               options: Options, coordinates: Sequence[str], model_ref: str, executor,
-               store, progress, done_count: list[int], total: int) -> list[list[MemberRow]]:
-    """Run one round's sets in blocks (resuming stored blocks); rows[member][row]."""
+               options: Options, device: str | Placement, coordinates: Sequence[str],
+               model_ref: str, executor, store, progress, done_count: list[int],
+               total: int) -> list[list[MemberRow]]:
+    """Run one round's sets in blocks (resuming stored blocks) on ``device`` (the
+    problem's placement); rows[member][row]."""
     from analysis.sweeps.executors import SerialExecutor, run_with_progress
     from analysis.sweeps.worker_counts import WorkerCounts
 
@@ -769,7 +788,7 @@ def _run_round(r: int, values: np.ndarray, target: Target, names: list[str],
             found[b] = _unpack(store.load(key), coordinates)
             done_count[0] += len(found[b]) * len(target.rows)
     tasks = [(b, (model_ref, target.rows, names, values[b:b + options.block],
-                  options.settings, coordinates, options.device))
+                  options.settings, coordinates, device))
              for b in blocks if b not in found]
 
     def on_result(item, result):

@@ -14,13 +14,19 @@ the share of the prior that matches k rows only with its doubtful rows counted: 
 interval reaching zero), ``narrowing`` (per parameter, the posterior's 90 % interval over
 the prior's, in the prior's coordinate), ``effective_sample_size`` and ``verdict`` ('' or
 why the run is too small to conclude). Parameters are in SI units (speed in rpm), λ1 in 1/s.
+
+A calibration run to a file is a study plan (``CalibrationPlan``, made by
+``plan_calibration``: ``analysis.integrate.study``), run by the one runner
+(``analysis.sweeps.runner.run_study``), which opens its store and writes its file.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
@@ -28,13 +34,22 @@ import xarray as xr
 from analysis.inference.abc import (
     RECHECK_SETS,
     Calibration,
+    CalibrationCost,
     Problem,
     doubtful_match,
+    prepare,
     recheck_halved,
     row_marks,
     run,
 )
 from analysis.provenance import plain, provenance, run_attrs
+
+if TYPE_CHECKING:
+    from analysis.inference.priors import Prior
+    from analysis.inference.targets import Target
+    from analysis.integrate.kernels.placement import Placement
+    from analysis.integrate.study import Executor, Progress, Say, Store
+    from analysis.model import Model
 
 BEST = 10
 """Sets listed under ``best``."""
@@ -181,36 +196,106 @@ def to_json(cal: Calibration, output: str | None = None) -> dict[str, Any]:
             "provenance": provenance(_attrs(cal))}
 
 
-def write_calibration(cal: Calibration, output: str | Path) -> xr.Dataset:
-    """Write the calibration's Dataset to ``output`` (netCDF, atomically); returns it."""
-    from analysis.io import save_dataset
+GPU_NOTE = ("note: the probe times the CPU's RK4; the member kernels on a GPU run faster "
+            "than this estimate")
+"""Said after the cost of a calibration whose device is not ``cpu``."""
 
-    ds = to_dataset(cal)
-    save_dataset(ds, output)
-    return ds
+
+@dataclass(frozen=True)
+class CalibrationPlan:
+    """A calibration as a study plan (``analysis.integrate.study.StudyPlan``): the prepared
+    ``problem`` (every input checked once by ``abc.prepare``, its device judged once:
+    ``problem.placement``) and the netCDF file it writes. Its store keeps each finished
+    block of ``block`` parameter sets under ``r<round>-b<first set>``; its progress counts
+    runs (a set at a row). ``run`` keeps the ``Calibration`` it made (``calibration``)."""
+
+    problem: Problem
+    output: Path
+    kind: str = "calibrate"
+    unit: str = "runs"
+    kept: list[Calibration] = field(default_factory=list, compare=False, repr=False)
+    """The Calibration of each ``run`` (the runner writes its Dataset; the caller reports
+    it)."""
+
+    @property
+    def definition(self) -> dict[str, Any]:
+        """The store's key: ``Problem.definition`` (as before plans: a stored calibration
+        still resumes)."""
+        return self.problem.definition()
+
+    @property
+    def placement(self) -> Placement | None:
+        return self.problem.placement
+
+    @property
+    def total(self) -> int:
+        """Runs: sets × rounds × target rows."""
+        opts = self.problem.options
+        return opts.samples * opts.rounds * len(self.problem.target.rows)
+
+    def head(self, executor: Executor) -> str:
+        """The line said before the cost: the runs and the executor that runs them."""
+        opts, rows = self.problem.options, len(self.problem.target.rows)
+        return (f"calibrate: {opts.samples} sets × {opts.rounds} rounds × {rows} rows = "
+                f"{self.total} runs ({executor.name})")
+
+    @property
+    def calibration(self) -> Calibration:
+        """The Calibration of the last ``run``."""
+        return self.kept[-1]
+
+    def cost(self, workers: int) -> CalibrationCost:
+        """The cost said before the work (``abc.problem_cost``) with ``workers`` host
+        workers (the executor's), and the GPU's note where the device is not ``cpu``."""
+        cost = self.problem.cost(host_workers=workers)
+        if self.problem.options.device != "cpu":
+            cost = dataclasses.replace(cost, notes=(GPU_NOTE,))
+        return cost
+
+    def run(self, store: Store | None, executor: Executor, progress: Progress | None,
+            say: Say | None) -> xr.Dataset:
+        """The rounds (``abc.run``: each round's line to ``say``), the best sets rechecked
+        with the step halved (``recheck_halved``), and the Dataset (``to_dataset``)."""
+        cal = run(self.problem, executor=executor, store=store, progress=progress, log=say)
+        checked, changed = recheck_halved(cal, device=self.problem.device)
+        if say:
+            say(f"step halved at the {RECHECK_SETS} best sets: {changed} of {checked} matched "
+                "rows changed class (now doubtful, not matched)")
+        self.kept.append(cal)
+        return to_dataset(cal)
+
+    def stopped(self, store, exc: BaseException) -> None:
+        """A stopped calibration counts its stored blocks (``PointStore.stopped``)."""
+        opts = self.problem.options
+        store.stopped(exc, opts.rounds * -(-opts.samples // opts.block),
+                      f"blocks of {opts.block} parameter sets")
+
+
+def plan_calibration(model: str | Model, target: str | Target,
+                     priors: Sequence[Prior | str], output: str | Path,
+                     **options: Any) -> CalibrationPlan:
+    """The plan of a calibration written to ``output`` (netCDF): every input checked once
+    (``abc.prepare``, whose ``options`` it takes: samples, rounds, seed, quantile,
+    settings, device, block), before any work; ``InputError`` naming the field.
+
+    >>> plan = plan_calibration("vakharia2015", "paper-table2", ["damping:10:3162:log"],
+    ...                         "cal.nc", samples=8, rounds=1)  # doctest: +SKIP
+    """
+    return CalibrationPlan(prepare(model, target, priors, **options), Path(output))
 
 
 def calibrate_to_file(problem: Problem, output: str | Path, *, executor=None,
                       progress: Callable[[int, int], None] | None = None,
                       log: Callable[[str], None] | None = None,
                       on_damaged: Callable[[str], None] | None = None) -> Calibration:
-    """Run a prepared calibration resumably: each finished block of members is stored in
-    ``<output>.parts`` (``analysis.sweeps.store``) as it arrives, so an interrupted
-    calibration run again with the same definition computes only the missing blocks; at
-    the end the netCDF file is written atomically and the folder removed."""
-    from analysis.sweeps.store import PointStore
+    """Run a prepared calibration resumably (``CalibrationPlan`` through
+    ``analysis.sweeps.runner.run_study``, its cost not said): each finished block of
+    members is stored in ``<output>.parts`` (``analysis.sweeps.store``) as it arrives, so
+    an interrupted calibration run again with the same definition computes only the
+    missing blocks; at the end the netCDF file is written atomically and the folder
+    removed. ``log(line)``: each round's line and the halved step's."""
+    from analysis.sweeps.runner import run_study
 
-    store = PointStore(output, problem.definition(), lock=True, on_damaged=on_damaged)
-    total = problem.options.rounds * -(-problem.options.samples // problem.options.block)
-    try:
-        cal = run(problem, executor=executor, store=store, progress=progress, log=log)
-        checked, changed = recheck_halved(cal)
-        if log:
-            log(f"step halved at the {RECHECK_SETS} best sets: {changed} of {checked} matched "
-                "rows changed class (now doubtful, not matched)")
-        write_calibration(cal, output)
-    except BaseException as exc:
-        store.stopped(exc, total, f"blocks of {problem.options.block} parameter sets")
-        raise
-    store.remove()
-    return cal
+    plan = CalibrationPlan(problem, Path(output))
+    run_study(plan, executor, progress=progress, say=log, on_damaged=on_damaged, cost=False)
+    return plan.calibration

@@ -29,6 +29,7 @@ import xarray as xr
 from analysis.errors import InputError, check_count
 from analysis.inference.targets import Target, TargetRow
 from analysis.integrate.kernels import Schedule, run_members
+from analysis.integrate.kernels.placement import CPU, Placement
 from analysis.integrate.plan import RunPlan
 from analysis.model import Model, System, as_system, load_model
 from analysis.provenance import completed_attrs, state_names, to_dataset
@@ -99,15 +100,17 @@ class EngineResult:
 
 def run_engine(system: System, states: np.ndarray, parameters: np.ndarray, h: float,
                every: int, transient_samples: int, n_samples: int, per_revolution: int,
-               device: str = "cpu",
+               device: str | Placement = CPU,
                progress: Callable[[int, int], None] | None = None) -> EngineResult:
     """Run M members of ``system``'s model and balls in one call of the member kernels
     (``analysis.integrate.kernels.run_members``): ``states`` (M × n), ``parameters``
     (M × n_par), step ``h`` s; ``transient_samples`` · ``every`` steps dropped, then
     ``n_samples`` samples every ``every`` steps kept, with one tangent vector renormalised
     at each sample; λ1 is the mean growth over the record, its 95 % interval from batch
-    means of the revolutions' growths (``per_revolution`` samples each). ``progress(done,
-    M)``: members run so far (on the CPU every ~0.5 s of work)."""
+    means of the revolutions' growths (``per_revolution`` samples each). ``device``: a
+    ``Placement`` judged once by the study, or a name placed here (default: the cores,
+    ``placement.CPU``, nothing judged). ``progress(done, M)``: members run so far (on the
+    CPU every ~0.5 s of work)."""
     schedule = Schedule(transient_samples * every, every, n_samples, tangent=True,
                         lyapunov_skip=0, keep_sections=True)
     out = run_members(system, states, parameters, h, schedule, device=device,
@@ -194,11 +197,11 @@ def _member_row(system: System, samples: np.ndarray, lam: float, ci: float, h: f
 
 def evaluate_row(model: Model | str, row: TargetRow, names: Sequence[str],
                  thetas: np.ndarray, settings: RunSettings, coordinates: Sequence[str],
-                 device: str = "cpu",
+                 device: str | Placement = CPU,
                  progress: Callable[[int, int], None] | None = None) -> list[MemberRow]:
     """Every parameter set ``thetas`` (M × P, SI units, in the order of ``names``) at one
-    target ``row``: one ensemble call, each member classified and its lines named.
-    ``progress(done, M)``: the sets whose run is done (``run_engine``)."""
+    target ``row``: one ensemble call, each member classified and its lines named, on
+    ``device`` (``run_engine``). ``progress(done, M)``: the sets whose run is done."""
     model = load_model(model) if not isinstance(model, Model) else model
     base = row_system(model, row)
     members = [base.replace(**dict(zip(names, map(float, theta), strict=True)))
@@ -262,25 +265,27 @@ def check_steps(model: Model, target: Target, corners: Sequence[dict[str, float]
         try:  # at the target's own values first: then a refusal is not the prior's
             RunPlan.step(base, h, warn=lambda message: None)
         except InputError as exc:
-            field = "--dt" if settings.dt is not None else f"model '{model.name}'"
-            raise InputError(f"{field}: at {row.name()}: {exc}") from None
+            if settings.dt is not None:
+                raise InputError(f"dt: at {row.name()}: {exc}", field="dt") from None
+            raise InputError(f"model '{model.name}': at {row.name()}: {exc}") from None
         for corner in corners:
-            check_corner_step(base, corner, settings, "--prior", row.name())
+            check_corner_step(base, corner, settings, "prior", row.name())
 
 
 def check_corner_step(base: System, corner: dict[str, float], settings: RunSettings,
                       field: str, where: str) -> None:
-    """``InputError`` naming ``field``, the corner and ``where`` unless ``base`` with the
-    ``corner``'s values has an RK4 step (``settings.steps``) that ``RunPlan.step`` accepts:
-    a calibration's priors and an uncertainty study's distributions are judged at their
-    corners before any work."""
+    """``InputError`` naming ``field`` (a parameter: ``prior``, ``dist``; the error's
+    ``field``), the corner and ``where`` unless ``base`` with the ``corner``'s values has
+    an RK4 step (``settings.steps``) that ``RunPlan.step`` accepts: a calibration's priors
+    and an uncertainty study's distributions are judged at their corners before any
+    work."""
     system = base.replace(**corner)
     h, _ = settings.steps(system)
     try:
         RunPlan.step(system, h, warn=lambda message: None)
     except InputError as exc:
         shown = ", ".join(f"{k} = {v:g}" for k, v in corner.items())
-        raise InputError(f"{field}: at {shown} ({where}): {exc}") from None
+        raise InputError(f"{field}: at {shown} ({where}): {exc}", field=field) from None
 
 
 def member_steps(target: Target, settings: RunSettings, model: Model) -> int:

@@ -153,7 +153,7 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
     for value in dict.fromkeys((values[0], values[-1])):
         base = study.system(value)
         for end in ends:
-            check_corner_step(base, end, settings, "--dist", f"{axis} = {value:g}")
+            check_corner_step(base, end, settings, "dist", f"{axis} = {value:g}")
     return study
 
 

@@ -1,0 +1,131 @@
+"""A calibration is a study plan (issue 39): ``plan_calibration`` checks every input once
+(the priors, the RK4 steps at their corners, the row kernels, the device judged once) and
+the one runner (``sweeps.runner.run_study``) opens its store and writes its file; the
+command line and the API each check every thing exactly once, and a refusal leaves no
+file."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+import analysis.inference.abc as abc
+from analysis.errors import InputError
+from analysis.integrate.kernels import placement
+from analysis.integrate.study import StudyPlan
+from analysis.io import open_result
+from analysis.sweeps.runner import run_study
+
+PRIORS = ["rotor_mass:0.3:3:log", "damping:100:1000:log"]
+TINY = {"samples": 4, "rounds": 1, "block": 2,
+        "settings": abc.RunSettings(transient_revolutions=10, revolutions=40)}
+TINY_CLI = ("--samples", "4", "--rounds", "1", "--transient-revolutions", "10",
+            "--revolutions", "40", "--block", "2", "--executor", "serial")
+CHECKS = ("check_priors", "check_fixed", "check_steps", "check_row_kernels")
+"""The calibration's checks, by their name in ``analysis.inference.abc``."""
+
+
+@pytest.fixture
+def counted(monkeypatch) -> Counter:
+    """Calls of each of ``CHECKS`` and of ``placement.judge`` (``judge``). The cost's advice
+    tries coarser steps than the calibration's own (``abc.accepted_dt``: ``check_steps``
+    with a ``dt`` given): those are counted apart, as ``check_steps of a coarser dt``."""
+    calls: Counter = Counter()
+
+    def counting(name, fn):
+        def call(*args, **kwargs):
+            coarser = name == "check_steps" and args[3].dt is not None
+            calls[f"{name} of a coarser dt" if coarser else name] += 1
+            return fn(*args, **kwargs)
+        return call
+
+    for name in CHECKS:
+        monkeypatch.setattr(abc, name, counting(name, getattr(abc, name)))
+    monkeypatch.setattr(placement, "judge", counting("judge", placement.judge))
+    return calls
+
+
+ONCE = Counter({name: 1 for name in (*CHECKS, "judge")})
+
+
+def test_the_command_checks_each_thing_once(counted, tmp_path):
+    from typer.testing import CliRunner
+
+    from analysis.cli import app
+
+    out = tmp_path / "cal.nc"
+    done = CliRunner().invoke(app, ["calibrate", "vakharia2015", "--target", "paper-table2",
+                                    *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI,
+                                    "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    counted.pop("check_steps of a coarser dt", None)  # the advice's, not a check
+    assert counted == ONCE
+    assert out.exists() and not (tmp_path / "cal.nc.parts").exists()
+
+
+def test_the_api_checks_each_thing_once_and_the_plan_is_a_study_plan(counted, tmp_path):
+    from analysis.inference.results import CalibrationPlan, plan_calibration, to_dataset
+
+    out = tmp_path / "cal.nc"
+    plan = plan_calibration("vakharia2015", "paper-table2", PRIORS, out, **TINY)
+    assert isinstance(plan, StudyPlan) and isinstance(plan, CalibrationPlan)
+    assert counted == ONCE, "every check made by the plan"
+    assert plan.placement == "cpu" and plan.placement.variants == ("tangent",)
+    assert (plan.kind, plan.unit, plan.total) == ("calibrate", "runs", 4 * 1 * 5)
+    assert plan.definition == plan.problem.definition()
+    lines: list[str] = []
+    ds = run_study(plan, progress=None, say=lines.append, cost=False)
+    assert counted == ONCE, "the run checks nothing again, the device included"
+    assert lines[0].startswith("round 1/1: ") and lines[-1].startswith("step halved at")
+    written = open_result(out)
+    assert written.sizes == ds.sizes and written.sizes["member"] == 4
+    assert float(written.matched.sum()) == float(to_dataset(plan.calibration).matched.sum())
+    assert not (tmp_path / "cal.nc.parts").exists()
+
+
+def test_calibrate_to_file_checks_nothing_again(counted, tmp_path):
+    from analysis.inference.results import calibrate_to_file
+
+    problem = abc.prepare("vakharia2015", "paper-table2", PRIORS, **TINY)
+    cal = calibrate_to_file(problem, tmp_path / "cal.nc")
+    assert counted == ONCE
+    assert len(cal.rounds) == 1 and (tmp_path / "cal.nc").exists()
+
+
+def test_the_head_names_the_runs_and_the_executor(tmp_path):
+    from analysis.inference.results import plan_calibration
+    from analysis.sweeps.executors import SerialExecutor
+
+    plan = plan_calibration("vakharia2015", "paper-table2", PRIORS, tmp_path / "c.nc", **TINY)
+    assert plan.head(SerialExecutor()) == \
+        "calibrate: 4 sets × 1 rounds × 5 rows = 20 runs (serial)"
+
+
+@pytest.mark.parametrize("options, field", [
+    ({"device": "tpu"}, "device"),
+    ({"samples": 200_000, "rounds": 30}, "samples"),
+    ({"settings": abc.RunSettings(dt=1.0)}, "prior"),  # RK4 unstable at a prior's corner
+])
+def test_a_refusal_names_its_field_and_leaves_no_file(options, field, tmp_path):
+    from analysis.inference.results import plan_calibration
+
+    out = tmp_path / "cal.nc"
+    with pytest.raises(InputError) as refused:
+        plan_calibration("vakharia2015", "paper-table2", PRIORS, out, **{**TINY, **options})
+    assert refused.value.field == field and str(refused.value).startswith(f"{field}: ")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_command_line_names_the_option_and_leaves_no_file(tmp_path):
+    from typer.testing import CliRunner
+
+    from analysis.cli import app
+
+    out = tmp_path / "cal.nc"
+    done = CliRunner().invoke(app, ["calibrate", "vakharia2015", "--target", "paper-table2",
+                                    *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI,
+                                    "--device", "tpu", "-o", str(out)])
+    assert done.exit_code == 2
+    assert "error: --device: must be cpu, gpu or auto, got 'tpu'" in done.output
+    assert list(tmp_path.iterdir()) == []
