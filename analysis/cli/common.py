@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import math
 from pathlib import Path
@@ -432,21 +431,6 @@ def as_option(exc: Exception) -> Exception:
                 context.params.get(param.name) is not None:
             return exc.renamed(max(param.opts, key=len))
     return exc
-
-
-@contextlib.contextmanager
-def option_names(*fields: str):
-    """Within: an ``InputError`` that names one of the API's ``fields`` (``harmonics:
-    …``, ``stability_every: …``) names the command's option instead (``--harmonics: …``,
-    ``--stability-every: …``)."""
-    try:
-        yield
-    except InputError as err:
-        text = str(err)
-        field = text.partition(":")[0]
-        if field not in fields:
-            raise
-        raise InputError("--" + field.replace("_", "-") + text[len(field):]) from None
 
 
 def continued_systems(system, param: str | None, start: float | None, stop: float | None):

@@ -28,7 +28,6 @@ from analysis.cli.common import (
     figure_output,
     given_options,
     netcdf_output,
-    option_names,
     parse_n_balls,
     parse_sets,
     progress_lines,
@@ -36,10 +35,6 @@ from analysis.cli.common import (
     write_figure,
 )
 from analysis.errors import InputError
-
-API_FIELDS = ("harmonics", "points", "frequencies", "samples", "stability_every",
-              "lyapunov_duration")
-"""The API's fields that ``hb`` and ``torus`` give as options of the same name."""
 
 
 @app.command()
@@ -75,17 +70,18 @@ def hb(
     and cage frequencies) use `torus`, whose default invariant circle is accurate on
     contact. Prints its error estimate: the change at 2H and at twice the samples. Says
     its expected cost first (a timed Newton iteration x iterations x points)."""
-    from analysis.frequency.methods import PERIODIC, Request
+    from analysis.cli.plans import run_plan
+    from analysis.frequency.methods import PERIODIC, Request, plan_branch
     from analysis.model import as_system
 
     system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
                                               **parse_sets(sets)), param, start, stop)
-    with option_names(*API_FIELDS):
-        request = Request(harmonics, period=period, param=param, start=start, stop=stop,
-                          max_points=max_points, ds_max=ds_max,
-                          options=given_options(dt=dt, settle=settle, samples=samples),
-                          progress=progress_lines(quiet), figure=0.0 if plot else None)
-        data = PERIODIC["hb"].measured(system, request, end, cost_lines(quiet))
+    request = Request(harmonics, period=period, param=param, start=start, stop=stop,
+                      max_points=max_points, ds_max=ds_max,
+                      options=given_options(dt=dt, settle=settle, samples=samples),
+                      progress=progress_lines(quiet), figure=0.0 if plot else None)
+    plan = plan_branch(PERIODIC["hb"], system, request, end, output, kind="hb")
+    data = run_plan(plan, quiet=quiet, lines=True)
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
             json_attrs(data, HB_JSON))
@@ -102,20 +98,13 @@ def json_attrs(data, keys) -> dict:
     return attrs(data, keys)
 
 
-def cost_lines(quiet: bool):
-    """The ``cost`` callback of ``Method.run``: the estimate's lines on stderr, before the
-    work (None with ``--quiet``)."""
-    return None if quiet else (lambda est: typer.echo("\n".join(est.lines()), err=True))
-
-
 def _finish(data, output: Path, as_json: bool, say, figure, extra: dict | None = None,
             also: dict | None = None) -> None:
-    """Write ``data`` to ``output`` (and each Dataset of ``also`` to its path); say so
-    (``say()``) or print the JSON of its points (with ``extra``); ``figure``: (path,
-    figure maker) or None."""
+    """After ``data`` was written to ``output`` (``run_plan``): write each Dataset of
+    ``also`` to its path; say so (``say()``) or print the JSON of its points (with
+    ``extra``); ``figure``: (path, figure maker) or None."""
     from analysis.io import save_dataset
 
-    save_dataset(data, output)
     for path, dataset in (also or {}).items():
         save_dataset(dataset, path)
     if not as_json:
@@ -287,25 +276,25 @@ def torus(
     --method hb (or --harmonics): 2-D harmonic balance, for smooth forces only: on contact
     models 20-38 % off whatever its residual; prints its change at 2H and its aliasing.
     Says its expected cost first."""
+    from analysis.cli.plans import run_plan
+    from analysis.frequency import methods as m
     from analysis.frequency.circle_run import circle_run
-    from analysis.frequency.methods import TORUS, Request, default_torus_method, method_of
     from analysis.model import as_system
 
-    chosen = method_of(TORUS, method or default_torus_method(frequencies, harmonics),
-                       "--method")
+    chosen = m.method_of(m.TORUS, method or m.default_torus_method(frequencies, harmonics),
+                         "method")
     resolution = _resolution(chosen, harmonics=harmonics, points=points)
     system, end = continued_systems(as_system(model, parse_n_balls(n_balls),
                                               **parse_sets(sets)), param, start, stop)
     _check_run(system, run, duration, dt)
-    with option_names(*API_FIELDS):
-        request = Request(resolution, frequencies=frequencies, param=param, start=start,
-                          stop=stop, max_points=max_points, ds_max=ds_max,
-                          lyapunov_duration=lyapunov_duration,
-                          stability_every=stability_every,
-                          options=given_options(dt=dt, settle=settle),
-                          progress=progress_lines(quiet),
-                          figure=max(duration, 2.0) if plot else None)
-        data = chosen.measured(system, request, end, cost_lines(quiet))
+    request = m.Request(resolution, frequencies=frequencies, param=param, start=start,
+                        stop=stop, max_points=max_points, ds_max=ds_max,
+                        lyapunov_duration=lyapunov_duration, stability_every=stability_every,
+                        options=given_options(dt=dt, settle=settle),
+                        progress=progress_lines(quiet),
+                        figure=max(duration, 2.0) if plot else None)
+    data = run_plan(m.plan_branch(chosen, system, request, end, output, kind="torus"),
+                    quiet=quiet, lines=True)
     also = {}
     if run:  # an invariant circle's run is integrated between its sections
         also[run] = circle_run(data, duration, dt)
@@ -351,20 +340,28 @@ def _check_run(system, run: Path | None, duration: float, dt: float | None) -> N
     if run:
         from analysis.frequency.torus.dataset import check_torus_run
 
-        with option_names("duration", "dt"):
-            check_torus_run(system, duration, dt)
+        check_torus_run(system, duration, dt)
 
 
 def _resolution(chosen, **given):
-    """The resolution given for ``chosen`` (None: its default); one given for another
-    method is refused in one line."""
+    """The resolution given for ``chosen``, else its default, which the command then holds
+    as that option's value (so a refusal of it, field ``points``, names ``--points`` as
+    one of a given value: ``common.as_option``); one given for another method is refused
+    in one line."""
+    from analysis.cli.common import click
     from analysis.frequency.methods import TORUS
 
     for name, value in given.items():
         if value is not None and name != chosen.resolution:
             owner = next(m.name for m in TORUS.values() if m.resolution == name)
             raise InputError(f"--{name}: applies to --method {owner} only; {chosen.resolved}")
-    return given[chosen.resolution]
+    value = given[chosen.resolution]
+    if value is None:
+        value = chosen.default
+        context = click.globals.get_current_context(silent=True)
+        if context is not None:
+            context.params[chosen.resolution] = value
+    return value
 
 
 HB_CAUTION = ("note: the residual is not the error: on contact models 2-D harmonic balance "

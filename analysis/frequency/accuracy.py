@@ -129,7 +129,7 @@ def hb_error(method, system: System, request, data: xr.Dataset) -> xr.Dataset:
         out[name], why = float("nan"), []
         for ask in asks:
             try:
-                out[name] = change(data, method.run(system, ask))
+                out[name] = change(data, method.resized(system, ask))
             except InputError as exc:
                 why.append(f"at H = {ask.resolution}: {exc}" if len(asks) > 1 else str(exc))
                 continue

@@ -16,6 +16,12 @@ response, as a Dataset) and ``follow`` (a branch in a runtime parameter, as a Da
 
 Adding a method is one entry: its three functions and its resolution.
 
+A command runs a method as a study plan (``analysis.integrate.study.StudyPlan``):
+``plan_branch(method, system, request, end, output)`` checks every input once and returns
+a ``BranchPlan`` (no store: a branch is not resumable), which the one runner
+(``analysis.sweeps.runner.run_study``) costs, runs and writes. ``Method.run`` and
+``Method.measured`` are the same plan run in memory.
+
 >>> sorted(TORUS), TORUS["shooting"].resolution
 (['hb', 'shooting'], 'points')
 >>> method_of(TORUS, "fourier", "method")
@@ -29,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -74,7 +81,7 @@ class Request:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.lyapunov_duration) and self.lyapunov_duration >= 0):
             raise InputError(f"lyapunov_duration: must be a finite number >= 0 s, got "
-                             f"{self.lyapunov_duration!r}")
+                             f"{self.lyapunov_duration!r}", field="lyapunov_duration")
         from analysis.errors import check_count
 
         check_count("stability_every", self.stability_every)
@@ -112,30 +119,107 @@ class Method:
     error: Callable[[Method, System, Request, xr.Dataset], xr.Dataset] | None = None
     """``data`` with the method's own error estimate in its attrs (``accuracy.hb_error``;
     the invariant circle's ``circle_run.with_between_error``)."""
+    resize: Callable[[System, Request], None] | None = None
+    """The checks of ``check`` that depend on the resolution and the samples alone: what a
+    re-solve of a checked study at another size (the error estimate's, ``resized``) checks
+    again; None: ``check`` whole."""
+    unit: str = "points"
+    """What the points of a branch are (``responses``, ``tori``, ``circles``)."""
 
     def measured(self, system: System, request: Request, end: System | None = None,
                  cost: Callable[[CostEstimate], None] | None = None) -> xr.Dataset:
         """``run``, then the method's own error estimate (``error``) in the attrs."""
-        data = self.run(system, request, end, cost)
-        return data if self.error is None else self.error(self, system, request, data)
+        plan = plan_branch(self, system, request, end)
+        if cost is not None and self.estimate is not None:
+            cost(plan.cost(1))
+        return plan.run(None, None, None, None)
 
     def run(self, system: System, request: Request, end: System | None = None,
             cost: Callable[[CostEstimate], None] | None = None) -> xr.Dataset:
         """Check, then one response (no ``request.param``) or its branch; a request without
         a resolution gets the method's default. ``cost``: given the estimate after the
         checks, before the work."""
-        if request.resolution is None:
-            request = replace(request, resolution=self.default)
-        self.check(system, end, request)
+        plan = plan_branch(self, system, request, end)
         if cost is not None and self.estimate is not None:
-            cost(self.estimate(system, request))
-        return (self.follow if request.param is not None else self.solve)(system, request)
+            cost(plan.cost(1))
+        return plan.response()
+
+    def resized(self, system: System, request: Request) -> xr.Dataset:
+        """One response of a study already checked whole (``check``), at the resolution
+        and samples of ``request`` (the error estimate's re-solves at 2H and at twice the
+        samples): only ``resize`` checks again (what the size changes), then ``solve``."""
+        if self.resize is None:
+            self.check(system, None, request)
+        else:
+            self.resize(system, request)
+        return self.solve(system, request)
+
+
+@dataclass(frozen=True)
+class BranchPlan:
+    """A frequency-domain study as a ``StudyPlan`` (``analysis.integrate.study``): one
+    response of ``method`` or its branch in ``request.param``, checked whole by
+    ``plan_branch`` (``method.check`` once). No store (``definition`` None: a branch is not
+    resumable) and no member kernel (``placement`` None); ``total``: the responses at most
+    (``max_points`` of a branch, else 1), counted in ``unit``. ``run`` solves or follows
+    and adds the method's own error estimate; the runner writes ``output``
+    (``analysis.sweeps.runner.run_study``). The progress of a branch goes to
+    ``request.progress``, one line per message."""
+
+    kind: str
+    method: Method
+    system: System
+    request: Request
+    end: System | None
+    output: Path | None
+    """The netCDF file the runner writes; None: a plan run in memory (``Method.run``)."""
+    total: int
+    unit: str
+    definition: None = None
+    placement: None = None
+
+    def cost(self, workers: int) -> CostEstimate:
+        """The method's estimate (a short timed probe: ``frequency.cost``); the work runs
+        on one worker whatever ``workers`` are."""
+        if self.method.estimate is None:
+            raise TypeError(f"method {self.method.name!r} has no cost estimate")
+        return self.method.estimate(self.system, self.request)
+
+    def response(self) -> xr.Dataset:
+        """The response (no ``request.param``) or its branch, without the error
+        estimate."""
+        method = self.method
+        return (method.follow if self.request.param is not None else method.solve)(
+            self.system, self.request)
+
+    def run(self, store: object, executor: object, progress: object,
+            say: object) -> xr.Dataset:
+        """``response``, then the method's own error estimate in the attrs (``store``,
+        ``executor``, ``progress`` and ``say`` are not used: the work is one serial solve
+        or branch, its lines to ``request.progress``)."""
+        data = self.response()
+        error = self.method.error
+        return data if error is None else error(self.method, self.system, self.request, data)
+
+
+def plan_branch(method: Method, system: System, request: Request, end: System | None = None,
+                output: Path | None = None, kind: str | None = None) -> BranchPlan:
+    """The study of ``request`` by ``method`` on ``system`` (``end``: the System at the far
+    end of a branch, or None), every input checked once (``method.check``; a request
+    without a resolution gets the method's default first), before any work; ``output``:
+    the file ``run_study`` writes; ``kind``: the plan's name (default the method's).
+    ``InputError`` naming its field otherwise."""
+    if request.resolution is None:
+        request = replace(request, resolution=method.default)
+    method.check(system, end, request)
+    return BranchPlan(kind or method.name, method, system, request, end, output,
+                      request.max_points if request.param is not None else 1, method.unit)
 
 
 def method_of(table: Mapping[str, Method], name: str, field: str = "method") -> Method:
     """The method called ``name`` in ``table``; ``InputError`` naming the choices."""
     if name not in table:
-        raise InputError(f"{field}: must be {' or '.join(table)}, got {name!r}")
+        raise InputError(f"{field}: must be {' or '.join(table)}, got {name!r}", field=field)
     return table[name]
 
 
@@ -172,6 +256,13 @@ def _check_periodic(system: System, end: System | None, request: Request) -> Non
     check_harmonics(request.resolution, system.n_state)
     check_forced(system)
     prepare(system, request.period)  # the period exists and lasts a finite time here
+    fast_samples(request.resolution, request.options.get("samples"))
+
+
+def _resize_periodic(system: System, request: Request) -> None:
+    from analysis.frequency.periodic.harmonic import check_harmonics, fast_samples
+
+    check_harmonics(request.resolution, system.n_state)
     fast_samples(request.resolution, request.options.get("samples"))
 
 
@@ -237,6 +328,13 @@ def _check_torus(system: System, end: System | None, request: Request) -> None:
                    request.options.get("dt"))
 
 
+def _resize_torus(system: System, request: Request) -> None:
+    from analysis.frequency.torus.equations import check_torus_harmonics
+
+    pair = check_torus_harmonics(request.resolution, system.n_state)
+    _torus_frequencies(system, None, request, pair)
+
+
 def _solve_torus(system: System, request: Request) -> xr.Dataset:
     from analysis.frequency.torus.dataset import torus_dataset
     from analysis.frequency.torus.solve import solve_torus
@@ -263,7 +361,7 @@ def _check_circle(system: System, end: System | None, request: Request) -> None:
     freqs = _torus_frequencies(system, end, request)
     if freqs[0].kind == "vc" or freqs[1].kind != "vc":
         raise InputError(f"frequencies: --method shooting needs F1 shaft or param:NAME and "
-                         f"F2 a vc, got {request.frequencies}")
+                         f"F2 a vc, got {request.frequencies}", field="frequencies")
     _check_forcing(system, freqs, request.options.get("dt"))
 
 
@@ -300,16 +398,18 @@ def _circle_error(method: Method, system: System, request: Request,
 
 PERIODIC: dict[str, Method] = {
     "hb": Method("hb", "harmonics", 10, "harmonic balance is resolved by --harmonics",
-                 _check_periodic, _solve_periodic, _follow_periodic, hb_cost, _hb_error),
+                 _check_periodic, _solve_periodic, _follow_periodic, hb_cost, _hb_error,
+                 _resize_periodic, "responses"),
 }
 """The methods of a periodic response (``bearingdyn hb``)."""
 
 TORUS: dict[str, Method] = {
     "hb": Method("hb", "harmonics", "8,4", "harmonic balance is resolved by --harmonics",
-                 _check_torus, _solve_torus, _follow_torus, torus_hb_cost, _hb_error),
+                 _check_torus, _solve_torus, _follow_torus, torus_hb_cost, _hb_error,
+                 _resize_torus, "tori"),
     "shooting": Method("shooting", "points", DEFAULT_POINTS,
                        "the shooting torus is resolved by --points",
                        _check_circle, _solve_circle, _follow_circle, circle_cost,
-                       _circle_error),
+                       _circle_error, unit="circles"),
 }
 """The methods of a 2-torus (``bearingdyn torus --method``)."""

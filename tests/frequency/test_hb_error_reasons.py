@@ -21,12 +21,12 @@ class Refusing:
     def __init__(self, refused, samples=True):
         self.refused, self.samples = refused, samples
 
-    def run(self, system, request):
+    def resized(self, system, request):
         if request.resolution in self.refused:
             raise InputError(f"harmonics: {request.resolution} need too much memory")
         if not self.samples and "samples" in request.options:
             raise InputError("hb: no periodic response found (no convergence)")
-        return PERIODIC["hb"].run(system, request)
+        return PERIODIC["hb"].resized(system, request)
 
 
 def test_reasons_in_place_of_nan():
