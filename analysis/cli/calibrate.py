@@ -69,7 +69,7 @@ def calibrate(
                             seed=seed, device=device, block=block,
                             settings=RunSettings(transient_revolutions=transient,
                                                  revolutions=revolutions, dt=dt))
-    _run_plan(plan, executor, workers, scheduler, quiet=quiet)
+    run_headed(plan, executor, workers, scheduler, quiet=quiet)
     cal = plan.calibration
     if as_json:
         echo_json(to_json(cal, str(output)), indent=1)
@@ -81,14 +81,15 @@ def calibrate(
         write_figure(corner_figure(to_dataset(cal)), plot, err=as_json)
 
 
-def _run_plan(plan, executor: str, workers: int | None, scheduler: str | None, *,
-              quiet: bool):
+def run_headed(plan, executor: str, workers: int | None, scheduler: str | None, *,
+               quiet: bool):
     """``analysis.cli.plans.run_plan``'s path (the executor made, the cost said, the plan
-    run by ``run_study``, the executor closed) with the plan's ``head`` line (the runs and
-    the executor's name) said first: ``run_plan`` does not say it yet."""
+    run by ``run_study``, the executor closed) with the plan's ``head(executor)`` line (its
+    runs and the executor's name) said first, which ``run_plan`` does not say; a plan
+    whose ``output`` is None is run alone (no store, no file). Returns the Dataset."""
     from analysis.cli.plans import recomputing
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.runner import run_study
+    from analysis.sweeps.runner import run_study, say_cost
 
     say = None if quiet else (lambda text: typer.echo(text, err=True))
     progress = ProgressReporter(plan.kind, quiet, unit=plan.unit)
@@ -96,6 +97,10 @@ def _run_plan(plan, executor: str, workers: int | None, scheduler: str | None, *
     try:
         if say is not None:
             say(plan.head(ex))
+        if plan.output is None:
+            if say is not None:
+                say_cost(plan, ex, say)
+            return plan.run(None, ex, progress, say)
         return run_study(plan, ex, progress=progress, say=say,
                          on_damaged=recomputing("block"))
     finally:

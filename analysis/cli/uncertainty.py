@@ -19,7 +19,6 @@ from analysis.cli.common import (
     WorkersOption,
     app,
     echo_json,
-    executor_of,
     figure_output,
     netcdf_output,
     parse_sets,
@@ -49,6 +48,9 @@ def swept(param: str | None, n_balls: str | None) -> dict:
     from analysis.sweeps.grid import Axis
 
     balls = None if n_balls is None else parse_balls_list(n_balls)
+    if param is None and balls is None:
+        raise InputError("--param/--n-balls: give one of them (--param NAME:LO:HI:N, or "
+                         "--n-balls LIST)")
     if param is None:
         return {"n_balls": balls}
     axis = Axis.parse(param)
@@ -97,26 +99,16 @@ def uncertainty(
     quiet: QuietOption = False,
 ):
     """Regime probabilities under tolerances, with intervals and Sobol' indices."""
+    from analysis.cli.calibrate import run_headed
     from analysis.inference.simulate import RunSettings
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.executors import workers_of
-    from analysis.uncertainty.study import prepare, run, to_json, uncertainty_to_file
+    from analysis.uncertainty.study import plan_uncertainty, to_json
 
-    study = prepare(model, dist, sets=parse_sets(sets), **swept(param, n_balls),
-                    samples=samples, seed=seed, device=device, block=block,
-                    settings=RunSettings(transient_revolutions=transient,
-                                         revolutions=revolutions, dt=dt))
-    ex = executor_of(executor, workers, scheduler)
-    _say_cost(study, ex, quiet, workers_of)
-    progress = ProgressReporter("uncertainty", quiet, unit="runs")
-    try:
-        if output is not None:
-            ds = uncertainty_to_file(study, output, executor=ex, progress=progress,
-                                     on_damaged=_recomputing)
-        else:
-            ds = run(study, executor=ex, progress=progress)
-    finally:
-        ex.close()
+    plan = plan_uncertainty(model, dist, output, sets=parse_sets(sets),
+                            **swept(param, n_balls), samples=samples, seed=seed,
+                            device=device, block=block,
+                            settings=RunSettings(transient_revolutions=transient,
+                                                 revolutions=revolutions, dt=dt))
+    ds = run_headed(plan, executor, workers, scheduler, quiet=quiet)
     if as_json:
         echo_json(to_json(ds, str(output or "")), indent=1)
     else:
@@ -125,27 +117,6 @@ def uncertainty(
         from analysis.reports.uncertainty_plots import uncertainty_figure
 
         write_figure(uncertainty_figure(ds), plot, err=as_json)
-
-
-def _say_cost(study, ex, quiet: bool, workers_of) -> None:
-    """The run count, any truncation note and the estimate, before the work (stderr)."""
-    if quiet:
-        return
-    from analysis.uncertainty.study import study_cost
-
-    def say(text: str) -> None:
-        typer.echo(text, err=True)
-
-    say(f"uncertainty: {study.design.samples} draws -> {study.design.runs} members x "
-        f"{len(study.values)} values = {study.runs} runs ({ex.name})")
-    for dist in study.dists:
-        if dist.note:
-            say(f"note: {dist.note}")
-    for line in study_cost(study, host_workers=workers_of(ex)).lines():
-        say(line)
-    if study.device != "cpu":
-        say("note: the probe times the CPU's RK4; the member kernels on a GPU run faster "
-            "than this estimate")
 
 
 def _print(ds, output: Path | None) -> None:
@@ -168,7 +139,3 @@ def _print(ds, output: Path | None) -> None:
              f"(ST {np.nanmax(st):.2f})")
         typer.echo(f"{axis} = {v:g}: " + ", ".join(parts) + most)
 
-
-def _recomputing(key: str) -> None:
-    typer.echo(f"warning: stored block {key} could not be read; computing it again",
-               err=True)

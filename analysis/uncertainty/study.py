@@ -20,7 +20,10 @@ blows up is ``diverged``. Its amplitude is half the peak-to-peak of each displac
 **Resumable.** Each block of members at one value is stored as it finishes in
 ``<output>.parts`` (``analysis.sweeps.store``); run again with the same definition, only
 the missing blocks are computed. Blocks run on any executor of ``analysis.sweeps.executors``
-(in this process, processes, Dask).
+(in this process, processes, Dask). A study written to a file is a study plan
+(``UncertaintyPlan``, made by ``plan_uncertainty``: ``analysis.integrate.study``), run by
+the one runner (``analysis.sweeps.runner.run_study``), which opens its store and writes its
+file.
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
@@ -43,12 +47,17 @@ from analysis.inference.simulate import (
     member_record,
     run_engine,
 )
+from analysis.integrate.kernels.placement import CPU, Placement
 from analysis.model import BallCounts, Model, System, as_system, load_model
 from analysis.provenance import displacement_names
 from analysis.uncertainty.distributions import Dist, check_dists
 from analysis.uncertainty.probabilities import probabilities, regime, regime_order
 from analysis.uncertainty.sampling import Design, check_samples, draw
 from analysis.uncertainty.sobol import indices
+
+if TYPE_CHECKING:
+    from analysis.inference.abc import CalibrationCost
+    from analysis.integrate.study import Executor, Progress, Say, Store
 
 BLOCK = 256
 """Members per executor task on the CPU (a task is one kernel call at one value)."""
@@ -73,6 +82,9 @@ class Study:
     block: int = BLOCK
     balls: int | None = None
     """The balls of a parameter sweep (None: the model's own)."""
+    placement: Placement | None = None
+    """Where every kernel call runs (``check_kernels``: judged once by ``prepare``); None:
+    each call places ``device`` itself."""
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -115,30 +127,32 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
     model, the distributions against it (``distributions.check_dists``), ``sets`` (fixed
     values, ``--set``), the swept ``param`` (NAME, values) or ``n_balls`` (exactly one of
     them), ``samples`` >= 1, the run settings, and the RK4 step at both ends of every
-    distribution at the first and last swept value."""
+    distribution at the first and last swept value; then the device, judged once, and the
+    member kernels built on it (``check_kernels``)."""
 
     mdl = load_model(model) if not isinstance(model, Model) else model
     sets = {str(k): float(v) for k, v in (sets or {}).items()}
     balls = None
     if param is not None and n_balls is not None:
         if len(n_balls) != 1:
-            raise InputError("--n-balls: with --param, give one count (the balls of the "
-                             f"sweep), got {len(n_balls)}")
+            raise InputError("n_balls: with param, give one count (the balls of the "
+                             f"sweep), got {len(n_balls)}", field="n_balls")
         balls, n_balls = int(n_balls[0]), None
     if param is None and n_balls is None:
-        raise InputError("--param/--n-balls: give one of them (--param NAME:LO:HI:N, or "
-                         "--n-balls LIST)")
+        raise InputError("param/n_balls: give one of them (param = (NAME, values), or "
+                         "n_balls = counts)")
     axis, values = ("n_balls", tuple(int(n) for n in n_balls)) if param is None else \
         (str(param[0]), tuple(float(v) for v in param[1]))
     if not 1 <= len(values) <= MAX_VALUES:
-        raise InputError(f"--param/--n-balls: give 1 to {MAX_VALUES} values, got "
-                         f"{len(values)}")
+        name = "n_balls" if param is None else "param"
+        raise InputError(f"{name}: give 1 to {MAX_VALUES} values, got {len(values)}",
+                         field=name)
     if axis in sets:
         raise InputError(f"--set {axis}: also the swept parameter")
     found = check_dists(dists, mdl, sets, axis)
     check_samples(samples)
     if device not in ("cpu", "gpu", "auto"):
-        raise InputError(f"--device: must be cpu, gpu or auto, got {device!r}")
+        raise InputError(f"device: must be cpu, gpu or auto, got {device!r}", field="device")
     settings = settings or RunSettings()
     settings.check()
     design = draw(found, samples, seed)
@@ -154,7 +168,24 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
         base = study.system(value)
         for end in ends:
             check_corner_step(base, end, settings, "dist", f"{axis} = {value:g}")
-    return study
+    return dataclasses.replace(study, placement=check_kernels(study))
+
+
+def check_kernels(study: Study) -> Placement:
+    """The study's device judged once (``placement.place``: the name, its availability,
+    ``auto``'s choice for a kernel call of ``block`` draws of the first value's RK4 steps)
+    and the member kernels (tangent variant) of every swept value's balls built, or loaded
+    and self-tested, on it: a kernel or a cache that cannot be built is one ``InputError``
+    before any work. Every kernel call of the study runs on the ``Placement`` returned."""
+    from analysis.integrate.kernels.placement import place
+
+    settings = study.settings
+    _, every = settings.steps(study.system(study.values[0]))
+    steps = settings.samples_per_revolution * every * (settings.transient_revolutions +
+                                                       settings.revolutions)
+    values = study.values if study.axis == "n_balls" else study.values[:1]
+    return place(study.device, min(study.block, study.design.runs),
+                 lambda: [study.system(v) for v in values], "tangent", steps)
 
 
 def check_size(study: Study) -> None:
@@ -168,9 +199,10 @@ def check_size(study: Study) -> None:
                                                        2 * settings.revolutions)
     hours = study.runs * steps / CPU_RATE / 3600
     if hours > MAX_CORE_HOURS:
-        raise InputError(f"--samples: {study.runs:,} runs ({study.design.runs} members x "
+        raise InputError(f"samples: {study.runs:,} runs ({study.design.runs} members x "
                          f"{len(study.values)} values) are estimated at {hours:.3g} "
-                         f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or values")
+                         f"core-hours, above {MAX_CORE_HOURS:g}; give fewer samples or values",
+                         field="samples")
 
 
 def classify_draw(system: System, samples: np.ndarray, lam: float, ci: float, h: float,
@@ -187,10 +219,11 @@ def classify_draw(system: System, samples: np.ndarray, lam: float, ci: float, h:
 
 
 def evaluate_members(system: System, names: Sequence[str], thetas: np.ndarray,
-                     settings: RunSettings, device: str = "cpu",
+                     settings: RunSettings, device: str | Placement = CPU,
                      progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
     """Every draw ``thetas`` (M × P, SI units) at ``system``: one kernel call per distinct
-    RK4 step (one in all unless the speed is drawn). Returns ``nature`` (M classes),
+    RK4 step (one in all unless the speed is drawn), on ``device`` (the study's placement,
+    or a name placed at each call). Returns ``nature`` (M classes),
     ``lambda1``, ``ci95`` (1/s) and ``amplitude_<v>`` (m) arrays."""
     members = [system.replace(**dict(zip(names, map(float, theta), strict=True)))
                for theta in thetas]
@@ -264,7 +297,8 @@ def run(study: Study, *, executor=None, store=None,
         system = study.system(study.values[i])
         tasks.append(((i, b), ref, _balls(system), {**study.sets} if study.axis == "n_balls"
                       else {**study.sets, study.axis: study.values[i]}, study.names,
-                      rows[b:b + study.block], study.settings, study.device))
+                      rows[b:b + study.block], study.settings,
+                      study.placement if study.placement is not None else study.device))
 
     def on_result(task, result):
         if store is not None:
@@ -483,22 +517,89 @@ def study_cost(study: Study, workers: int | None = None, host_workers: int = 1):
     return CalibrationCost(kernels, study.runs, host, host_workers)
 
 
+GPU_NOTE = ("note: the probe times the CPU's RK4; the member kernels on a GPU run faster "
+            "than this estimate")
+"""Said after the cost of a study whose device is not ``cpu``."""
+
+
+@dataclass(frozen=True)
+class UncertaintyPlan:
+    """An uncertainty study as a study plan (``analysis.integrate.study.StudyPlan``): the
+    prepared ``study`` (every input checked once by ``prepare``, its device judged once:
+    ``study.placement``) and the netCDF file it writes. Its store keeps each block of
+    ``block`` draws at one value under ``v<value index>-r<first row>``; its progress counts
+    runs (a draw at a value)."""
+
+    study: Study
+    output: Path | None
+    """None: not written (the command line without ``-o``: its ``run`` alone, no store)."""
+    kind: str = "uncertainty"
+    unit: str = "runs"
+
+    @property
+    def definition(self) -> dict[str, Any]:
+        """The store's key: ``Study.definition`` (as before plans: a stored study still
+        resumes)."""
+        return self.study.definition()
+
+    @property
+    def placement(self) -> Placement | None:
+        return self.study.placement
+
+    @property
+    def total(self) -> int:
+        return self.study.runs
+
+    def head(self, executor: Executor) -> str:
+        """The lines said before the cost: the runs and the executor that runs them, then
+        each distribution's note (a truncation)."""
+        study = self.study
+        return "\n".join([f"uncertainty: {study.design.samples} draws -> {study.design.runs} "
+                          f"members x {len(study.values)} values = {study.runs} runs "
+                          f"({executor.name})",
+                          *(f"note: {d.note}" for d in study.dists if d.note)])
+
+    def cost(self, workers: int) -> CalibrationCost:
+        """The cost said before the work (``study_cost``) with ``workers`` host workers (the
+        executor's), and the GPU's note where the device is not ``cpu``."""
+        cost = study_cost(self.study, host_workers=workers)
+        if self.study.device != "cpu":
+            cost = dataclasses.replace(cost, notes=(GPU_NOTE,))
+        return cost
+
+    def run(self, store: Store | None, executor: Executor, progress: Progress | None,
+            say: Say | None) -> xr.Dataset:
+        """The study's blocks (``run``), stored in ``store`` as they finish."""
+        return run(self.study, executor=executor, store=store, progress=progress)
+
+    def stopped(self, store, exc: BaseException) -> None:
+        """A stopped study counts its stored blocks (``PointStore.stopped``)."""
+        store.stopped(exc, len(self.study.blocks()), f"blocks of {self.study.block} draws")
+
+
+def plan_uncertainty(model: str | Model, dists: Sequence[Dist | str],
+                     output: str | Path | None, **options: Any) -> UncertaintyPlan:
+    """The plan of a study written to ``output`` (netCDF; None: not written, for its
+    ``run`` alone): every input checked once
+    (``prepare``, whose ``options`` it takes: sets, param, n_balls, samples, seed, device,
+    settings, block), before any work; ``InputError`` naming the field.
+
+    >>> plan = plan_uncertainty("vakharia2015", ["radial_clearance=uniform:5e-6:20e-6"],
+    ...                         "u.nc", n_balls=[8], samples=4)  # doctest: +SKIP
+    """
+    return UncertaintyPlan(prepare(model, dists, **options),
+                           None if output is None else Path(output))
+
+
 def uncertainty_to_file(study: Study, output, *, executor=None,
                         progress: Callable[[int, int], None] | None = None,
                         on_damaged: Callable[[str], None] | None = None) -> xr.Dataset:
-    """Run a prepared study resumably: each finished block stored in ``<output>.parts``
-    (``analysis.sweeps.store``) as it arrives; run again with the same definition, only
-    the missing blocks are computed; at the end the netCDF file is written atomically and
-    the folder removed."""
-    from analysis.io import save_dataset
-    from analysis.sweeps.store import PointStore
+    """Run a prepared study resumably (``UncertaintyPlan`` through
+    ``analysis.sweeps.runner.run_study``, its cost not said): each finished block stored in
+    ``<output>.parts`` (``analysis.sweeps.store``) as it arrives; run again with the same
+    definition, only the missing blocks are computed; at the end the netCDF file is
+    written atomically and the folder removed."""
+    from analysis.sweeps.runner import run_study
 
-    store = PointStore(output, study.definition(), lock=True, on_damaged=on_damaged)
-    try:
-        ds = run(study, executor=executor, store=store, progress=progress)
-        save_dataset(ds, output)
-    except BaseException as exc:
-        store.stopped(exc, len(study.blocks()), f"blocks of {study.block} draws")
-        raise
-    store.remove()
-    return ds
+    return run_study(UncertaintyPlan(study, Path(output)), executor, progress=progress,
+                     on_damaged=on_damaged, cost=False)

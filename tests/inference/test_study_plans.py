@@ -2,7 +2,8 @@
 (the priors, the RK4 steps at their corners, the row kernels, the device judged once) and
 the one runner (``sweeps.runner.run_study``) opens its store and writes its file; the
 command line and the API each check every thing exactly once, and a refusal leaves no
-file."""
+file. The uncertainty study (``uncertainty.study.plan_uncertainty``) is a plan the same
+way."""
 
 from __future__ import annotations
 
@@ -128,4 +129,71 @@ def test_the_command_line_names_the_option_and_leaves_no_file(tmp_path):
                                     "--device", "tpu", "-o", str(out)])
     assert done.exit_code == 2
     assert "error: --device: must be cpu, gpu or auto, got 'tpu'" in done.output
+    assert list(tmp_path.iterdir()) == []
+
+
+# --- the uncertainty study, the same way ---------------------------------------------------
+
+UNC_CLI = ("uncertainty", "vakharia2015", "--dist", "radial_clearance=uniform:5e-6:20e-6",
+           "--n-balls", "8,9", "--samples", "4", "--transient-revolutions", "10",
+           "--revolutions", "40", "--executor", "serial")
+
+
+@pytest.fixture
+def unc_counted(monkeypatch) -> Counter:
+    """Calls of the study's checks (``check_dists``, ``check_size``, ``check_kernels``) and
+    of ``placement.judge``."""
+    import analysis.uncertainty.study as study
+
+    calls: Counter = Counter()
+
+    def counting(name, fn):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return fn(*args, **kwargs)
+        return call
+
+    for name in ("check_dists", "check_size", "check_kernels"):
+        monkeypatch.setattr(study, name, counting(name, getattr(study, name)))
+    monkeypatch.setattr(placement, "judge", counting("judge", placement.judge))
+    return calls
+
+
+UNC_ONCE = Counter({"check_dists": 1, "check_size": 1, "check_kernels": 1, "judge": 1})
+
+
+@pytest.mark.parametrize("written", [True, False], ids=["to-a-file", "printed-only"])
+def test_the_uncertainty_command_checks_each_thing_once(unc_counted, tmp_path, written):
+    from typer.testing import CliRunner
+
+    from analysis.cli import app
+
+    out = tmp_path / "u.nc"
+    done = CliRunner().invoke(app, [*UNC_CLI, *(("-o", str(out)) if written else ())])
+    assert done.exit_code == 0, done.output
+    assert unc_counted == UNC_ONCE
+    assert out.exists() == written and not (tmp_path / "u.nc.parts").exists()
+
+
+def test_the_uncertainty_plan_is_a_study_plan_and_checks_nothing_again(unc_counted,
+                                                                      tmp_path):
+    from analysis.uncertainty.study import UncertaintyPlan, plan_uncertainty
+
+    settings = abc.RunSettings(transient_revolutions=10, revolutions=40)
+    plan = plan_uncertainty("vakharia2015", ["radial_clearance=uniform:5e-6:20e-6"],
+                            tmp_path / "u.nc", n_balls=[8], samples=4, settings=settings)
+    assert isinstance(plan, StudyPlan) and isinstance(plan, UncertaintyPlan)
+    assert plan.placement == "cpu" and plan.total == plan.study.runs
+    ds = run_study(plan)
+    assert unc_counted == UNC_ONCE
+    assert open_result(tmp_path / "u.nc").sizes == ds.sizes
+
+
+def test_an_uncertainty_refusal_names_its_field_and_leaves_no_file(tmp_path):
+    from analysis.uncertainty.study import plan_uncertainty
+
+    with pytest.raises(InputError) as refused:
+        plan_uncertainty("vakharia2015", ["radial_clearance=uniform:5e-6:20e-6"],
+                         tmp_path / "u.nc", n_balls=[8], samples=4, device="tpu")
+    assert refused.value.field == "device"
     assert list(tmp_path.iterdir()) == []
