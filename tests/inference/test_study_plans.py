@@ -197,3 +197,47 @@ def test_an_uncertainty_refusal_names_its_field_and_leaves_no_file(tmp_path):
                          tmp_path / "u.nc", n_balls=[8], samples=4, device="tpu")
     assert refused.value.field == "device"
     assert list(tmp_path.iterdir()) == []
+
+
+ONE_ROW = """name = "one-row"
+[conditions]
+speed_rpm = 5000.0
+[[rows]]
+n_balls = 8
+class = "quasi-periodic"
+"""
+
+
+def test_a_calibration_on_the_gpu_judges_it_once_and_runs_there(monkeypatch, tmp_path):
+    """On a stand-in GPU (``fake_cupy``: the GPU path run by the CPU build): the device is
+    judged once, every ensemble call (the rounds' and the halved step's) goes the GPU
+    path, and the sets' classes and λ1 are those of the cores."""
+    from analysis.inference.results import calibrate_to_file
+    from analysis.model import as_system
+    from tests.integrate.fake_cupy import FakeCupy, fake_gpu
+
+    target = tmp_path / "one.toml"
+    target.write_text(ONE_ROW)
+    options = {**TINY, "samples": 8, "block": 4,  # a record that fits the stand-in's 64 KiB
+               "settings": abc.RunSettings(transient_revolutions=5, revolutions=40,
+                                           samples_per_revolution=8)}
+    cpu = calibrate_to_file(abc.prepare("vakharia2015", str(target), PRIORS, **options),
+                            tmp_path / "cpu.nc")
+    judged: list[str] = []
+    judge = placement.judge
+
+    def counting(device, members, steps):
+        judged.append(device)
+        return judge(device, members, steps)
+
+    monkeypatch.setattr(placement, "judge", counting)
+    system = as_system("vakharia2015", 8, speed_rpm=5000.0)
+    with fake_gpu(monkeypatch, FakeCupy(system, seen := [])):
+        problem = abc.prepare("vakharia2015", str(target), PRIORS, device="gpu", **options)
+        gpu = calibrate_to_file(problem, tmp_path / "gpu.nc")
+    assert judged == ["gpu"] and problem.placement.gpu and seen and all(seen)
+    assert [[m[0].nature for m in r.rows] for r in gpu.rounds] == \
+        [[m[0].nature for m in r.rows] for r in cpu.rounds]
+    assert [[m[0].lambda1 for m in r.rows] for r in gpu.rounds] == \
+        [[m[0].lambda1 for m in r.rows] for r in cpu.rounds]
+    assert open_result(tmp_path / "gpu.nc").attrs["device"] == "gpu"
