@@ -241,3 +241,16 @@ def test_a_calibration_on_the_gpu_judges_it_once_and_runs_there(monkeypatch, tmp
     assert [[m[0].lambda1 for m in r.rows] for r in gpu.rounds] == \
         [[m[0].lambda1 for m in r.rows] for r in cpu.rounds]
     assert open_result(tmp_path / "gpu.nc").attrs["device"] == "gpu"
+
+
+def test_the_cost_of_a_calibration_not_on_the_cpu_ends_with_the_gpus_note(tmp_path):
+    """``auto``: judged once for an ensemble call of a round's sets (here the cores: no GPU
+    is visible, or too few sets); the cost, from the CPU's probe, says so last."""
+    from analysis.inference.results import GPU_NOTE, plan_calibration
+
+    plan = plan_calibration("vakharia2015", "paper-table2", PRIORS, tmp_path / "c.nc",
+                            **{**TINY, "device": "auto", "block": None})
+    assert plan.placement.asked == "auto" and plan.placement.members == 4
+    assert plan.cost(1).lines()[-1] == GPU_NOTE
+    assert GPU_NOTE not in plan_calibration("vakharia2015", "paper-table2", PRIORS,
+                                            tmp_path / "c.nc", **TINY).cost(1).lines()
