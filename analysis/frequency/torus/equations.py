@@ -95,8 +95,9 @@ def parse_frequencies(text: str | tuple, model: Model) -> tuple[Period, Period]:
         try:
             per.check(model)
         except InputError as err:
-            raise InputError(str(err).replace("period: ", "frequencies: ", 1),
-                             field="frequencies") from None
+            text = str(err).replace("period: ", "frequencies: ", 1)
+            raise InputError(text, field="frequencies" if text.startswith("frequencies:")
+                             else None) from None
         out.append(per)
     same_name = out[0].name == out[1].name or out[0].kind == "vc"
     if out[0].kind == out[1].kind and same_name and \
