@@ -242,7 +242,8 @@ def basins(
     plan = plan_basins(system, x_range, y_range, output, period=period, dt=dt,
                        options=options, block=block,
                        **_mapping(mapper, device, transient_periods, sections))
-    ds = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json, part="block")
+    ds, _ = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json,
+                     part="block")
     _finish(ds, output, as_json, plot)
 
 
@@ -315,12 +316,12 @@ def attractors(
                     **_mapping(mapper, device, transient_periods, sections))
     if along is None:  # every input checked once: the plan
         plan = plan_fractions(system, sides, samples, output, **settings)
-        ds = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json,
+        ds, _ = run_plan(plan, executor, workers, scheduler, quiet=quiet or as_json,
                       part="block")
     else:
         plan = plan_continuation(system, along.coordinate, along.points, sides, samples,
                                  output, **settings, match_distance=match_threshold)
-        ds = run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block",
+        ds, _ = run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block",
                       lines=True, cost=not as_json)
     _finish(ds, output, as_json, plot, branches)
 

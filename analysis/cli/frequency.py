@@ -81,7 +81,7 @@ def hb(
                       options=given_options(dt=dt, settle=settle, samples=samples),
                       progress=progress_lines(quiet), figure=0.0 if plot else None)
     plan = plan_branch(PERIODIC["hb"], system, request, end, output, kind="hb")
-    data = run_plan(plan, quiet=quiet, lines=True)
+    data, _ = run_plan(plan, quiet=quiet, lines=True)
     _finish(data, output, as_json, lambda: _print(data, output),
             plot and (plot, lambda: response_figure(data)),
             json_attrs(data, HB_JSON))
@@ -293,8 +293,8 @@ def torus(
                         options=given_options(dt=dt, settle=settle),
                         progress=progress_lines(quiet),
                         figure=max(duration, 2.0) if plot else None)
-    data = run_plan(m.plan_branch(chosen, system, request, end, output, kind="torus"),
-                    quiet=quiet, lines=True)
+    data, _ = run_plan(m.plan_branch(chosen, system, request, end, output, kind="torus"),
+                       quiet=quiet, lines=True)
     also = {}
     if run:  # an invariant circle's run is integrated between its sections
         also[run] = circle_run(data, duration, dt)

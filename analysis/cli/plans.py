@@ -9,6 +9,9 @@ the one runner (``analysis.sweeps.runner.run_study``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import typer
 
 from analysis.cli.common import executor_of
@@ -24,22 +27,31 @@ def recomputing(unit: str):
 
 def run_plan(plan, executor: str = "serial", workers: int | None = None,
              scheduler: str | None = None, *, quiet: bool = False, label: str | None = None,
-             part: str = "point", lines: bool = False, cost: bool = True):
+             part: str = "point", lines: bool = False, cost: bool = True,
+             head: Callable[[str], str] | None = None) -> tuple[Any, str]:
     """Run ``plan`` from the command line (see the module): ``executor``, ``workers``,
     ``scheduler`` as the options give them; ``quiet``: no cost, no progress; ``label``: the
     progress bar's (default the plan's ``kind``); ``part``: what a stored part is called in
     the damaged-part warning; ``lines``: the plan reports its progress as lines (a
     continuation's values) rather than a counter; ``cost``: say the cost (``--json`` keeps
-stderr to the progress). Returns the Dataset written."""
+    stderr to the progress); ``head(executor name)``: a line said first (a calibration's
+    runs). The progress starts after the cost is said, so its rate counts the work, not the
+    probe. Returns the Dataset (or what a plan without an ``output`` returns) and the
+    executor's name."""
     from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.runner import run_study
+    from analysis.sweeps.runner import run_study, say_cost
 
     say = None if quiet else (lambda text: typer.echo(text, err=True))
-    progress = None if lines else ProgressReporter(label or plan.kind, quiet, unit=plan.unit)
     ex = executor_of(executor, workers, scheduler)
     try:
+        if say is not None and head is not None:
+            say(head(ex.name))
+        if say is not None and cost:
+            say_cost(plan, ex, say)
+        progress = None if lines else ProgressReporter(label or plan.kind, quiet,
+                                                       unit=plan.unit)
         return run_study(plan, ex, progress=progress, say=say, on_damaged=recomputing(part),
-                         cost=cost)
+                         cost=False), ex.name
     finally:
         ex.close()
 

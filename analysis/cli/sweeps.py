@@ -17,13 +17,13 @@ from analysis.cli.common import (
     SetOption,
     WorkersOption,
     app,
-    executor_of,
     netcdf_output,
     parse_n_balls,
     parse_sets,
     reports_errors,
 )
 from analysis.cli.devices import DeviceOption, SweepDeviceOption
+from analysis.cli.plans import run_plan
 from analysis.errors import check_count
 
 
@@ -68,7 +68,7 @@ def sweep(
     axis = Axis.linear(param, start, stop, num)
     plan = plan_diagram(setting, axis, output, direction=direction, follow=follow,
                         device=device)  # every input, before a worker starts or a file is made
-    ds, ran_on = _run_plan(plan, executor, workers, scheduler, quiet=quiet,
+    ds, ran_on = run_plan(plan, executor, workers, scheduler, quiet=quiet,
                            label=f"sweep {param}")
     typer.echo(f"wrote {output}: {ds.sizes[param]} values × {ds.sizes['direction']} "
                f"direction(s), {samples} section points each ({ran_on})")
@@ -125,7 +125,7 @@ def chart(
     several = parse_ics(ics, ics_box, ics_seed)
     plan = plan_chart(setting, x_axis, y_axis, output, ics=several,
                       device=device)  # every input, before a worker starts or a file is made
-    ds, ran_on = _run_plan(plan, executor, workers, scheduler, quiet=quiet, label="chart")
+    ds, ran_on = run_plan(plan, executor, workers, scheduler, quiet=quiet, label="chart")
     typer.echo(f"wrote {output}: {ds.sizes[ds.attrs['y']]} × {ds.sizes[ds.attrs['x']]} "
                f"points ({ran_on})"
                + (f"; {int(ds.multistable.sum())} multistable among {several.count} initial "
@@ -134,24 +134,3 @@ def chart(
         typer.echo(chart_table(ds))
 
 
-def _run_plan(plan, executor: str, workers: int | None, scheduler: str | None, *,
-              quiet: bool, label: str):
-    """``analysis.cli.plans.run_plan``'s path (the executor made, the cost said, the plan
-    run by ``run_study`` with the progress under ``label``, the executor closed), returning
-    the Dataset and the executor's name, which the command's last line says. The progress
-    starts after the cost is said (its rate and ETA count the points, not the probe).
-    ``run_plan`` does neither yet."""
-    from analysis.cli.plans import recomputing
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.runner import run_study, say_cost
-
-    say = None if quiet else (lambda text: typer.echo(text, err=True))
-    ex = executor_of(executor, workers, scheduler)
-    try:
-        if say is not None:
-            say_cost(plan, ex, say)
-        ds = run_study(plan, ex, progress=ProgressReporter(label, quiet, unit=plan.unit),
-                       say=say, on_damaged=recomputing("point"), cost=False)
-    finally:
-        ex.close()
-    return ds, ex.name

@@ -67,7 +67,8 @@ class StudyPlan(Protocol):
     - ``kind``: its name (the store's ``kind``, the progress bar's label);
     - ``unit``: what ``total`` and its progress count (``points``, ``initial states``,
       ``runs``);
-    - ``output``: the netCDF file it writes;
+    - ``output``: the netCDF file it writes (None: nothing is written, the run's value is
+      returned: a calibration kept in memory);
     - ``definition``: its store key (JSON-like: what makes its stored parts), or None for a
       study that keeps no store (it is not resumable: a frequency-domain branch);
     - ``placement``: where its members run (judged once by ``make``), or None where no
@@ -81,7 +82,7 @@ class StudyPlan(Protocol):
 
     kind: str
     unit: str
-    output: Path
+    output: Path | None
     definition: Mapping[str, Any] | None
     placement: Placement | None
     total: int

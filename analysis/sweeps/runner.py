@@ -34,10 +34,12 @@ def run_study(plan: StudyPlan, executor: Executor | None = None, *,
     or ``cost``; ``say`` also takes the lines the plan reports as it goes), its
     parts on ``executor`` (default: serial) and in its store (a damaged stored part is
     reported to ``on_damaged(key)`` and computed again), its Dataset written to
-    ``plan.output`` and returned."""
+    ``plan.output`` and returned (a plan whose ``output`` is None: run, nothing written)."""
     executor = executor or SerialExecutor()
     if say is not None and cost:
         say_cost(plan, executor, say)
+    if plan.output is None:  # no file: the work alone (a calibration kept in memory)
+        return plan.run(None, executor, progress, say)
     if plan.definition is None:  # no store: the work, then the file
         ds = plan.run(None, executor, progress, say)
         save_dataset(ds, plan.output)
