@@ -24,8 +24,10 @@ CHECKS = {"check_count"}
 """Checks whose first argument is the field their message begins with."""
 
 STILL_CONVERTING: dict[str, str] = {
-    "analysis/inference/abc.py": "the calibration's plan (another helper)",
-    "analysis/uncertainty/study.py": "the uncertainty study's plan (another helper)",
+    "analysis/inference/abc.py":
+        "'--prior NAME: the target fixes NAME' waits on a field followed by an item",
+    "analysis/uncertainty/study.py":
+        "'--set AXIS: also the swept parameter' waits on a field followed by an item",
     "analysis/inference/priors.py":
         "'prior NAME: …' waits on InputError taking a field followed by an item "
         "(errors.py: the message may begin '<field> ')",
