@@ -11,15 +11,17 @@ class InputError(BearingdynError, ValueError):
     """A value given by the user is outside what the model or method allows.
 
     ``field``: the parameter the message names first (``"harmonics"``), when the raiser
-    says so; the message then begins ``"<field>: "``. The command line shows the option of
-    that parameter instead (``--harmonics: …``) without reading the message text back."""
+    says so; the message then begins ``"<field>: "``, or ``"<field> <item>: "`` where it
+    is about one item of the parameter (``"prior damping: "``). The command line shows the
+    option of that parameter instead (``--harmonics: …``, ``--prior damping: …``) without
+    reading the message text back."""
 
     field: str | None = None
 
     def __init__(self, message: str, field: str | None = None) -> None:
         super().__init__(message)
         if field is not None:
-            if not message.startswith(f"{field}:"):
+            if not message.startswith((f"{field}:", f"{field} ")):
                 raise ValueError(f"an InputError naming field {field!r} must begin with it: "
                                  f"{message!r}")
             self.field = field

@@ -28,13 +28,6 @@ STILL_CONVERTING: dict[str, str] = {
         "'--prior NAME: the target fixes NAME' waits on a field followed by an item",
     "analysis/uncertainty/study.py":
         "'--set AXIS: also the swept parameter' waits on a field followed by an item",
-    "analysis/inference/priors.py":
-        "'prior NAME: …' waits on InputError taking a field followed by an item "
-        "(errors.py: the message may begin '<field> ')",
-    "analysis/uncertainty/distributions.py":
-        "'dist NAME: …' waits on InputError taking a field followed by an item (errors.py)",
-    "analysis/measured/bearings.py":
-        "waits on cli/import_ross.py renaming the error by its field, not by its text",
 }
 """Files whose flag messages are still being converted; the lead empties this."""
 

@@ -25,8 +25,10 @@ def parse_ball_bearings(items: list[str] | None) -> dict:
             raise InputError(f"--ball-bearing: node {int(node)} given twice")
         try:
             b = lookup(name.strip())
-        except InputError as exc:  # the catalogue names its own option
-            raise InputError(str(exc).replace("--bearing:", "--ball-bearing:", 1)) from None
+        except InputError as exc:  # the catalogue names its parameter, bearing
+            if exc.field != "bearing":
+                raise
+            raise InputError("--ball-bearing" + str(exc)[len(exc.field):]) from None
         found[int(node)] = BallBearing(b.name, b.ball_diameter_m, b.pitch_diameter_m,
                                        b.n_balls, b.source)
     return found

@@ -59,14 +59,16 @@ def parse_prior(text: str) -> Prior:
     try:
         lo, hi = float(parts[1]), float(parts[2])
     except ValueError:
-        raise InputError(f"--prior {name}: LO and HI must be numbers, got {text!r}") from None
+        raise InputError(f"prior {name}: LO and HI must be numbers, got {text!r}",
+                         field="prior") from None
     if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise InputError(f"--prior {name}: LO and HI must be finite, got {text!r}")
+        raise InputError(f"prior {name}: LO and HI must be finite, got {text!r}", field="prior")
     if lo >= hi:
-        raise InputError(f"--prior {name}: LO must be < HI, got LO = {lo:g}, HI = {hi:g}")
+        raise InputError(f"prior {name}: LO must be < HI, got LO = {lo:g}, HI = {hi:g}",
+                         field="prior")
     log = len(parts) == 4 and parts[3] == "log"
     if log and lo <= 0:
-        raise InputError(f"--prior {name}: a log prior needs LO > 0, got LO = {lo:g}")
+        raise InputError(f"prior {name}: a log prior needs LO > 0, got LO = {lo:g}", field="prior")
     return Prior(name, lo, hi, log)
 
 
@@ -78,19 +80,19 @@ def check_priors(priors: Sequence[Prior], model: Model) -> tuple[Prior, ...]:
     seen: set[str] = set()
     for prior in priors:
         if prior.name in STRUCTURAL:
-            raise InputError(f"--prior {prior.name}: the balls are a target row's condition, "
-                             "not a calibrated parameter")
+            raise InputError(f"prior {prior.name}: the balls are a target row's condition, "
+                             "not a calibrated parameter", field="prior")
         if prior.name not in model.parameter_names:
-            raise InputError(f"--prior {prior.name}: not a parameter of model "
-                             f"'{model.name}' ({', '.join(model.parameter_names)})")
+            raise InputError(f"prior {prior.name}: not a parameter of model "
+                             f"'{model.name}' ({', '.join(model.parameter_names)})", field="prior")
         if prior.name in seen:
-            raise InputError(f"--prior {prior.name}: given twice")
+            raise InputError(f"prior {prior.name}: given twice", field="prior")
         seen.add(prior.name)
         for end in (prior.lo, prior.hi):
             try:
                 model.parameters({prior.name: end})
             except InputError as exc:
-                raise InputError(f"--prior {prior.name}: {exc}") from None
+                raise InputError(f"prior {prior.name}: {exc}", field="prior") from None
     return tuple(priors)
 
 

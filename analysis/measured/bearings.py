@@ -90,23 +90,24 @@ def check_geometry(d: float, pitch: float, z: int, angle: float, name: str = "")
     """InputError unless the bearing can exist: 0 < d < D (a ball larger than the pitch
     circle cannot roll on it), z ≥ 3 whole balls that fit on the pitch circle
     (z ≤ π/asin(d/D)), 0 ≤ α < 90°."""
-    label = f"--bearing: {name}: " if name else "--bearing: "
+    label = f"bearing: {name}: " if name else "bearing: "
     values = (d, pitch, angle)
     if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
         raise InputError(f"{label}the diameters and angle must be finite numbers, got "
-                         f"d={d}, D={pitch}, angle={angle}")
+                         f"d={d}, D={pitch}, angle={angle}", field="bearing")
     if not 0 < d < pitch:
         raise InputError(f"{label}the ball diameter d must be > 0 and smaller than the pitch "
-                         f"diameter D, got d={d * 1e3:g} mm, D={pitch * 1e3:g} mm")
+                         f"diameter D, got d={d * 1e3:g} mm, D={pitch * 1e3:g} mm", field="bearing")
     if isinstance(z, bool) or int(z) != z or z < 3:
-        raise InputError(f"{label}the number of balls z must be a whole number >= 3, got {z}")
+        raise InputError(f"{label}the number of balls z must be a whole number >= 3, got {z}",
+                         field="bearing")
     fit = math.floor(math.pi / math.asin(d / pitch))
     if z > fit:
         raise InputError(f"{label}{z} balls of {d * 1e3:g} mm do not fit on a pitch circle "
-                         f"of {pitch * 1e3:g} mm (at most {fit})")
+                         f"of {pitch * 1e3:g} mm (at most {fit})", field="bearing")
     if not 0 <= angle < math.pi / 2:
         raise InputError(f"{label}the contact angle must be in [0, 90) degrees, got "
-                         f"{math.degrees(angle):g}")
+                         f"{math.degrees(angle):g}", field="bearing")
 
 
 CWRU = ("Case Western Reserve University Bearing Data Center, bearing information "
@@ -135,24 +136,25 @@ _FIELDS = {"d": "ball diameter (mm)", "D": "pitch diameter (mm)", "z": "balls",
 
 def parse_geometry(text: str) -> Bearing:
     """``d=7.94,D=39.04,z=9,angle=0``: ball and pitch diameters in mm, the number of balls,
-    the contact angle in degrees (optional, default 0). InputError naming ``--bearing``."""
+    the contact angle in degrees (optional, default 0). InputError naming ``bearing``."""
     values: dict[str, str] = {}
     for part in text.split(","):
         key, sep, value = (s.strip() for s in part.partition("="))
         if not sep or key not in _FIELDS or key in values:
-            raise InputError(f"--bearing: a geometry is d=MM,D=MM,z=BALLS[,angle=DEG] "
-                             f"(d, D in mm, angle in degrees), got {text!r}")
+            raise InputError(f"bearing: a geometry is d=MM,D=MM,z=BALLS[,angle=DEG] "
+                             f"(d, D in mm, angle in degrees), got {text!r}", field="bearing")
         values[key] = value
     missing = [k for k in ("d", "D", "z") if k not in values]
     if missing:
-        raise InputError(f"--bearing: the geometry lacks {', '.join(missing)} "
-                         f"(d=MM,D=MM,z=BALLS[,angle=DEG]), got {text!r}")
+        raise InputError(f"bearing: the geometry lacks {', '.join(missing)} "
+                         f"(d=MM,D=MM,z=BALLS[,angle=DEG]), got {text!r}", field="bearing")
     try:
         d, pitch = float(values["d"]) * 1e-3, float(values["D"]) * 1e-3
         angle = math.radians(float(values.get("angle", "0")))
         z_float = float(values["z"])
     except ValueError:
-        raise InputError(f"--bearing: d, D, z and angle must be numbers, got {text!r}") from None
+        raise InputError(f"bearing: d, D, z and angle must be numbers, got {text!r}",
+                         field="bearing") from None
     z = int(z_float) if z_float.is_integer() else z_float
     return Bearing(text, d, pitch, z, angle,  # type: ignore[arg-type]
                    "given: d, D in mm, angle in degrees")
@@ -168,11 +170,11 @@ def model_bearing(name: str, bearing: str | None = None) -> Bearing:
 
     model = load_model(name)
     if not model.bearing_names:
-        raise InputError(f"--bearing: model '{model.name}' has no bearing")
+        raise InputError(f"bearing: model '{model.name}' has no bearing", field="bearing")
     which = bearing or model.bearing_names[0]
     if which not in model.bearing_names:
-        raise InputError(f"--bearing: model '{model.name}' has no bearing '{which}'; "
-                         f"bearings: {', '.join(model.bearing_names)}")
+        raise InputError(f"bearing: model '{model.name}' has no bearing '{which}'; "
+                         f"bearings: {', '.join(model.bearing_names)}", field="bearing")
     values = model.defaults
     index = model.bearing_names.index(which)
     n = model.default_structure[index]
@@ -180,8 +182,8 @@ def model_bearing(name: str, bearing: str | None = None) -> Bearing:
     fault = freqs.faults[which]
     fit = balls_that_fit(values, which)
     if fit is None:
-        raise InputError(f"--bearing: model '{model.name}' gives no ball and pitch diameter "
-                         f"for bearing '{which}'")
+        raise InputError(f"bearing: model '{model.name}' gives no ball and pitch diameter "
+                         f"for bearing '{which}'", field="bearing")
     _, d, pitch = fit
     angle = float(values.get(f"contact_angle_{which}", values.get("contact_angle", 0.0)))
     races = [values.get(f"{k}_{which}", values.get(k)) for k in ("inner_race_diameter",
@@ -205,8 +207,8 @@ def lookup(text: str) -> Bearing:
     key = str(text).strip()
     low = key.lower()
     if not key:
-        raise InputError("--bearing: give a catalogue name (" + ", ".join(CATALOGUE)
-                         + "), d=MM,D=MM,z=BALLS[,angle=DEG] or a model's name")
+        raise InputError("bearing: give a catalogue name (" + ", ".join(CATALOGUE)
+                         + "), d=MM,D=MM,z=BALLS[,angle=DEG] or a model's name", field="bearing")
     if low in CATALOGUE or low in ALIASES:
         return CATALOGUE[ALIASES.get(low, low)]
     if "=" in key:
@@ -217,9 +219,9 @@ def lookup(text: str) -> Bearing:
     if name in available_models() or name.endswith(".toml"):
         return model_bearing(name, which or None)
     names = ", ".join([*CATALOGUE, *ALIASES])
-    raise InputError(f"--bearing: no bearing {key!r}; give one of {names}, a geometry "
+    raise InputError(f"bearing: no bearing {key!r}; give one of {names}, a geometry "
                      f"d=MM,D=MM,z=BALLS[,angle=DEG] (mm, degrees) or a model's name "
-                     f"(bearingdyn models)")
+                     f"(bearingdyn models)", field="bearing")
 
 
 def frequency_table(bearing: Bearing, shaft_hz: float) -> list[str]:

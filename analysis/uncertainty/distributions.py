@@ -104,24 +104,25 @@ def parse_dist(text: str) -> Dist:
         raise InputError(f"dist: must be {form}, got {text!r}", field="dist")
     kind = parts[0].strip().lower()
     if kind not in KINDS:
-        raise InputError(f"--dist {name}: unknown distribution {parts[0]!r}; "
-                         f"known: {', '.join(KINDS)}")
+        raise InputError(f"dist {name}: unknown distribution {parts[0]!r}; "
+                         f"known: {', '.join(KINDS)}", field="dist")
     try:
         a, b = float(parts[1]), float(parts[2])
     except ValueError:
-        raise InputError(f"--dist {name}: the two numbers must be numbers, "
-                         f"got {text!r}") from None
+        raise InputError(f"dist {name}: the two numbers must be numbers, "
+                         f"got {text!r}", field="dist") from None
     if not (math.isfinite(a) and math.isfinite(b)):
-        raise InputError(f"--dist {name}: the two numbers must be finite, got {text!r}")
+        raise InputError(f"dist {name}: the two numbers must be finite, got {text!r}", field="dist")
     if kind == "uniform" and b < a:
-        raise InputError(f"--dist {name}: a negative spread: HI must be >= LO, got LO = "
-                         f"{a:g}, HI = {b:g}")
+        raise InputError(f"dist {name}: a negative spread: HI must be >= LO, got LO = "
+                         f"{a:g}, HI = {b:g}", field="dist")
     if kind == "normal" and b < 0:
-        raise InputError(f"--dist {name}: a negative spread: SD must be >= 0, got {b:g}")
+        raise InputError(f"dist {name}: a negative spread: SD must be >= 0, got {b:g}",
+                         field="dist")
     if kind == "lognormal" and (a <= 0 or b < 1):
-        raise InputError(f"--dist {name}: a lognormal needs MEDIAN > 0 and FACTOR >= 1 (its "
+        raise InputError(f"dist {name}: a lognormal needs MEDIAN > 0 and FACTOR >= 1 (its "
                          f"geometric standard deviation), got MEDIAN = {a:g}, "
-                         f"FACTOR = {b:g}")
+                         f"FACTOR = {b:g}", field="dist")
     return Dist(name, kind, a, b)
 
 
@@ -136,8 +137,8 @@ def _inside(model: Model, dist: Dist, value: float, what: str) -> None:
     try:
         model.parameters({dist.name: value})
     except InputError as exc:
-        raise InputError(f"--dist {dist.name}: its support reaches outside the parameter's "
-                         f"allowed range at its {what} ({exc})") from None
+        raise InputError(f"dist {dist.name}: its support reaches outside the parameter's "
+                         f"allowed range at its {what} ({exc})", field="dist") from None
 
 
 def fit_to_model(dist: Dist, model: Model) -> Dist:
@@ -146,10 +147,11 @@ def fit_to_model(dist: Dist, model: Model) -> Dist:
     inside it and its tails truncated to it (``note`` says so, with the share of probability
     cut off)."""
     if dist.name in NOT_UNCERTAIN:
-        raise InputError(f"--dist {dist.name}: the balls are swept with --n-balls, not drawn")
+        raise InputError(f"dist {dist.name}: the balls are swept with --n-balls, not drawn",
+                         field="dist")
     if dist.name not in model.parameter_names:
-        raise InputError(f"--dist {dist.name}: not a parameter of model '{model.name}' "
-                         f"({', '.join(model.parameter_names)})")
+        raise InputError(f"dist {dist.name}: not a parameter of model '{model.name}' "
+                         f"({', '.join(model.parameter_names)})", field="dist")
     low, high, _ = allowed_range(model, dist.name)
     if dist.degenerate or dist.kind == "uniform":
         _inside(model, dist, dist.a, "low end" if not dist.degenerate else "value")
@@ -179,13 +181,13 @@ def check_dists(dists: Sequence[Dist | str], model: Model,
     out = []
     for dist in parsed:
         if dist.name in seen:
-            raise InputError(f"--dist {dist.name}: given twice")
+            raise InputError(f"dist {dist.name}: given twice", field="dist")
         seen.add(dist.name)
         if sets and dist.name in sets:
-            raise InputError(f"--dist {dist.name}: also given with --set; a parameter is "
-                             "either uncertain (--dist) or fixed (--set)")
+            raise InputError(f"dist {dist.name}: also given with --set; a parameter is "
+                             "either uncertain (--dist) or fixed (--set)", field="dist")
         if swept is not None and dist.name == swept:
-            raise InputError(f"--dist {dist.name}: also the swept --param; a parameter is "
-                             "either uncertain or swept")
+            raise InputError(f"dist {dist.name}: also the swept --param; a parameter is "
+                             "either uncertain or swept", field="dist")
         out.append(fit_to_model(dist, model))
     return tuple(out)

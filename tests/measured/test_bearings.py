@@ -94,7 +94,7 @@ def test_geometry_in_mm_and_degrees():
 def test_impossible_or_unknown_bearing_is_one_line(text, words):
     with pytest.raises(InputError, match=words) as err:
         lookup(text)
-    assert str(err.value).startswith("--bearing:")
+    assert str(err.value).startswith("bearing:") and err.value.field == "bearing"
     assert "\n" not in str(err.value)
 
 
