@@ -510,9 +510,9 @@ def check_fixed(priors: Sequence[Prior], target: Target) -> None:
     for prior in priors:
         fixing = [row.name() for row in target.rows if prior.name in dict(row.parameters)]
         if fixing:
-            raise InputError(f"--prior {prior.name}: the target fixes {prior.name} "
+            raise InputError(f"prior {prior.name}: the target fixes {prior.name} "
                              f"({', '.join(fixing[:3])}{', …' if len(fixing) > 3 else ''}); "
-                             "calibrate a parameter the target leaves free")
+                             "calibrate a parameter the target leaves free", field="prior")
 
 
 def check_row_kernels(model: Model, target: Target, options: Options) -> Placement:

@@ -148,7 +148,7 @@ def prepare(model: str | Model, dists: Sequence[Dist | str], *,
         raise InputError(f"{name}: give 1 to {MAX_VALUES} values, got {len(values)}",
                          field=name)
     if axis in sets:
-        raise InputError(f"--set {axis}: also the swept parameter")
+        raise InputError(f"sets {axis}: also the swept parameter", field="sets")
     found = check_dists(dists, mdl, sets, axis)
     check_samples(samples)
     if device not in ("cpu", "gpu", "auto"):

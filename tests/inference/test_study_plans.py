@@ -254,3 +254,14 @@ def test_the_cost_of_a_calibration_not_on_the_cpu_ends_with_the_gpus_note(tmp_pa
     assert plan.cost(1).lines()[-1] == GPU_NOTE
     assert GPU_NOTE not in plan_calibration("vakharia2015", "paper-table2", PRIORS,
                                             tmp_path / "c.nc", **TINY).cost(1).lines()
+
+
+def test_a_prior_the_target_fixes_is_refused_naming_the_prior(tmp_path):
+    from analysis.inference.results import plan_calibration
+
+    with pytest.raises(InputError) as refused:
+        plan_calibration("vakharia2015", "paper-table2", ["speed_rpm:3000:6000"],
+                         tmp_path / "c.nc", **TINY)
+    assert refused.value.field == "prior"
+    assert str(refused.value).startswith("prior speed_rpm: the target fixes speed_rpm")
+    assert list(tmp_path.iterdir()) == []
