@@ -59,7 +59,7 @@ from analysis.sweeps.grid import (
     record,
 )
 from analysis.sweeps.multistability import Ics, point_attractors
-from analysis.sweeps.points import chart_points, grid_device
+from analysis.sweeps.points import chart_grid_points, chart_points, grid_device
 from analysis.sweeps.runner import run_study
 from analysis.sweeps.store import PointStore
 
@@ -115,15 +115,19 @@ on a GPU enough to fill it."""
 
 def _chart_group_task(group: list[tuple], device: str = "cpu",
                       threads: int | None = None) -> list[tuple[str, dict]]:
-    """Chart points of one model and balls together (``points.chart_points``: one call of
-    the member kernels on ``device``, ``threads`` CPU threads); with ``Ics`` (a task's last
-    item) also each point's attractors among K initial states."""
-    setting = group[0][0]
-    systems = [_task_system(task) for task in group]
+    """Chart points of one model and balls together (``points.chart_grid_points``: planned
+    as arrays, one call of the member kernels on ``device``, ``threads`` CPU threads); with
+    ``Ics`` (a task's last item) also each point's attractors among K initial states (a
+    System per point: ``points.chart_points``)."""
+    setting, xname, _, yname, _, _, ics = group[0]
+    if ics is None:  # no System per point: the group's points as arrays
+        points = chart_grid_points(setting, (xname, yname),
+                                   [(task[2], task[4]) for task in group], device, threads)
+    else:
+        systems = [_task_system(task) for task in group]
+        points = chart_points(setting, systems, device, threads)
     out = [(task[-2], point if isinstance(point, dict) else _failed_point(setting, point))
-           for task, point in zip(group, chart_points(setting, systems, device, threads),
-                                  strict=True)]
-    ics = group[0][-1]
+           for task, point in zip(group, points, strict=True)]
     if ics is not None:
         for (key, point), system in zip(out, systems, strict=True):
             point.update(_ics_point(setting, ics, system, key))

@@ -15,6 +15,8 @@ period, graph ratio); ``tests/sweeps/test_classes.py`` checks them equal to
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from analysis.stability.classify import GRAPH_RATIO
@@ -84,16 +86,73 @@ def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
     return found
 
 
+@cache
+def _sums_in_order(n: int) -> bool:
+    """Whether ``np.add.reduce`` over a contiguous last axis of ``n`` doubles adds them in
+    order, ((a0 + a1) + a2) + …, as numpy's pairwise sum does below 8 terms: checked once
+    per n on 4096 random rows (then ``_plane_norms`` gives ``_norms``' bits)."""
+    if n >= 8:
+        return False
+    d = np.random.default_rng(n).normal(size=(4096, n)) * np.logspace(-6, 3, n)
+    return bool(np.array_equal(_norms(d), _plane_norms(np.ascontiguousarray(d.T))))
+
+
+def _plane_norms(planes: np.ndarray) -> np.ndarray:
+    """``_norms`` of vectors stored one component per plane (n × …), the squares added in
+    order as ``graph_ratios`` adds them (``_sums_in_order``: the same bits where it
+    holds)."""
+    out = planes[0] * planes[0]
+    for plane in planes[1:]:
+        out += plane * plane
+    return out
+
+
+def _median_root(squares: np.ndarray) -> np.ndarray:
+    """``np.median(np.sqrt(squares), axis=0)`` of columns of squared distances (N ×
+    m), bit for bit: the square root is monotonic and correctly rounded, so the middle
+    values are the roots of the middle squares (one partition at N // 2, the lower middle
+    the largest below it); two of them averaged as ``np.median`` does (their sum over 2)
+    for an even N; NaN where a column holds one."""
+    rows = np.ascontiguousarray(squares.T)
+    half = rows.shape[1] // 2
+    part = np.partition(rows, half, axis=1)
+    upper = np.sqrt(part[:, half])
+    middle = upper if rows.shape[1] % 2 else (np.sqrt(part[:, :half].max(axis=1)) + upper) / 2
+    return np.where(np.isnan(rows).any(axis=1), np.nan, middle)
+
+
 def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.ndarray:
-    """``classify.graph_ratio`` of each member (m × K × n points, phases m × K)."""
+    """``classify.graph_ratio`` of each member (m × K × n points, phases m × K). With
+    fewer than 8 state variables (``_sums_in_order``) the distances are taken one
+    component at a time (K × members planes: contiguous gathers and in-place sums, the
+    squares added in order) and the medians from the squared distances (``_median_root``):
+    the same bits as the direct form (``tests/sweeps/test_chart_host_batched.py``)."""
     count = points.shape[1]
     rng = np.random.default_rng(seed)
     i, j = rng.integers(0, count, (2, 4 * count))
     i, j = i[i != j], j[i != j]
     out = np.empty(len(points))
+    planes = _sums_in_order(points.shape[2])
     for lo in range(0, len(points), CHUNK):
         part = points[lo:lo + CHUNK]
         order = np.argsort(phase[lo:lo + CHUNK], axis=1)
+        if planes:
+            members, ranks = np.arange(len(part)), order.T
+            neighbours = pairs = None
+            for plane in np.ascontiguousarray(part.transpose(2, 1, 0)):  # K × members
+                step = np.diff(plane[ranks, members], axis=0)
+                step *= step
+                gap = np.take(plane, i, axis=0)
+                gap -= np.take(plane, j, axis=0)
+                gap *= gap
+                if neighbours is None:
+                    neighbours, pairs = step, gap
+                else:
+                    neighbours += step
+                    pairs += gap
+            out[lo:lo + CHUNK] = _median_root(neighbours) / np.maximum(
+                _median_root(pairs), 1e-300)
+            continue
         sorted_points = np.take_along_axis(part, order[:, :, None], axis=1)
         neighbours = np.sqrt(_norms(np.diff(sorted_points, axis=1)))
         pairs = np.sqrt(_norms(part[:, i] - part[:, j]))

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cache
 
@@ -67,10 +67,11 @@ from analysis.model import Model, Structure, System
 from analysis.provenance import (
     completed_attrs,
     displacement_names,
+    run_attrs,
     state_variable_attrs,
     to_dataset,
 )
-from analysis.signal.poincare import period_of, poincare_section
+from analysis.signal.poincare import parse_section, period_of, poincare_section
 from analysis.stability.classify import (
     Classification,
     classify_section,
@@ -444,7 +445,7 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
     before any point, ``grid_device``: only ``--device auto`` on the cores gets here).
     Without ``datasets`` a point's result is its chart row (``chart_row``'s fields) instead
     of a ``PointResult``, the points of equal section counts classified together
-    (``_kernel_rows``: no Dataset, the class with numpy over the points; identical rows,
+    (``_batch_rows``: no Dataset, the class with numpy over the points; identical rows,
     ``tests/sweeps/test_chart_host.py``)."""
     results: list = [None] * len(systems)
     groups: dict[tuple, list[tuple[int, _KernelPoint]]] = {}
@@ -454,80 +455,142 @@ def kernel_points(systems: list[System], durations: list[float], transient: floa
         groups.setdefault((id(system.model), system.structure), []).append((i, point))
     for group in groups.values():
         points = [point for _, point in group]
-        schedule = Schedule(
-            [(p.first - p.skip - 1) * p.every for p in points], [p.every for p in points],
-            [p.skip + p.count for p in points], tangent=True,
-            lyapunov_skip=[p.skip for p in points],
-            extremes_from=[p.steps[0] for p in points], extremes_to=[p.steps[1] for p in points])
-        placed = place(device, len(points), steps=schedule.total_steps)
-        try:
-            out = run_members(points[0].system,
-                              np.array([np.asarray(p.system.state, float) for p in points]),
-                              np.array([p.system.p for p in points]),
-                              np.array([p.h for p in points]), schedule, device=placed,
-                              threads=threads)
-        except (Unsupported, CompileError):
-            if placed.gpu:
-                raise
-            for i, _ in group:  # no CPU build: the scalar blocks, point by point
+        batch = _Batch.of(points)
+        out = _run_batch(batch, device, threads)
+        if out is None:  # no CPU build: the scalar blocks, point by point
+            for i, _ in group:
                 results[i] = _scalar_point(systems[i], durations[i], transient, dt, section)
             continue
-        kept = []
+        if not datasets:
+            for (i, _), row in zip(group, _batch_rows(batch, out), strict=True):
+                results[i] = row
+            continue
         for j, (i, point) in enumerate(group):
             if out.diverged_at[j] >= 0:
                 results[i] = blow_up_error(point.system, int(out.diverged_at[j]), point.h,
                                            out.final[j])
-            elif not datasets:
-                kept.append((j, i))
             else:
                 total = point.skip + point.count
                 results[i] = _kernel_result(point, out.sections[j, point.skip:total],
                                             out.logs[j, total - point.averaged:total],
                                             out.high[j] - out.low[j])
-        by_count: dict[int, list[tuple[int, int]]] = {}
-        for j, i in kept:
-            by_count.setdefault(points[j].count, []).append((j, i))
-        for members in by_count.values():
-            rows = _kernel_rows([points[j] for j, _ in members], out, [j for j, _ in members])
-            for (_, i), row in zip(members, rows, strict=True):
-                results[i] = row
     return results
 
 
-def _kernel_rows(points: list[_KernelPoint], out, rows: list[int]) -> list[dict]:
-    """The chart rows (``chart_row``'s fields) of kernel points of one model holding the
-    same number of section points, members ``rows`` of the kernel result ``out``: λ1, its
-    interval (``lyapunov.running_mean``, ``batch_ci95``, one interval per row) and the class
-    (``classes.chart_classes``) with numpy over the points."""
-    model, attrs = points[0].system.model, [p.attrs for p in points]
-    sections = np.stack([out.sections[j, p.skip:p.skip + p.count]
-                         for j, p in zip(rows, points, strict=True)])
-    ptp = out.high[rows] - out.low[rows]
-    logs = np.stack([out.logs[j, p.skip + p.count - p.averaged:p.skip + p.count]
-                     for j, p in zip(rows, points, strict=True)])
-    interval = np.array([p.every * p.h for p in points])[:, None]
-    lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
-    period = np.array([p.period for p in points])
-    times = np.stack([(0.0 + np.arange(p.first, p.first + p.count)) * p.period
-                      for p in points])
-    graph = np.array([run_unbalance(a) > 0 and a.get("vc_hz", 0) > 0
-                      and str(p.section) == "shaft" for a, p in zip(attrs, points,
-                                                                   strict=True)])
-    vc_hz = np.array([float(a.get("vc_hz", 0)) for a in attrs])
-    natures, periods, ratios = chart_classes(sections, ptp, model.state_names,
-                                             _units(model), period, times, graph, vc_hz,
-                                             lam, ci)
-    shown = displacement_names(attrs[0])
-    index = [model.state_names.index(v) for v in shown]
-    found = []
-    for m, nature in enumerate(natures):
-        half = ptp[m].tolist()
-        found.append({"nature": nature, "nature_code": nature_code(nature),
-                      "period": periods[m].item(), "lyapunov": lam[m].item(),
-                      "ci95": ci[m].item(), "graph_ratio": ratios[m].item() or np.nan,
-                      **{f"amplitude_{v}": half[k] / 2 for v, k in zip(shown, index,
-                                                                       strict=True)}})
+@dataclass(frozen=True)
+class _Batch:
+    """The kernel points of one model and balls as arrays, one row per member (what
+    ``_KernelPoint`` holds per point): the first member's ``system`` (model, balls, initial
+    state), the parameter vectors ``p`` (M × parameters), each member's section period and
+    step h (s), its steps per section, first section, sections, skipped sections, averaged
+    logs and the record's first and last step; ``graph``: whether its graph ratio is judged
+    (forced at X and VC, shaft section), ``vc_hz`` its VC frequency (Hz); ``shown``: the
+    displacements of its amplitudes; ``member(j)``: member j's System (made only for a
+    blow-up's message)."""
+
+    system: System
+    p: np.ndarray
+    period: np.ndarray
+    h: np.ndarray
+    every: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    skip: np.ndarray
+    averaged: np.ndarray
+    steps_from: np.ndarray
+    steps_to: np.ndarray
+    graph: np.ndarray
+    vc_hz: np.ndarray
+    shown: tuple[str, ...]
+    member: Callable[[int], System] = field(compare=False)
+
+    @classmethod
+    def of(cls, points: list[_KernelPoint]) -> _Batch:
+        """The batch of kernel points planned one by one (``_kernel_point``)."""
+        attrs = [p.attrs for p in points]
+
+        def ints(name: str) -> np.ndarray:
+            return np.array([getattr(p, name) for p in points], dtype=np.int64)
+
+        return cls(points[0].system, np.array([p.system.p for p in points]),
+                   np.array([p.period for p in points]), np.array([p.h for p in points]),
+                   ints("every"), ints("first"), ints("count"), ints("skip"),
+                   ints("averaged"), np.array([p.steps[0] for p in points], dtype=np.int64),
+                   np.array([p.steps[1] for p in points], dtype=np.int64),
+                   np.array([run_unbalance(a) > 0 and a.get("vc_hz", 0) > 0
+                             and str(p.section) == "shaft"
+                             for a, p in zip(attrs, points, strict=True)], dtype=bool),
+                   np.array([float(a.get("vc_hz", 0)) for a in attrs]),
+                   displacement_names(attrs[0]), lambda j: points[j].system)
+
+    def schedule(self) -> Schedule:
+        """The members' ``Schedule``: the tangent from the start of the skipped sections,
+        the extremes over the record's steps."""
+        return Schedule((self.first - self.skip - 1) * self.every, self.every,
+                        self.skip + self.count, tangent=True, lyapunov_skip=self.skip,
+                        extremes_from=self.steps_from, extremes_to=self.steps_to)
+
+
+def _run_batch(batch: _Batch, device: str | Placement, threads: int | None):
+    """The batch's one ``run_members`` call on ``device`` (placed for its members and
+    steps); None where the cores have no build of its kernel (``Unsupported``,
+    ``CompileError``: the points then run one by one), an error on the GPU."""
+    schedule = batch.schedule()
+    placed = place(device, len(batch.p), steps=schedule.total_steps)
+    state = np.asarray(batch.system.state, float)
+    try:
+        return run_members(batch.system, np.tile(state, (len(batch.p), 1)), batch.p,
+                           batch.h, schedule, device=placed, threads=threads)
+    except (Unsupported, CompileError):
+        if placed.gpu:
+            raise
+        return None
+
+
+def _batch_rows(batch: _Batch, out) -> list[dict | SimulationError]:
+    """Each member's chart row (``chart_row``'s fields) from the kernel result ``out``, or
+    the ``SimulationError`` of its blow-up: the members holding the same number of section
+    points classified together (``_count_rows``)."""
+    found: list = [None] * len(batch.p)
+    by_count: dict[int, list[int]] = {}
+    for j, (step, count) in enumerate(zip(out.diverged_at.tolist(), batch.count.tolist(),
+                                          strict=True)):
+        if step >= 0:
+            found[j] = blow_up_error(batch.member(j), step, float(batch.h[j]), out.final[j])
+        else:
+            by_count.setdefault(count, []).append(j)
+    for count, members in by_count.items():
+        rows = np.array(members, dtype=np.int64)
+        for j, row in zip(members, _count_rows(batch, out, rows, count), strict=True):
+            found[j] = row
     return found
+
+
+def _count_rows(batch: _Batch, out, rows: np.ndarray, count: int) -> list[dict]:
+    """The chart rows of the members ``rows`` of ``batch``, each holding ``count`` section
+    points: λ1, its interval (``lyapunov.running_mean``, ``batch_ci95``, one interval per
+    row) and the class (``classes.chart_classes``) with numpy over the members."""
+    model = batch.system.model
+    skip, span = batch.skip[rows][:, None], np.arange(count)
+    sections = out.sections[rows[:, None], skip + span]
+    ptp = out.high[rows] - out.low[rows]
+    averaged = int(batch.averaged[rows[0]])  # count − count % BLOCKS: one per count
+    logs = out.logs[rows[:, None], skip + (count - averaged) + np.arange(averaged)]
+    interval = (batch.every[rows] * batch.h[rows])[:, None]
+    lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
+    period = batch.period[rows]
+    times = (0.0 + (batch.first[rows][:, None] + span)) * period[:, None]
+    natures, periods, ratios = chart_classes(sections, ptp, model.state_names, _units(model),
+                                             period, times, batch.graph[rows],
+                                             batch.vc_hz[rows], lam, ci)
+    index = [model.state_names.index(v) for v in batch.shown]
+    halves = (ptp[:, index] / 2).tolist()
+    return [{"nature": nature, "nature_code": nature_code(nature), "period": n,
+             "lyapunov": lam_k, "ci95": ci_k, "graph_ratio": ratio or np.nan,
+             **{f"amplitude_{v}": a for v, a in zip(batch.shown, half, strict=True)}}
+            for nature, n, lam_k, ci_k, ratio, half in zip(
+                natures, periods.tolist(), lam.tolist(), ci.tolist(), ratios.tolist(), halves,
+                strict=True)]
 
 
 def _scalar_point(system: System, duration: float, transient: float, dt: float,
@@ -617,3 +680,208 @@ def chart_points(setting: Setting, systems: list[System], device: str | Placemen
                              device, threads, datasets=False)
     return [out if isinstance(out, SimulationError | dict) else chart_row(out)
             for out in outs]
+
+
+FIT_PARAMETERS = ("ball_diameter", "pitch_diameter", "inner_race_diameter",
+                  "outer_race_diameter")
+"""Parameters (and their ``<name>_<bearing>`` forms) that decide how many balls fit a
+bearing (``model.balls_that_fit``): an axis over one of them is planned point by point."""
+
+
+def chart_grid_points(setting: Setting, names: Sequence[str], values: Sequence[Sequence[float]],
+                      device: str | Placement = "cpu",
+                      threads: int | None = None) -> list[dict | SimulationError]:
+    """``chart_points`` of the grid points of one model and balls at ``values`` (one row of
+    values per point, one per axis of ``names``), without a System per point where it can:
+    with λ1 the points are planned as arrays (``_grid_batch``: one parameter matrix, one
+    evaluation of the frequencies, the run checks and schedules with numpy) and run in one
+    call of the member kernels; where the arrays cannot plan them (no λ1, an axis over the
+    balls' fit, a model whose frequencies take no column of values, a point a check would
+    refuse) the points are made one by one (``setting.system_at``, ``chart_points``), so
+    any refusal is the one ``chart_points`` gives. The rows are ``chart_points``' bit for
+    bit (``tests/sweeps/test_chart_host_batched.py``)."""
+    batch = _grid_batch(setting, tuple(names), values) if setting.lyapunov else None
+    if batch is None:
+        systems = [setting.system_at(**dict(zip(names, row, strict=True))) for row in values]
+        return chart_points(setting, systems, device, threads)
+    out = _run_batch(batch, device, threads)
+    if out is None:  # no CPU build: the scalar blocks, point by point
+        return chart_points(setting, [batch.member(j) for j in range(len(values))], device,
+                            threads)
+    return _batch_rows(batch, out)
+
+
+def _frequency_columns(model: Model, structure: Structure,
+                       p: np.ndarray) -> dict[str, np.ndarray] | None:
+    """The shaft, cage and VC frequencies (Hz) of ``Model.frequencies`` for every row of
+    ``p`` (M × parameters), keyed as its ``as_dict`` keys them (the fault frequencies left
+    out: no section reads them); None where the model's functions do not take a column of
+    values (a ``math`` function of a parameter)."""
+    m, columns = len(p), p.T
+    try:
+        shaft = np.broadcast_to(np.asarray(model.module.shaft_speed(columns), dtype=float),
+                                (m,)) / (2 * math.pi)
+        cage = {b: np.broadcast_to(np.asarray(model.cage_speed(b, columns), dtype=float),
+                                   (m,)) / (2 * math.pi) for b in model.bearing_names}
+    except (TypeError, ValueError):
+        return None
+    vc = {b: n * cage[b] for b, n in zip(model.bearing_names, structure, strict=True)}
+    out = {"shaft_hz": shaft}
+    if len(vc) <= 1:
+        out["cage_hz"] = next(iter(cage.values()), np.zeros(m))
+        out["vc_hz"] = next(iter(vc.values()), np.zeros(m))
+    else:
+        for b in vc:
+            out[f"cage_hz_{b}"], out[f"vc_hz_{b}"] = cage[b], vc[b]
+    return out
+
+
+def _period_column(section: str, columns: dict[str, np.ndarray], attrs: dict,
+                   bearings: list[str]) -> np.ndarray | None:
+    """The period (s) of ``section`` at every row of ``columns`` (``period_of``'s steps:
+    1 / the frequency of its attr; a ``param:NAME`` section's frequency 1 / NAME), the
+    values not in ``columns`` those of ``attrs``; None where a period is not a finite
+    number > 0 or its attr is not known here."""
+    kind, name = parse_section(str(section).strip())
+    m = len(next(iter(columns.values())))
+    if kind == "param":
+        value = columns.get(name, np.full(m, float(attrs[name])) if name in attrs else None)
+        frequency = None if value is None else 1.0 / value
+    elif kind == "shaft":
+        frequency = columns["shaft_hz"]
+    else:
+        keys = [f"{kind}_hz_{name}", f"{kind}_hz"] if name else \
+            [f"{kind}_hz", *(f"{kind}_hz_{b}" for b in bearings[:1])]
+        frequency = next((columns[k] for k in keys if k in columns), None)
+    if frequency is None:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if not np.all(np.isfinite(frequency) & (frequency > 0)):
+            return None
+        return 1.0 / frequency
+
+
+def _first_kept(threshold: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """``plan.first_kept`` of every row (the same float products, so the same steps)."""
+    k = np.maximum(0, np.ceil(threshold / step)).astype(np.int64)
+    while (down := (k > 0) & ((k - 1).astype(float) * step >= threshold)).any():
+        k[down] -= 1
+    while (up := k.astype(float) * step < threshold).any():
+        k[up] += 1
+    return k
+
+
+def _grid_batch(setting: Setting, names: tuple[str, ...],
+                values: Sequence[Sequence[float]]) -> _Batch | None:
+    """The kernel points of grid points of one model and balls planned as arrays, each
+    step that of ``setting.seconds`` and ``_kernel_point`` (the same float operations, so
+    the same periods, steps and schedules): the first and last point are Systems with the
+    whole run check (``RunPlan.make``) and their attrs, the others rows of one parameter
+    matrix whose frequencies are evaluated once (``_frequency_columns``; checked equal to
+    the first and last point's attrs) and whose times pass ``check_times`` and
+    ``check_kept``. Where a point's section is the model's own (``default_section``) it is
+    judged on the first point's attrs with the point's parameters, frequencies and duration.
+    None where the arrays cannot plan the points or a check would refuse one: the caller
+    then makes them one by one (the same refusal)."""
+    m = len(values)
+    grid = np.asarray(values, dtype=float).reshape(m, len(names))
+
+    def member(j: int) -> System:
+        return setting.system_at(**dict(zip(names, values[j], strict=True)))
+
+    ends = [member(0), member(m - 1)]
+    model, structure = ends[0].model, ends[0].structure
+    if ends[1].structure != structure:
+        return None
+    params: dict[str, np.ndarray] = {}
+    for name, column in zip(names, grid.T, strict=True):
+        if axis_bearing(name) is not None:
+            if np.any(column != column[0]):
+                return None
+            continue
+        if name.startswith(FIT_PARAMETERS) or name not in model.module.RANGES:
+            return None
+        low, high, inclusive = model.module.RANGES[name]
+        with np.errstate(invalid="ignore"):
+            if not np.all(np.isfinite(column) & (column >= low if inclusive else column > low)
+                          & (column <= high)):
+                return None
+        params[name] = column
+    index = {name: i for i, name in enumerate(model.parameter_names)}
+    p = np.tile(ends[0].p, (m, 1))
+    for name, column in params.items():
+        p[:, index[name]] = column
+    columns = _frequency_columns(model, structure, p)
+    if columns is None:
+        return None
+    run = [run_attrs(model, structure, dict(s.parameters)) for s in ends]
+    if any(k not in a or columns[k][j] != a[k] for k in columns
+           for j, a in ((0, run[0]), (m - 1, run[1]))):
+        return None
+    columns.update(params)
+    dt, transient = setting.step(), setting.transient
+    record = _period_column(setting.record_section, columns, run[0], model.bearing_names)
+    if record is None or any(record[j] != period_of(a, setting.record_section)
+                             for j, a in ((0, run[0]), (m - 1, run[1]))):
+        return None
+    duration = transient + (setting.samples + 0.5) * record
+    if not (math.isfinite(dt) and dt > 0 and math.isfinite(transient) and transient >= 0):
+        return None
+    with np.errstate(invalid="ignore"):
+        if not np.all(np.isfinite(duration) & (duration > 0) & (transient < duration)
+                      & (dt <= duration)):
+            return None
+    kept = np.rint(duration / dt).astype(np.int64) \
+        - _first_kept(transient - 1e-12 * duration, np.full(m, dt)) + 1
+    if np.any(kept < 2):  # check_kept's refusal
+        return None
+    attrs = [completed_attrs(s, **RunPlan.make(s, duration=float(duration[j]),
+                                               transient=transient, dt=dt,
+                                               warn=lambda message: None).settings())
+             for s, j in zip(ends, (0, m - 1), strict=True)]
+    columns["duration"] = duration
+
+    def attrs_of(j: int) -> dict:
+        """The attrs the point's section and graph are judged on."""
+        return {**attrs[0], **{k: v[j] for k, v in columns.items()}}
+
+    if setting.section:
+        sections = [setting.section] * m
+    else:
+        keys = list(columns)
+        rows = zip(*(columns[k].tolist() for k in keys), strict=True)
+        sections = [default_section({**attrs[0], **dict(zip(keys, row, strict=True))})
+                    for row in rows]
+        if sections[-1] != default_section(attrs[1]):
+            return None
+    section_of = np.array(sections, dtype=object)
+    period = np.empty(m)
+    for section in dict.fromkeys(sections):
+        at = np.flatnonzero(section_of == section)
+        column = _period_column(section, columns, attrs[0], model.bearing_names)
+        if column is None or column[at[0]] != period_of(attrs_of(int(at[0])), section):
+            return None
+        period[at] = column[at]
+    if period[-1] != period_of(attrs[1], sections[-1]):
+        return None
+    steps = np.maximum(1, np.ceil(period / dt - 1e-9)).astype(np.int64)  # section_step
+    h = np.where(np.abs(period / dt - steps) <= 1e-9, float(dt), period / steps)
+    first_step = _first_kept(transient - 1e-12 * duration, h)
+    last_step = np.rint(duration / h).astype(np.int64)
+    first = -(-first_step // steps)
+    count = last_step // steps - first + 1
+    averaged = count - count % BLOCKS
+    if np.any(averaged < BLOCKS):
+        return None
+    skip = np.ceil(default_lengths(model)[2] / period - 1e-9).astype(np.int64)
+    skip = np.maximum(np.minimum(skip, first - 1), 0)
+    unbalance = model.role("unbalance_force")
+    if any(n in unbalance or n == "unbalance_force" for n in params):
+        forced = np.array([run_unbalance(attrs_of(j)) > 0 for j in range(m)])
+    else:
+        forced = np.full(m, run_unbalance(attrs[0]) > 0)
+    vc_hz = columns["vc_hz"] if "vc_hz" in attrs[0] and "vc_hz" in columns else np.zeros(m)
+    graph = forced & (vc_hz > 0) & (section_of == "shaft")
+    return _Batch(ends[0], p, period, h, steps, first, count, skip, averaged, first_step,
+                  last_step, graph, np.asarray(vc_hz, dtype=float),
+                  displacement_names(attrs[0]), member)
