@@ -180,16 +180,12 @@ def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
         ratios[judged] = graph_ratios(points[judged],
                                       np.mod(times[judged] * vc_hz[judged][:, None], 1.0))
     floor = chaos_floor * 2 * np.pi / period
-    natures = []
-    for n, ratio, lam_k, ci_k, floor_k in zip(periods.tolist(), ratios.tolist(),
-                                              lam.tolist(), ci.tolist(), floor.tolist(),
-                                              strict=True):
-        if n:
-            natures.append(f"periodic-{n}")
-        elif ratio == ratio and ratio < GRAPH_RATIO:
-            natures.append("quasi-periodic")
-        elif lam_k - ci_k > 0 and lam_k > floor_k:
-            natures.append("chaotic")
-        else:
-            natures.append("quasi-periodic")
-    return natures, periods, ratios
+    # periodic-n where a period repeats, else quasi-periodic by the graph ratio (NaN: not
+    # judged), else chaotic where λ1 is above its interval and the chaos floor
+    with np.errstate(invalid="ignore"):
+        chaotic = ~(ratios < GRAPH_RATIO) & (lam - ci > 0) & (lam > floor)
+    code = np.where(periods > 0, periods + 1, chaotic.astype(np.int64))
+    names = np.array(["quasi-periodic", "chaotic",
+                      *(f"periodic-{n}" for n in range(1, int(periods.max(initial=0)) + 1))],
+                     dtype=object)
+    return names[code].tolist(), periods, ratios

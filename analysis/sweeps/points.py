@@ -571,11 +571,16 @@ def _count_rows(batch: _Batch, out, rows: np.ndarray, count: int) -> list[dict]:
     points: λ1, its interval (``lyapunov.running_mean``, ``batch_ci95``, one interval per
     row) and the class (``classes.chart_classes``) with numpy over the members."""
     model = batch.system.model
-    skip, span = batch.skip[rows][:, None], np.arange(count)
-    sections = out.sections[rows[:, None], skip + span]
-    ptp = out.high[rows] - out.low[rows]
+    skip, span = batch.skip[rows], np.arange(count)
     averaged = int(batch.averaged[rows[0]])  # count − count % BLOCKS: one per count
-    logs = out.logs[rows[:, None], skip + (count - averaged) + np.arange(averaged)]
+    if np.all(skip == skip[0]):  # the usual case: slices, not an index per element
+        start = int(skip[0])
+        sections = out.sections[rows, start:start + count]
+        logs = out.logs[rows, start + count - averaged:start + count]
+    else:
+        sections = out.sections[rows[:, None], skip[:, None] + span]
+        logs = out.logs[rows[:, None], skip[:, None] + (count - averaged) + np.arange(averaged)]
+    ptp = out.high[rows] - out.low[rows]
     interval = (batch.every[rows] * batch.h[rows])[:, None]
     lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
     period = batch.period[rows]
@@ -771,6 +776,72 @@ def _first_kept(threshold: np.ndarray, step: np.ndarray) -> np.ndarray:
     return k
 
 
+_UNSEEN = object()
+
+
+class _Reads(dict):
+    """A run's attrs that note which keys a judgement reads (``every``: it iterated them)."""
+
+    def __init__(self, *args) -> None:
+        super().__init__(*args)
+        self.read: set = set()
+        self.every = False
+
+    def __getitem__(self, key):
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+    def __contains__(self, key) -> bool:
+        self.read.add(key)
+        return super().__contains__(key)
+
+    def __iter__(self):
+        self.every = True
+        return super().__iter__()
+
+    def keys(self):
+        self.every = True
+        return super().keys()
+
+    def items(self):
+        self.every = True
+        return super().items()
+
+    def values(self):
+        self.every = True
+        return super().values()
+
+
+def _each_judged(judge: Callable[[dict], object], attrs: dict,
+                 columns: dict[str, np.ndarray]) -> list:
+    """``judge({**attrs, **row})`` of every row of ``columns`` (the attrs that differ from
+    point to point), judged once per distinct values of the keys it reads: a judgement
+    that read the same values takes the same path to the same verdict (``judge`` a pure
+    function of the attrs, ``default_section`` or ``run_unbalance``), so a group whose
+    points differ only in what it does not read is judged once."""
+    keys = list(columns)
+    values = [columns[k].tolist() for k in keys]
+    paths: dict[tuple[int, ...], dict[tuple, object]] = {}
+    found = []
+    for j in range(len(values[0]) if values else 0):
+        for read, seen in paths.items():
+            verdict = seen.get(tuple(values[i][j] for i in read), _UNSEEN)
+            if verdict is not _UNSEEN:
+                break
+        else:
+            mapping = _Reads({**attrs, **{k: v[j] for k, v in zip(keys, values,
+                                                                 strict=True)}})
+            verdict = judge(mapping)
+            read = tuple(i for i, k in enumerate(keys) if mapping.every or k in mapping.read)
+            paths.setdefault(read, {})[tuple(values[i][j] for i in read)] = verdict
+        found.append(verdict)
+    return found
+
+
 def _grid_batch(setting: Setting, names: tuple[str, ...],
                 values: Sequence[Sequence[float]]) -> _Batch | None:
     """The kernel points of grid points of one model and balls planned as arrays, each
@@ -848,10 +919,7 @@ def _grid_batch(setting: Setting, names: tuple[str, ...],
     if setting.section:
         sections = [setting.section] * m
     else:
-        keys = list(columns)
-        rows = zip(*(columns[k].tolist() for k in keys), strict=True)
-        sections = [default_section({**attrs[0], **dict(zip(keys, row, strict=True))})
-                    for row in rows]
+        sections = _each_judged(default_section, attrs[0], columns)
         if sections[-1] != default_section(attrs[1]):
             return None
     section_of = np.array(sections, dtype=object)
@@ -875,11 +943,8 @@ def _grid_batch(setting: Setting, names: tuple[str, ...],
         return None
     skip = np.ceil(default_lengths(model)[2] / period - 1e-9).astype(np.int64)
     skip = np.maximum(np.minimum(skip, first - 1), 0)
-    unbalance = model.role("unbalance_force")
-    if any(n in unbalance or n == "unbalance_force" for n in params):
-        forced = np.array([run_unbalance(attrs_of(j)) > 0 for j in range(m)])
-    else:
-        forced = np.full(m, run_unbalance(attrs[0]) > 0)
+    forced = np.array(_each_judged(lambda a: run_unbalance(a) > 0, attrs[0], columns),
+                      dtype=bool)
     vc_hz = columns["vc_hz"] if "vc_hz" in attrs[0] and "vc_hz" in columns else np.zeros(m)
     graph = forced & (vc_hz > 0) & (section_of == "shaft")
     return _Batch(ends[0], p, period, h, steps, first, count, skip, averaged, first_step,
