@@ -222,9 +222,11 @@ class ChartPlan:
             store.save_block(results)
             stored[0] += len(results)
 
-        tasks = [(setting, x.name, xv, y.name, yv, f"{iy:04d}-{ix:04d}", ics)
-                 for iy, yv in enumerate(y.values) for ix, xv in enumerate(x.values)
-                 if f"{iy:04d}-{ix:04d}" not in done]
+        columns = [f"-{ix:04d}" for ix in range(len(x.values))]
+        tasks = [(setting, x.name, xv, y.name, yv, key, ics)
+                 for iy, yv in enumerate(y.values) for xv, column in zip(x.values, columns,
+                                                                          strict=True)
+                 if (key := f"{iy:04d}{column}") not in done]
         threads = max(1, cores() // getattr(executor, "workers", 1))  # a pool shares them
         run_with_progress(executor, partial(_chart_group_task, device=self.placement,
                                             threads=threads),

@@ -575,8 +575,10 @@ def _count_rows(batch: _Batch, out, rows: np.ndarray, count: int) -> list[dict]:
     averaged = int(batch.averaged[rows[0]])  # count − count % BLOCKS: one per count
     if np.all(skip == skip[0]):  # the usual case: slices, not an index per element
         start = int(skip[0])
-        sections = out.sections[rows, start:start + count]
-        logs = out.logs[rows, start + count - averaged:start + count]
+        members = slice(int(rows[0]), int(rows[-1]) + 1) \
+            if rows[-1] - rows[0] + 1 == len(rows) else rows  # consecutive: views
+        sections = out.sections[members, start:start + count]
+        logs = out.logs[members, start + count - averaged:start + count]
     else:
         sections = out.sections[rows[:, None], skip[:, None] + span]
         logs = out.logs[rows[:, None], skip[:, None] + (count - averaged) + np.arange(averaged)]
@@ -825,9 +827,10 @@ def _each_judged(judge: Callable[[dict], object], attrs: dict,
     points differ only in what it does not read is judged once."""
     keys = list(columns)
     values = [columns[k].tolist() for k in keys]
+    m = len(values[0])
     paths: dict[tuple[int, ...], dict[tuple, object]] = {}
     found = []
-    for j in range(len(values[0]) if values else 0):
+    for j in range(m):
         for read, seen in paths.items():
             verdict = seen.get(tuple(values[i][j] for i in read), _UNSEEN)
             if verdict is not _UNSEEN:
@@ -837,6 +840,8 @@ def _each_judged(judge: Callable[[dict], object], attrs: dict,
                                                                  strict=True)}})
             verdict = judge(mapping)
             read = tuple(i for i, k in enumerate(keys) if mapping.every or k in mapping.read)
+            if not read:  # it reads nothing that differs: every point's verdict
+                return [verdict] * m
             paths.setdefault(read, {})[tuple(values[i][j] for i in read)] = verdict
         found.append(verdict)
     return found

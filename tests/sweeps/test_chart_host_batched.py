@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from analysis.errors import InputError, SimulationError
-from analysis.stability.classify import graph_ratio
+from analysis.stability.classify import classify_section, graph_ratio
 from analysis.sweeps import classes
 from analysis.sweeps import points as chart
 from analysis.sweeps.grid import Setting
@@ -123,3 +124,38 @@ def test_graph_ratios_by_component_equal_the_direct_form(monkeypatch, count, n):
     for row in range(0, m, 7):
         assert np.array_equal(got[row], graph_ratio(points[row], phase[row]), equal_nan=True)
     assert np.isnan(got[5])
+
+
+def test_classes_with_a_tilt_equal_classify_section():
+    """Positions of two units (a tilt in rad beside x, y in m: rescaled to the orbit
+    size), velocities over the section's ω: class, period and graph ratio equal
+    ``classify_section``'s on 120 made-up sections."""
+    rng = np.random.default_rng(11)
+    names = ("x", "y", "tx", "vx", "vy", "vtx")
+    units = {"x": "m", "y": "m", "tx": "rad", "vx": "m/s", "vy": "m/s", "vtx": "rad/s"}
+    m, count = 120, 40
+    k = np.arange(count)[:, None]
+    sections = np.stack([
+        (np.cos(0.3 * k + np.arange(6)) if i % 3 == 0 else
+         np.tile(rng.normal(size=(1 + i % 4, 6)), (count, 1))[:count] if i % 3 == 1 else
+         rng.normal(size=(count, 6))) * [1e-5, 1e-5, 1e-3, 1e-2, 1e-2, 1.0]
+        for i in range(m)])
+    ptp = np.ptp(sections, axis=1)
+    period = 1.0 / rng.uniform(20.0, 200.0, m)
+    times = (0.0 + np.arange(5, 5 + count)) * period[:, None]
+    vc_hz = rng.uniform(5.0, 80.0, m)
+    lam, ci = rng.normal(0.0, 30.0, m), rng.uniform(0.1, 4.0, m)
+    graph = np.ones(m, dtype=bool)
+    natures, periods, ratios = classes.chart_classes(sections, ptp, names, units, period,
+                                                     times, graph, vc_hz, lam, ci)
+    for i in range(m):
+        attrs = {"section": "shaft", "section_period_s": period[i],
+                 "state_names": " ".join(names), "unbalance_force": 20.0, "vc_hz": vc_hz[i]}
+        pts = xr.Dataset({v: ("k", sections[i, :, c], {"units": units[v]})
+                          for c, v in enumerate(names)},
+                         coords={"t": ("k", times[i])}, attrs=attrs)
+        got = classify_section(pts, dict(zip(names, ptp[i].tolist(), strict=True)),
+                               lambda i=i: (float(lam[i]), float(ci[i])))
+        assert (natures[i], periods[i]) == (got.nature, got.period or 0), i
+        assert (ratios[i] == got.graph_ratio if got.graph_ratio is not None
+                else np.isnan(ratios[i])), i
