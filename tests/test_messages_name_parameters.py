@@ -23,13 +23,8 @@ ERRORS = {"InputError", "DeviceError", "ValueError"}
 CHECKS = {"check_count"}
 """Checks whose first argument is the field their message begins with."""
 
-STILL_CONVERTING: dict[str, str] = {
-    "analysis/inference/abc.py":
-        "'--prior NAME: the target fixes NAME' waits on a field followed by an item",
-    "analysis/uncertainty/study.py":
-        "'--set AXIS: also the swept parameter' waits on a field followed by an item",
-}
-"""Files whose flag messages are still being converted; the lead empties this."""
+STILL_CONVERTING: dict[str, str] = {}
+"""Files whose flag messages are still being converted (none now)."""
 
 NOT_GIVEN: dict[tuple[str, str], str] = {
     ("analysis/signal/envelope.py", 'f"--band: no band of at least'):

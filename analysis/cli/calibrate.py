@@ -17,12 +17,12 @@ from analysis.cli.common import (
     WorkersOption,
     app,
     echo_json,
-    executor_of,
     figure_output,
     netcdf_output,
     reports_errors,
     write_figure,
 )
+from analysis.cli.plans import run_plan
 
 
 @app.command()
@@ -69,7 +69,7 @@ def calibrate(
                             seed=seed, device=device, block=block,
                             settings=RunSettings(transient_revolutions=transient,
                                                  revolutions=revolutions, dt=dt))
-    run_headed(plan, executor, workers, scheduler, quiet=quiet)
+    run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block")
     cal = plan.calibration
     if as_json:
         echo_json(to_json(cal, str(output)), indent=1)
@@ -79,32 +79,6 @@ def calibrate(
         from analysis.reports.calibration_plots import corner_figure
 
         write_figure(corner_figure(to_dataset(cal)), plot, err=as_json)
-
-
-def run_headed(plan, executor: str, workers: int | None, scheduler: str | None, *,
-               quiet: bool):
-    """``analysis.cli.plans.run_plan``'s path (the executor made, the cost said, the plan
-    run by ``run_study``, the executor closed) with the plan's ``head(executor)`` line (its
-    runs and the executor's name) said first, which ``run_plan`` does not say; a plan
-    whose ``output`` is None is run alone (no store, no file). Returns the Dataset."""
-    from analysis.cli.plans import recomputing
-    from analysis.reports.progress import ProgressReporter
-    from analysis.sweeps.runner import run_study, say_cost
-
-    say = None if quiet else (lambda text: typer.echo(text, err=True))
-    progress = ProgressReporter(plan.kind, quiet, unit=plan.unit)
-    ex = executor_of(executor, workers, scheduler)
-    try:
-        if say is not None:
-            say(plan.head(ex))
-        if plan.output is None:
-            if say is not None:
-                say_cost(plan, ex, say)
-            return plan.run(None, ex, progress, say)
-        return run_study(plan, ex, progress=progress, say=say,
-                         on_damaged=recomputing("block"))
-    finally:
-        ex.close()
 
 
 def _print(cal, output: Path) -> None:

@@ -9,7 +9,6 @@ the one runner (``analysis.sweeps.runner.run_study``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import typer
@@ -27,25 +26,26 @@ def recomputing(unit: str):
 
 def run_plan(plan, executor: str = "serial", workers: int | None = None,
              scheduler: str | None = None, *, quiet: bool = False, label: str | None = None,
-             part: str = "point", lines: bool = False, cost: bool = True,
-             head: Callable[[str], str] | None = None) -> tuple[Any, str]:
+             part: str = "point", lines: bool = False,
+             cost: bool = True) -> tuple[Any, str]:
     """Run ``plan`` from the command line (see the module): ``executor``, ``workers``,
     ``scheduler`` as the options give them; ``quiet``: no cost, no progress; ``label``: the
     progress bar's (default the plan's ``kind``); ``part``: what a stored part is called in
     the damaged-part warning; ``lines``: the plan reports its progress as lines (a
     continuation's values) rather than a counter; ``cost``: say the cost (``--json`` keeps
-    stderr to the progress); ``head(executor name)``: a line said first (a calibration's
-    runs). The progress starts after the cost is said, so its rate counts the work, not the
-    probe. Returns the Dataset (or what a plan without an ``output`` returns) and the
-    executor's name."""
+    stderr to the progress). A plan with a ``head(executor)`` method has that line said
+    first (a calibration's runs and the executor). The progress starts after the cost is
+    said, so its rate counts the work, not the probe. Returns the Dataset (or what a plan
+    without an ``output`` returns) and the executor's name."""
     from analysis.reports.progress import ProgressReporter
     from analysis.sweeps.runner import run_study, say_cost
 
     say = None if quiet else (lambda text: typer.echo(text, err=True))
     ex = executor_of(executor, workers, scheduler)
     try:
+        head = getattr(plan, "head", None)
         if say is not None and head is not None:
-            say(head(ex.name))
+            say(head(ex))
         if say is not None and cost:
             say_cost(plan, ex, say)
         progress = None if lines else ProgressReporter(label or plan.kind, quiet,

@@ -99,7 +99,7 @@ def uncertainty(
     quiet: QuietOption = False,
 ):
     """Regime probabilities under tolerances, with intervals and Sobol' indices."""
-    from analysis.cli.calibrate import run_headed
+    from analysis.cli.plans import run_plan
     from analysis.inference.simulate import RunSettings
     from analysis.uncertainty.study import plan_uncertainty, to_json
 
@@ -108,7 +108,7 @@ def uncertainty(
                             device=device, block=block,
                             settings=RunSettings(transient_revolutions=transient,
                                                  revolutions=revolutions, dt=dt))
-    ds = run_headed(plan, executor, workers, scheduler, quiet=quiet)
+    ds, _ = run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block")
     if as_json:
         echo_json(to_json(ds, str(output or "")), indent=1)
     else:

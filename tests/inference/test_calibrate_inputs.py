@@ -105,7 +105,7 @@ def test_prior_maps_unit_cube_log_and_linear():
     assert log.to_unit(1000.0) == pytest.approx(1.0)
     lin = parse_prior("rotor_mass:1:3")
     assert lin.from_unit(0.25) == pytest.approx(1.5)
-    with pytest.raises(InputError, match="^prior: must be NAME:LO:HI"):
+    with pytest.raises(InputError, match=r"^prior: must be NAME:LO:HI"):
         parse_prior("damping:10")
 
 

@@ -118,11 +118,11 @@ def test_a_bearing_nodes_orbit_is_its_own_states_and_its_bearings_orbit(tmp_path
 
 def test_node_on_a_rigid_model_or_a_missing_node_is_an_input_error():
     rigid = simulate("balanced-rotor", duration=0.001, transient=0.0, compiled=False)
-    with pytest.raises(InputError, match="^node: only for a flexible"):
+    with pytest.raises(InputError, match=r"^node: only for a flexible"):
         node_orbit(rigid, 0)
     flexible = simulate(MODEL, duration=0.0002, transient=0.0, compiled=False)
     for bad in (-1, 13, 2.5):
-        with pytest.raises(InputError, match="^node: a node of three-disk-rotor, 0…12"):
+        with pytest.raises(InputError, match=r"^node: a node of three-disk-rotor, 0…12"):
             node_orbit(flexible, bad)
-    with pytest.raises(InputError, match="^node: draws"):
+    with pytest.raises(InputError, match=r"^node: draws"):
         orbits(flexible, "x", "y", node=3)
