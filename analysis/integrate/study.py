@@ -78,6 +78,11 @@ class StudyPlan(Protocol):
       probe of what will run: ``analysis.integrate.cost``);
     - ``run(store, executor, progress, say)``: the work, its parts stored in ``store`` (None
       when ``definition`` is None) as they finish; returns the Dataset the runner writes.
+
+    Two methods are optional (the runner and the CLI path use them where a plan has them):
+    ``head(executor) -> str``, a line said before the cost (a calibration's runs and the
+    executor), and ``stopped(store, exc)``, the note of a study stopped part way where it
+    counts its stored parts in its own words (blocks of initial states).
     """
 
     kind: str
