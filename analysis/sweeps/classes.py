@@ -35,17 +35,12 @@ def normalised(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     scale = {u: np.max(ptp[:, [index[q] for (q, _), uq in zip(pairs, unit_of, strict=True)
                                if uq == u]], axis=1) for u in unit_of}
     size = np.maximum(scale[unit_of[0]], 1e-300)
-    omega = 2 * np.pi / period
-    # x · factor and v / ω · factor as (x / 1) · factor and (v / ω) · factor: the same
-    # values, in two whole-array passes instead of two strided ones per variable
-    over, times = np.ones((len(sections), 1, len(names))), np.ones((len(sections), 1,
-                                                                   len(names)))
+    omega = (2 * np.pi / period)[:, None]
+    out = np.empty_like(sections)
     for (q, v), u in zip(pairs, unit_of, strict=True):
-        factor = size / np.maximum(scale[u], 1e-300) if u != unit_of[0] else 1.0
-        over[:, 0, index[q]], times[:, 0, index[q]] = 1.0, factor
-        over[:, 0, index[v]], times[:, 0, index[v]] = omega, factor
-    out = sections / over
-    out *= times
+        factor = (size / np.maximum(scale[u], 1e-300))[:, None] if u != unit_of[0] else 1.0
+        out[:, :, index[q]] = sections[:, :, index[q]] * factor
+        out[:, :, index[v]] = sections[:, :, index[v]] / omega * factor
     return out, size
 
 
