@@ -865,10 +865,8 @@ def _grid_batch(setting: Setting, names: tuple[str, ...],
     def member(j: int) -> System:
         return setting.system_at(**dict(zip(names, values[j], strict=True)))
 
-    ends = [member(0), member(m - 1)]
-    model, structure = ends[0].model, ends[0].structure
-    if ends[1].structure != structure:
-        return None
+    start = member(0)
+    model, structure = start.model, start.structure
     params: dict[str, np.ndarray] = {}
     for name, column in zip(names, grid.T, strict=True):
         if axis_bearing(name) is not None:
@@ -883,6 +881,9 @@ def _grid_batch(setting: Setting, names: tuple[str, ...],
                           & (column <= high)):
                 return None
         params[name] = column
+    ends = [start, member(m - 1)]  # after the columns' checks: a refusal is the first's
+    if ends[1].structure != structure:
+        return None
     index = {name: i for i, name in enumerate(model.parameter_names)}
     p = np.tile(ends[0].p, (m, 1))
     for name, column in params.items():

@@ -101,6 +101,12 @@ def test_what_the_arrays_cannot_plan_goes_point_by_point():
     with pytest.raises(InputError) as per_point:
         _per_point(short, SPEEDS, speeds)
     assert str(batched.value) == str(per_point.value)
+    outside = [(3000.0, 8.0), (-1.0, 8.0), (-2.0, 8.0)]  # the first refused is the middle
+    with pytest.raises(InputError) as batched:
+        chart.chart_grid_points(CHART, SPEEDS, outside)
+    with pytest.raises(InputError) as per_point:
+        _per_point(CHART, SPEEDS, outside)
+    assert str(batched.value) == str(per_point.value) and "-1" in str(batched.value)
 
 
 @pytest.mark.parametrize(("count", "n"), [(48, 4), (49, 4), (201, 4), (31, 2), (40, 6),
