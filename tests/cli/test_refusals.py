@@ -62,7 +62,8 @@ def test_a_point_refused_by_its_worker_leaves_no_parts(tmp_path, monkeypatch):
     def refuse(*args, **kwargs):
         raise InputError("dt: refused at this point")
 
-    for module, name in ((diagram, "diagram_point"), (chart, "chart_points")):
+    for module, name in ((diagram, "diagram_point"), (chart, "chart_points"),
+                         (chart, "chart_grid_points")):  # a group planned as arrays or by Systems
         monkeypatch.setattr(module, name, refuse)
     axis = Axis.linear("speed_rpm", 4000.0, 4500.0, 2)
     with pytest.raises(InputError, match="refused at this point"):
