@@ -261,7 +261,7 @@ def attractors(
         "--param", help="NAME:LO:HI:N: continue the attractors over N values of a runtime "
                         "parameter (its own unit, rpm for speed_rpm).")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random initial states.")] = 0,
-    match_threshold: Annotated[float | None, typer.Option(
+    match_distance: Annotated[float | None, typer.Option(
         "--match-threshold", help="With --param: largest distance between the section "
                                   "points of two attractors at consecutive values, in orbit "
                                   "sizes, that still makes them one id; larger matches are "
@@ -305,7 +305,7 @@ def attractors(
     sides = Box.parse(box, "--box")
     options = _options(resolution, revisits, record, hits, max_periods)
     along = Range.parse(param, "--param", with_num=True) if param is not None else None
-    match_threshold = _threshold(along, match_threshold)
+    match_distance = _threshold(along, match_distance)
     branches = [_branch(path) for path in branch or []]
     if branches and along is None:
         raise _input_error("--branch: a branch is drawn on the --param figure; give --param")
@@ -320,25 +320,26 @@ def attractors(
                       part="block")
     else:
         plan = plan_continuation(system, along.coordinate, along.points, sides, samples,
-                                 output, **settings, match_distance=match_threshold)
+                                 output, **settings, match_distance=match_distance)
         ds, _ = run_plan(plan, executor, workers, scheduler, quiet=quiet, part="block",
                       lines=True, cost=not as_json)
     _finish(ds, output, as_json, plot, branches)
 
 
-def _threshold(along, match_threshold: float | None) -> float | None:
-    """The matching threshold of a continuation over ``along`` (checked; default
-    ``MATCH_DISTANCE``); given without --param it is refused (it was ignored)."""
-    from analysis.stability.attractors.continuation import MATCH_DISTANCE, check_threshold
+def _threshold(along, match_distance: float | None) -> float | None:
+    """The matching threshold of a continuation over ``along`` (default
+    ``MATCH_DISTANCE``; checked by the plan, whose refusal names ``--match-threshold``:
+    ``common.as_option``); given without --param it is refused (it was ignored)."""
+    from analysis.stability.attractors.continuation import MATCH_DISTANCE
     from analysis.sweeps.attractor_blocks import check_value_count
 
     if along is None:
-        if match_threshold is not None:
+        if match_distance is not None:
             raise _input_error("--match-threshold: matches attractors between consecutive "
                                "--param values; give --param NAME:LO:HI:N, or leave it out")
         return None
     check_value_count("--param", along.num)  # before its values are made
-    return check_threshold(MATCH_DISTANCE if match_threshold is None else match_threshold)
+    return MATCH_DISTANCE if match_distance is None else match_distance
 
 
 def _input_error(text: str):

@@ -74,12 +74,12 @@ def set_distance(a: np.ndarray, b: np.ndarray, scale: Scale) -> float:
 
 
 def check_threshold(match_distance: float) -> float:
-    """``InputError`` unless the matching threshold is a finite number > 0 (orbit
-    sizes)."""
+    """``match_distance`` as a float, or ``InputError`` (field ``match_distance``) unless
+    the matching threshold is a finite number > 0 (orbit sizes)."""
     if (isinstance(match_distance, bool) or not isinstance(match_distance, (int, float))
             or not np.isfinite(match_distance) or match_distance <= 0):
-        raise InputError(f"match-threshold: must be a number > 0 (orbit sizes), got "
-                         f"{match_distance!r}")
+        raise InputError(f"match_distance: must be a number > 0 (orbit sizes), got "
+                         f"{match_distance!r}", field="match_distance")
     return float(match_distance)
 
 
@@ -243,12 +243,14 @@ def continue_attractors(
     ``blocks``: how each value's states are cut and mapped (``study.Blocks``; default: the
     study's own block size, in this process); ``mapper``, ``device``, ``feature_options``:
     as ``study.make_study``, resolved at each value; ``studies``: the study at each value,
-    made (and checked) before, by a plan: used instead of making them here."""
+    made (and checked, with ``match_distance``) before, by a plan: used instead of making
+    them here."""
     if parameter not in system.model.parameter_names:
         raise InputError(f"param: '{parameter}' is not a parameter of model "
                          f"'{system.model.name}'; parameters: "
                          f"{', '.join(system.model.parameter_names)}")
-    check_threshold(match_distance)
+    if studies is None:  # a plan's studies come with the threshold checked
+        check_threshold(match_distance)
     steps: list[Step] = []
     next_id = 1
     for value in values:
