@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 
 class BearingdynError(Exception):
     """Base class of every error bearingdyn reports to the user."""
@@ -34,6 +36,39 @@ class InputError(BearingdynError, ValueError):
         field."""
         assert self.field is not None
         return InputError(name + str(self)[len(self.field):])
+
+
+class ParameterError(InputError):
+    """An ``InputError`` about the parameter ``field`` whose line says more than its head:
+    ``template`` holds ``{field}`` wherever the parameter is named and ``{word}`` for each
+    of ``words`` (``word -> (the library's words, the command line's words)``), for a line
+    that names other parameters too. The library's line names parameters
+    (``sets speed_rpm: also an axis; …``); ``renamed(option)``, the command line's edge
+    (``cli.common.as_option``), gives the same line with the field's option and the
+    command line's words (``--set speed_rpm: …; drop the --set …``): no text is read back.
+
+    >>> err = ParameterError("ics_box", "{field}: draws the states of {ics}",
+    ...                      {"ics": ("ics", "--ics")})
+    >>> str(err), str(err.renamed("--ics-box"))
+    ('ics_box: draws the states of ics', '--ics-box: draws the states of --ics')
+    """
+
+    def __init__(self, field: str, template: str,
+                 words: Mapping[str, tuple[str, str]] | None = None) -> None:
+        self.field, self.template, self.words = field, template, dict(words or {})
+        super().__init__(self.text(field))
+
+    def text(self, name: str, command_line: bool = False) -> str:
+        """The line naming the parameter ``name`` (the field or its option), with the
+        command line's words where ``command_line``."""
+        return self.template.format(field=name, **{k: v[int(command_line)]
+                                                   for k, v in self.words.items()})
+
+    def renamed(self, name: str) -> InputError:
+        return InputError(self.text(name, command_line=True))
+
+    def __reduce__(self):  # pickled across worker processes with its parts
+        return type(self), (self.field, self.template, self.words)
 
 
 class StaleModelError(BearingdynError):

@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.errors import InputError, SimulationError
+from analysis.errors import InputError, ParameterError, SimulationError
 from analysis.integrate.compiled import library, run_rk4
 from analysis.integrate.cost import CostEstimate
 from analysis.integrate.kernels import (
@@ -76,7 +76,6 @@ from analysis.stability.classify import failure_text
 from analysis.sweeps.executors import Executor, run_with_progress
 from analysis.sweeps.grid import (
     Axis,
-    ParameterError,
     Setting,
     amplitude_fields,
     amplitudes,

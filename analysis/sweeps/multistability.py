@@ -16,12 +16,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analysis.errors import InputError
+from analysis.errors import InputError, ParameterError
 from analysis.forcing import PERIOD
 from analysis.model import System
 from analysis.stability.attractors import DIVERGED, AttractorStudy, Box, MapperOptions, Range
 from analysis.stability.classify import nature_code
-from analysis.sweeps.grid import ParameterError
 
 MAX_ICS = 256
 """Most initial states per chart point."""
@@ -105,7 +104,7 @@ def point_attractors(ics: Ics, system: System, section: str, point: int,
 
 def parse_ics(count: int | None, box: Sequence[str] | None, seed: int) -> Ics | None:
     """The ``Ics`` of ``--ics K --ics-box … --ics-seed S`` (None without ``--ics``); a box
-    without a count is refused naming ``ics_box`` (``grid.ParameterError``)."""
+    without a count is refused naming ``ics_box`` (``errors.ParameterError``)."""
     if count is None:
         if box:
             raise ParameterError("ics_box", "{field}: draws the initial states of {ics}; "

@@ -15,13 +15,13 @@ import pytest
 from typer.testing import CliRunner
 
 from analysis.cli import app
-from analysis.errors import InputError
+from analysis.errors import InputError, ParameterError
 from analysis.integrate.kernels import placement
 from analysis.integrate.study import StudyPlan
 from analysis.sweeps import chart, diagram, grid
 from analysis.sweeps.chart import plan_chart, stability_chart
 from analysis.sweeps.diagram import bifurcation_diagram, plan_diagram
-from analysis.sweeps.grid import Axis, ParameterError, Setting
+from analysis.sweeps.grid import Axis, Setting
 from analysis.sweeps.multistability import Ics, parse_ics
 from analysis.sweeps.runner import run_study
 
