@@ -360,9 +360,11 @@ class AttractorStudy:
         units = tuple(model.state_units[name] for name in model.state_names)
         return Scale.of_ranges(ranges, model.state_names, units, 2 * np.pi / smap.period_s)
 
-    def mapper(self) -> RecurrenceMapper:
-        """A fresh recurrence mapper of this study's map, scale and options."""
-        return RecurrenceMapper(self.map.advance, self.map.diverged, self.scale,
+    def mapper(self, advance: Callable[[np.ndarray, int], np.ndarray] | None = None
+               ) -> RecurrenceMapper:
+        """A fresh recurrence mapper of this study's map, scale and options; ``advance``
+        stands in for the map's ``advance`` (the cost probe's timed one)."""
+        return RecurrenceMapper(advance or self.map.advance, self.map.diverged, self.scale,
                                 self.options, self.autonomous)
 
     def map_block(self, states: np.ndarray,
