@@ -19,6 +19,7 @@ from analysis.frequency.methods import PERIODIC, TORUS, BranchPlan, Request
 from analysis.integrate.study import StudyPlan
 from analysis.io import open_result
 from analysis.sweeps.runner import run_study
+from tests.counting import count_calls, counting, invoke
 
 DUFFING = ["duffing", "--period", "shaft", "--set", "linear_stiffness=1", "--set",
            "cubic_stiffness=0.5", "--set", "damping=0.1", "--set", "forcing_amplitude=0.3",
@@ -34,30 +35,15 @@ def counted(monkeypatch) -> Counter:
     re-solve's size checks), keyed ``check``, ``cost``, ``resize``; of ``plan_branch``
     (``plan``) and of the System's build (``analysis.model.as_system``: ``system``)."""
     calls: Counter = Counter()
-
-    def counting(name, fn):
-        def call(*args, **kwargs):
-            calls[name] += 1
-            return fn(*args, **kwargs)
-        return call
-
     for table in (PERIODIC, TORUS):
         for key, method in list(table.items()):
             monkeypatch.setitem(table, key, replace(
-                method, check=counting("check", method.check),
-                estimate=counting("cost", method.estimate),
-                resize=method.resize and counting("resize", method.resize)))
-    monkeypatch.setattr(methods, "plan_branch", counting("plan", methods.plan_branch))
-    monkeypatch.setattr(analysis.model, "as_system", counting("system", analysis.model.as_system))
+                method, check=counting(calls, "check", method.check),
+                estimate=counting(calls, "cost", method.estimate),
+                resize=method.resize and counting(calls, "resize", method.resize)))
+    count_calls(monkeypatch, calls, "plan", methods.plan_branch, methods)
+    count_calls(monkeypatch, calls, "system", analysis.model.as_system, analysis.model)
     return calls
-
-
-def invoke(*args: str):
-    from typer.testing import CliRunner
-
-    from analysis.cli import app
-
-    return CliRunner().invoke(app, list(args))
 
 
 ONCE = {"plan": 1, "check": 1, "cost": 1, "system": 1}

@@ -13,10 +13,10 @@ import pytest
 
 import analysis.inference.abc as abc
 from analysis.errors import InputError
-from analysis.integrate.kernels import placement
 from analysis.integrate.study import StudyPlan
 from analysis.io import open_result
 from analysis.sweeps.runner import run_study
+from tests.counting import by_device, count_calls, count_judged, invoke
 
 PRIORS = ["rotor_mass:0.3:3:log", "damping:100:1000:log"]
 TINY = {"samples": 4, "rounds": 1, "block": 2,
@@ -34,31 +34,22 @@ def counted(monkeypatch) -> Counter:
     with a ``dt`` given): those are counted apart, as ``check_steps of a coarser dt``."""
     calls: Counter = Counter()
 
-    def counting(name, fn):
-        def call(*args, **kwargs):
-            coarser = name == "check_steps" and args[3].dt is not None
-            calls[f"{name} of a coarser dt" if coarser else name] += 1
-            return fn(*args, **kwargs)
-        return call
+    def steps(*args, **kwargs) -> str:
+        return "check_steps of a coarser dt" if args[3].dt is not None else "check_steps"
 
     for name in CHECKS:
-        monkeypatch.setattr(abc, name, counting(name, getattr(abc, name)))
-    monkeypatch.setattr(placement, "judge", counting("judge", placement.judge))
-    return calls
+        count_calls(monkeypatch, calls, steps if name == "check_steps" else name,
+                    getattr(abc, name), abc)
+    return count_judged(monkeypatch, calls)
 
 
 ONCE = Counter({name: 1 for name in (*CHECKS, "judge")})
 
 
 def test_the_command_checks_each_thing_once(counted, tmp_path):
-    from typer.testing import CliRunner
-
-    from analysis.cli import app
-
     out = tmp_path / "cal.nc"
-    done = CliRunner().invoke(app, ["calibrate", "vakharia2015", "--target", "paper-table2",
-                                    *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI,
-                                    "-o", str(out)])
+    done = invoke("calibrate", "vakharia2015", "--target", "paper-table2",
+                  *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI, "-o", str(out))
     assert done.exit_code == 0, done.output
     counted.pop("check_steps of a coarser dt", None)  # the advice's, not a check
     assert counted == ONCE
@@ -119,14 +110,10 @@ def test_a_refusal_names_its_field_and_leaves_no_file(options, field, tmp_path):
 
 
 def test_the_command_line_names_the_option_and_leaves_no_file(tmp_path):
-    from typer.testing import CliRunner
-
-    from analysis.cli import app
-
     out = tmp_path / "cal.nc"
-    done = CliRunner().invoke(app, ["calibrate", "vakharia2015", "--target", "paper-table2",
-                                    *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI,
-                                    "--device", "tpu", "-o", str(out)])
+    done = invoke("calibrate", "vakharia2015", "--target", "paper-table2",
+                  *(a for p in PRIORS for a in ("--prior", p)), *TINY_CLI, "--device", "tpu",
+                  "-o", str(out))
     assert done.exit_code == 2
     assert "error: --device: must be cpu, gpu or auto, got 'tpu'" in done.output
     assert list(tmp_path.iterdir()) == []
@@ -146,17 +133,9 @@ def unc_counted(monkeypatch) -> Counter:
     import analysis.uncertainty.study as study
 
     calls: Counter = Counter()
-
-    def counting(name, fn):
-        def call(*args, **kwargs):
-            calls[name] += 1
-            return fn(*args, **kwargs)
-        return call
-
     for name in ("check_dists", "check_size", "check_kernels"):
-        monkeypatch.setattr(study, name, counting(name, getattr(study, name)))
-    monkeypatch.setattr(placement, "judge", counting("judge", placement.judge))
-    return calls
+        count_calls(monkeypatch, calls, name, getattr(study, name), study)
+    return count_judged(monkeypatch, calls)
 
 
 UNC_ONCE = Counter({"check_dists": 1, "check_size": 1, "check_kernels": 1, "judge": 1})
@@ -164,12 +143,8 @@ UNC_ONCE = Counter({"check_dists": 1, "check_size": 1, "check_kernels": 1, "judg
 
 @pytest.mark.parametrize("written", [True, False], ids=["to-a-file", "printed-only"])
 def test_the_uncertainty_command_checks_each_thing_once(unc_counted, tmp_path, written):
-    from typer.testing import CliRunner
-
-    from analysis.cli import app
-
     out = tmp_path / "u.nc"
-    done = CliRunner().invoke(app, [*UNC_CLI, *(("-o", str(out)) if written else ())])
+    done = invoke(*UNC_CLI, *(("-o", str(out)) if written else ()))
     assert done.exit_code == 0, done.output
     assert unc_counted == UNC_ONCE
     assert out.exists() == written and not (tmp_path / "u.nc.parts").exists()
@@ -223,19 +198,12 @@ def test_a_calibration_on_the_gpu_judges_it_once_and_runs_there(monkeypatch, tmp
                                            samples_per_revolution=8)}
     cpu = calibrate_to_file(abc.prepare("vakharia2015", str(target), PRIORS, **options),
                             tmp_path / "cpu.nc")
-    judged: list[str] = []
-    judge = placement.judge
-
-    def counting(device, members, steps):
-        judged.append(device)
-        return judge(device, members, steps)
-
-    monkeypatch.setattr(placement, "judge", counting)
+    judged = count_judged(monkeypatch, Counter(), by_device)
     system = as_system("vakharia2015", 8, speed_rpm=5000.0)
     with fake_gpu(monkeypatch, FakeCupy(system, seen := [])):
         problem = abc.prepare("vakharia2015", str(target), PRIORS, device="gpu", **options)
         gpu = calibrate_to_file(problem, tmp_path / "gpu.nc")
-    assert judged == ["gpu"] and problem.placement.gpu and seen and all(seen)
+    assert judged == Counter({"judge gpu": 1}) and problem.placement.gpu and seen and all(seen)
     assert [[m[0].nature for m in r.rows] for r in gpu.rounds] == \
         [[m[0].nature for m in r.rows] for r in cpu.rounds]
     assert [[m[0].lambda1 for m in r.rows] for r in gpu.rounds] == \

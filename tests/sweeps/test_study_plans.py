@@ -12,11 +12,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from analysis.cli import app
 from analysis.errors import InputError, ParameterError
-from analysis.integrate.kernels import placement
 from analysis.integrate.study import StudyPlan
 from analysis.sweeps import chart, diagram, grid
 from analysis.sweeps.chart import plan_chart, stability_chart
@@ -24,6 +21,7 @@ from analysis.sweeps.diagram import bifurcation_diagram, plan_diagram
 from analysis.sweeps.grid import Axis, Setting
 from analysis.sweeps.multistability import Ics, parse_ics
 from analysis.sweeps.runner import run_study
+from tests.counting import by_device, count_calls, count_judged, invoke
 
 SETTING = Setting("vakharia2015", None, {}, transient=0.05, samples=10)
 X, Y = Axis.parse("speed_rpm:4000:5000:2"), Axis.parse("n_balls:8:8")
@@ -41,34 +39,15 @@ def checks(monkeypatch) -> Counter:
     the name each module calls), the device (``placement.judge``, by the device named), the
     initial states' box (``Ics.check``) and the cost (``grid_cost``)."""
     seen: Counter = Counter()
-
-    def counted(name, fn):
-        def call(*args, **kwargs):
-            seen[name] += 1
-            return fn(*args, **kwargs)
-        return call
-
-    for module in (chart, diagram, grid):
-        monkeypatch.setattr(module, "check_grid", counted("check_grid", grid.check_grid))
-    for module in (chart, diagram):
-        monkeypatch.setattr(module, "grid_cost", counted("cost", grid.grid_cost))
-    monkeypatch.setattr(Ics, "check", counted("ics", Ics.check))
-    judge = placement.judge
-
-    def judged(device, members, steps):
-        seen[f"judge {device}"] += 1
-        return judge(device, members, steps)
-
-    monkeypatch.setattr(placement, "judge", judged)
+    count_calls(monkeypatch, seen, "check_grid", grid.check_grid, chart, diagram, grid)
+    count_calls(monkeypatch, seen, "cost", grid.grid_cost, chart, diagram)
+    count_calls(monkeypatch, seen, "ics", Ics.check, Ics)
+    count_judged(monkeypatch, seen, by_device)
     return seen
 
 
-def _cli(args: list[str]):
-    return CliRunner().invoke(app, args)
-
-
 def test_a_chart_command_checks_each_thing_once(checks, tmp_path):
-    done = _cli([*CHART_ARGS, "-o", str(tmp_path / "c.nc"), "--device", "cpu", "--ics", "2"])
+    done = invoke(*CHART_ARGS, "-o", str(tmp_path / "c.nc"), "--device", "cpu", "--ics", "2")
     assert done.exit_code == 0, done.output
     assert checks == Counter({"check_grid": 1, "judge cpu": 1, "ics": 1, "cost": 1})
     assert "estimate:" in done.output and "wrote" in done.output
@@ -86,7 +65,7 @@ def test_a_chart_through_the_api_checks_each_thing_once(checks, tmp_path):
     (["--no-follow", "--device", "cpu"], "cpu"),  # the member kernels
 ], ids=["followed", "value-by-value", "kernels"])
 def test_a_sweep_command_checks_each_thing_once(checks, extra, judged, tmp_path):
-    done = _cli([*SWEEP_ARGS, "-o", str(tmp_path / "d.nc"), "--direction", "both", *extra])
+    done = invoke(*SWEEP_ARGS, "-o", str(tmp_path / "d.nc"), "--direction", "both", *extra)
     assert done.exit_code == 0, done.output
     expected = Counter({"check_grid": 1, "cost": 1})
     if judged is not None:
@@ -129,7 +108,7 @@ def test_the_plans_are_study_plans_that_hold_what_they_checked(checks, tmp_path)
     [*SWEEP_ARGS, "--direction", "left"],
 ], ids=["chart-step", "chart-box", "sweep-device", "sweep-direction"])
 def test_a_command_refused_by_its_plan_leaves_nothing_and_runs_nothing(checks, args, tmp_path):
-    done = _cli([*args, "-o", str(tmp_path / "out.nc")])
+    done = invoke(*args, "-o", str(tmp_path / "out.nc"))
     assert done.exit_code == 2, done.output
     assert done.output.startswith("error: ") and done.output.count("\n") == 1, done.output
     assert list(tmp_path.iterdir()) == []  # no file, no .parts folder
@@ -143,7 +122,7 @@ def test_a_refusal_names_the_parameter_and_the_command_line_its_option(tmp_path)
     assert str(refused.value) == ("device: the member kernels run the values of a diagram "
                                   "with follow=False (a followed diagram is one trajectory); "
                                   "set follow=False")
-    done = _cli([*SWEEP_ARGS, "-o", str(tmp_path / "d.nc"), "--device", "cpu"])
+    done = invoke(*SWEEP_ARGS, "-o", str(tmp_path / "d.nc"), "--device", "cpu")
     assert done.output == ("error: --device: the member kernels run the values of a "
                            "--no-follow sweep (a followed sweep is one trajectory); add "
                            "--no-follow\n")
