@@ -61,7 +61,7 @@ from analysis.sweeps.grid import (
 from analysis.sweeps.multistability import Ics, point_attractors
 from analysis.sweeps.points import chart_grid_points, chart_points, grid_device
 from analysis.sweeps.runner import run_study
-from analysis.sweeps.store import PointStore
+from analysis.sweeps.store import PointStore, stacked
 
 
 def classified_section(setting: Setting, system: System) -> str:
@@ -114,24 +114,30 @@ on a GPU enough to fill it."""
 
 
 def _chart_group_task(group: list[tuple], device: str = "cpu",
-                      threads: int | None = None) -> list[tuple[str, dict]]:
+                      threads: int | None = None) -> tuple[list[str], dict[str, np.ndarray]]:
     """Chart points of one model and balls together (``points.chart_grid_points``: planned
-    as arrays, one call of the member kernels on ``device``, ``threads`` CPU threads); with
+    as arrays, one call of the member kernels on ``device``, ``threads`` CPU threads), as
+    the group's keys and its columns (each field an array over the points: what
+    ``PointStore.save_columns`` stores; a failed point's row ``_failed_point``'s); with
     ``Ics`` (a task's last item) also each point's attractors among K initial states (a
     System per point: ``points.chart_points``)."""
     setting, xname, _, yname, _, _, ics = group[0]
+    keys = [task[-2] for task in group]
     if ics is None:  # no System per point: the group's points as arrays
-        points = chart_grid_points(setting, (xname, yname),
-                                   [(task[2], task[4]) for task in group], device, threads)
-    else:
-        systems = [_task_system(task) for task in group]
-        points = chart_points(setting, systems, device, threads)
-    out = [(task[-2], point if isinstance(point, dict) else _failed_point(setting, point))
-           for task, point in zip(group, points, strict=True)]
-    if ics is not None:
-        for (key, point), system in zip(out, systems, strict=True):
-            point.update(_ics_point(setting, ics, system, key))
-    return out
+        columns, failed = chart_grid_points(setting, (xname, yname),
+                                            [(task[2], task[4]) for task in group], device,
+                                            threads, columns=True)
+        if failed:  # rows again, a failed point's its own (the columns' widths its text's)
+            columns = stacked([_failed_point(setting, failed[j]) if j in failed else
+                               {f: column[j] for f, column in columns.items()}
+                               for j in range(len(group))])
+        return keys, columns
+    systems = [_task_system(task) for task in group]
+    rows = [point if isinstance(point, dict) else _failed_point(setting, point)
+            for point in chart_points(setting, systems, device, threads)]
+    for row, system, key in zip(rows, systems, keys, strict=True):
+        row.update(_ics_point(setting, ics, system, key))
+    return keys, stacked(rows)
 
 
 def _ics_point(setting: Setting, ics: Ics, system: System, key: str) -> dict:
@@ -215,12 +221,12 @@ class ChartPlan:
         ``executor``, each group stored as one block as it arrives; the chart of every
         point."""
         setting, x, y, ics = self.setting, self.x, self.y, self.ics
-        done = set(store.points())
+        done = store.keys()
         stored = [len(done)]
 
-        def keep(group: list[tuple], results: list[tuple[str, dict]]) -> None:
-            store.save_block(results)
-            stored[0] += len(results)
+        def keep(group: list[tuple], block: tuple[list[str], dict[str, np.ndarray]]) -> None:
+            store.save_columns(*block)
+            stored[0] += len(block[0])
 
         columns = [f"-{ix:04d}" for ix in range(len(x.values))]
         tasks = [(setting, x.name, xv, y.name, yv, key, ics)
@@ -275,21 +281,18 @@ def stability_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,
 def _assemble_chart(store: PointStore, setting: Setting, x: Axis, y: Axis,
                     ics: Ics | None = None) -> xr.Dataset:
     shape = (len(y.values), len(x.values))
-    stored = store.points()
-    first = stored[f"{0:04d}-{0:04d}"]
+    keys, stored = store.columns()  # every field a column over the stored points
+    at = dict(zip(keys.tolist(), range(len(keys)), strict=True))  # a key twice: its last
+    order = np.array([at[f"{iy:04d}-{ix:04d}"] for iy in range(shape[0])
+                      for ix in range(shape[1])], dtype=np.intp)  # row-major: the grid's
     extra = ("n_attractors", "multistable", "diverged_share") if ics is not None else ()
     fields = ("nature_code", "period", "lyapunov", "ci95",
-              *(f for f in first if f.startswith("amplitude_")), "graph_ratio", *extra)
-    points = [stored[f"{iy:04d}-{ix:04d}"] for iy in range(shape[0])
-              for ix in range(shape[1])]  # row-major: the grid's order
-    arrays = {f: np.array([point[f] for point in points], dtype=float).reshape(shape)
-              for f in fields}
-    nature = np.array([str(point["nature"]) for point in points],
-                      dtype=object).reshape(shape)
+              *(f for f in stored if f.startswith("amplitude_")), "graph_ratio", *extra)
+    arrays = {f: np.asarray(stored[f][order], dtype=float).reshape(shape) for f in fields}
+    nature = stored["nature"][order].astype(object).reshape(shape)
     codes = np.full((*shape, ics.count if ics is not None else 0), -1, dtype=np.int64)
     if ics is not None:
-        codes[...] = np.array([point["attractor_codes"] for point in points]).reshape(
-            codes.shape)
+        codes[...] = stored["attractor_codes"][order].reshape(codes.shape)
     dims = (y.name, x.name)
     state_units = setting.loaded().state_units
     units = {"lyapunov": "1/s", "ci95": "1/s",

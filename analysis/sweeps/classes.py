@@ -179,6 +179,20 @@ def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     ``times`` m × K the section times (s), ``graph`` whether a point's graph ratio is
     judged (forced at X and VC, shaft section), ``vc_hz`` its VC frequency (Hz), ``lam``
     and ``ci`` λ1 and its 95 % half-width (1/s)."""
+    classes, code, periods, ratios = class_codes(sections, ptp, names, units, period, times,
+                                                 graph, vc_hz, lam, ci, chaos_floor)
+    return classes[code].tolist(), periods, ratios
+
+
+def class_codes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
+                units: dict[str, str], period: np.ndarray, times: np.ndarray,
+                graph: np.ndarray, vc_hz: np.ndarray, lam: np.ndarray, ci: np.ndarray,
+                chaos_floor: float = 0.01
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``chart_classes`` with the classes as an index: the class names (an object array:
+    quasi-periodic, chaotic, periodic-1 … periodic-N), each point's index into them, the
+    periods and the graph ratios (the same arguments): the points' classes are
+    ``names[code]`` without a string per point."""
     points, size = normalised(sections, ptp, names, units, period)
     periods = repeat_periods(points, size)
     ratios = np.full(len(points), np.nan)
@@ -194,7 +208,7 @@ def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     with np.errstate(invalid="ignore"):
         chaotic = ~(ratios < GRAPH_RATIO) & (lam - ci > 0) & (lam > floor)
     code = np.where(periods > 0, periods + 1, chaotic.astype(np.int64))
-    names = np.array(["quasi-periodic", "chaotic",
-                      *(f"periodic-{n}" for n in range(1, int(periods.max(initial=0)) + 1))],
-                     dtype=object)
-    return names[code].tolist(), periods, ratios
+    classes = np.array(["quasi-periodic", "chaotic",
+                        *(f"periodic-{n}" for n in range(1, int(periods.max(initial=0)) + 1))],
+                       dtype=object)
+    return classes, code, periods, ratios

@@ -86,8 +86,9 @@ from analysis.stability.lyapunov import (
     running_mean,
     tangent_block,
 )
-from analysis.sweeps.classes import chart_classes
+from analysis.sweeps.classes import class_codes
 from analysis.sweeps.grid import Axis, Setting, axis_bearing
+from analysis.sweeps.store import stacked
 
 RENORM_EVERY = 100
 """RK4 steps between renormalisations of the tangent vector (as ``lyapunov``'s default)."""
@@ -549,27 +550,68 @@ def _run_batch(batch: _Batch, device: str | Placement, threads: int | None):
 
 def _batch_rows(batch: _Batch, out) -> list[dict | SimulationError]:
     """Each member's chart row (``chart_row``'s fields) from the kernel result ``out``, or
-    the ``SimulationError`` of its blow-up: the members holding the same number of section
-    points classified together (``_count_rows``)."""
-    found: list = [None] * len(batch.p)
-    by_count: dict[int, list[int]] = {}
-    for j, (step, count) in enumerate(zip(out.diverged_at.tolist(), batch.count.tolist(),
-                                          strict=True)):
-        if step >= 0:
-            found[j] = blow_up_error(batch.member(j), step, float(batch.h[j]), out.final[j])
-        else:
-            by_count.setdefault(count, []).append(j)
-    for count, members in by_count.items():
-        rows = np.array(members, dtype=np.int64)
-        for j, row in zip(members, _count_rows(batch, out, rows, count), strict=True):
-            found[j] = row
-    return found
+    the ``SimulationError`` of its blow-up: ``_batch_columns`` split into rows."""
+    columns, failed = _batch_columns(batch, out)
+    return _rows_of(columns, failed, len(batch.p))
 
 
-def _count_rows(batch: _Batch, out, rows: np.ndarray, count: int) -> list[dict]:
+def _rows_of(columns: dict[str, np.ndarray], failed: dict[int, SimulationError],
+             m: int) -> list[dict | SimulationError]:
+    """The m rows of ``columns`` (Python values, the fields in the columns' order), the
+    ``SimulationError`` of each member of ``failed``."""
+    names = list(columns)
+    rows: list = [dict(zip(names, row, strict=True))
+                  for row in zip(*(c.tolist() for c in columns.values()), strict=True)]
+    if not names:
+        rows = [None] * m
+    for j, exc in failed.items():
+        rows[j] = exc
+    return rows
+
+
+def _columns_of(rows: list[dict | SimulationError]
+                ) -> tuple[dict[str, np.ndarray], dict[int, SimulationError]]:
+    """Rows as ``_batch_columns`` gives them: each field stacked over the points
+    (``store.stacked``: the arrays ``PointStore.save_block`` stores), a failed point's row
+    a placeholder (another point's), and the failures by index."""
+    failed = {j: row for j, row in enumerate(rows) if isinstance(row, SimulationError)}
+    good = next((row for row in rows if not isinstance(row, SimulationError)), None)
+    if good is None:
+        return {}, failed
+    return stacked([good if j in failed else row for j, row in enumerate(rows)]), failed
+
+
+def _batch_columns(batch: _Batch, out
+                   ) -> tuple[dict[str, np.ndarray], dict[int, SimulationError]]:
+    """The members' chart rows as columns (``chart_row``'s fields in its order, each the
+    array ``PointStore.save_block`` would stack from the rows: the same dtypes and bits)
+    from the kernel result ``out``, and the ``SimulationError`` of each member that blew up
+    (its place in the columns a placeholder): the members holding the same number of
+    section points classified together (``_count_columns``), no dict per point."""
+    m = len(batch.p)
+    diverged = out.diverged_at >= 0
+    failed = {int(j): blow_up_error(batch.member(int(j)), int(out.diverged_at[j]),
+                                    float(batch.h[j]), out.final[j])
+              for j in np.flatnonzero(diverged)}
+    natures = np.full(m, "", dtype=object)
+    columns = {"nature": natures, "nature_code": np.zeros(m, dtype=np.int64),
+               "period": np.zeros(m, dtype=np.int64),
+               **{name: np.full(m, np.nan) for name in ("lyapunov", "ci95", "graph_ratio")},
+               **{f"amplitude_{v}": np.full(m, np.nan) for v in batch.shown}}
+    kept = np.flatnonzero(~diverged)
+    counts = batch.count[kept]
+    for count in dict.fromkeys(counts.tolist()):
+        _count_columns(batch, out, kept[counts == count], count, columns)
+    columns["nature"] = np.array(natures.tolist()) if m else np.array([], dtype=str)
+    return columns, failed
+
+
+def _count_columns(batch: _Batch, out, rows: np.ndarray, count: int,
+                   columns: dict[str, np.ndarray]) -> None:
     """The chart rows of the members ``rows`` of ``batch``, each holding ``count`` section
-    points: λ1, its interval (``lyapunov.running_mean``, ``batch_ci95``, one interval per
-    row) and the class (``classes.chart_classes``) with numpy over the members."""
+    points, written at ``rows`` of ``columns`` (``_batch_columns``'): λ1, its interval
+    (``lyapunov.running_mean``, ``batch_ci95``, one interval per row) and the class
+    (``classes.class_codes``) with numpy over the members."""
     model = batch.system.model
     skip, span = batch.skip[rows], np.arange(count)
     averaged = int(batch.averaged[rows[0]])  # count − count % BLOCKS: one per count
@@ -587,17 +629,18 @@ def _count_rows(batch: _Batch, out, rows: np.ndarray, count: int) -> list[dict]:
     lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
     period = batch.period[rows]
     times = (0.0 + (batch.first[rows][:, None] + span)) * period[:, None]
-    natures, periods, ratios = chart_classes(sections, ptp, model.state_names, _units(model),
-                                             period, times, batch.graph[rows],
-                                             batch.vc_hz[rows], lam, ci)
-    index = [model.state_names.index(v) for v in batch.shown]
-    halves = (ptp[:, index] / 2).tolist()
-    return [{"nature": nature, "nature_code": nature_code(nature), "period": n,
-             "lyapunov": lam_k, "ci95": ci_k, "graph_ratio": ratio or np.nan,
-             **{f"amplitude_{v}": a for v, a in zip(batch.shown, half, strict=True)}}
-            for nature, n, lam_k, ci_k, ratio, half in zip(
-                natures, periods.tolist(), lam.tolist(), ci.tolist(), ratios.tolist(), halves,
-                strict=True)]
+    classes, code, periods, ratios = class_codes(sections, ptp, model.state_names,
+                                                 _units(model), period, times,
+                                                 batch.graph[rows], batch.vc_hz[rows], lam, ci)
+    columns["nature"][rows] = classes[code]
+    columns["nature_code"][rows] = np.array([nature_code(c) for c in classes],
+                                            dtype=np.int64)[code]
+    columns["period"][rows] = periods
+    columns["lyapunov"][rows], columns["ci95"][rows] = lam, ci
+    columns["graph_ratio"][rows] = np.where(ratios == 0, np.nan, ratios)  # `ratio or nan`
+    for v, i in zip(batch.shown, (model.state_names.index(v) for v in batch.shown),
+                    strict=True):
+        columns[f"amplitude_{v}"][rows] = ptp[:, i] / 2
 
 
 def _scalar_point(system: System, duration: float, transient: float, dt: float,
@@ -696,8 +739,8 @@ bearing (``model.balls_that_fit``): an axis over one of them is planned point by
 
 
 def chart_grid_points(setting: Setting, names: Sequence[str], values: Sequence[Sequence[float]],
-                      device: str | Placement = "cpu",
-                      threads: int | None = None) -> list[dict | SimulationError]:
+                      device: str | Placement = "cpu", threads: int | None = None, *,
+                      columns: bool = False):
     """``chart_points`` of the grid points of one model and balls at ``values`` (one row of
     values per point, one per axis of ``names``), without a System per point where it can:
     with λ1 the points are planned as arrays (``_grid_batch``: one parameter matrix, one
@@ -706,16 +749,20 @@ def chart_grid_points(setting: Setting, names: Sequence[str], values: Sequence[S
     balls' fit, a model whose frequencies take no column of values, a point a check would
     refuse) the points are made one by one (``setting.system_at``, ``chart_points``), so
     any refusal is the one ``chart_points`` gives. The rows are ``chart_points``' bit for
-    bit (``tests/sweeps/test_chart_host_batched.py``)."""
+    bit (``tests/sweeps/test_chart_host_batched.py``). With ``columns`` the same rows as
+    columns and failures (``_batch_columns``: each field an array over the points, what
+    ``PointStore.save_block`` would stack from the rows; a failed point's
+    ``SimulationError`` by its index), no dict per point."""
     batch = _grid_batch(setting, tuple(names), values) if setting.lyapunov else None
+    out = None if batch is None else _run_batch(batch, device, threads)
+    if batch is not None and out is not None:
+        return _batch_columns(batch, out) if columns else _batch_rows(batch, out)
     if batch is None:
         systems = [setting.system_at(**dict(zip(names, row, strict=True))) for row in values]
-        return chart_points(setting, systems, device, threads)
-    out = _run_batch(batch, device, threads)
-    if out is None:  # no CPU build: the scalar blocks, point by point
-        return chart_points(setting, [batch.member(j) for j in range(len(values))], device,
-                            threads)
-    return _batch_rows(batch, out)
+    else:  # no CPU build: the scalar blocks, point by point
+        systems = [batch.member(j) for j in range(len(values))]
+    rows = chart_points(setting, systems, device, threads)
+    return _columns_of(rows) if columns else rows
 
 
 def _frequency_columns(model: Model, structure: Structure,

@@ -37,7 +37,7 @@ import shutil
 import sys
 import tempfile
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -240,13 +240,15 @@ class PointStore:
     def save_block(self, points: list[tuple[str, dict[str, Any]]]) -> None:
         """Store ``(key, values)`` points (the same fields, each of one shape) as one entry:
         ``keys`` and every field stacked over the points, in one atomic write."""
-        fields = points[0][1].keys()
-        if any(values.keys() != fields for _, values in points):
-            raise ValueError("a block's points must have the same fields")
-        block = {"keys": np.array([key for key, _ in points])}
-        for name in fields:
-            block[name] = np.stack([np.asarray(values[name]) for _, values in points])
-        self.save(BLOCK + points[0][0], block)
+        self.save_columns([key for key, _ in points], stacked([values for _, values in points]))
+
+    def save_columns(self, keys: Sequence[str], columns: dict[str, np.ndarray]) -> None:
+        """Store points given as columns (each field an array over the points, in the order
+        of ``keys``) as one entry, exactly as ``save_block`` stores the same points (``keys``
+        and the fields in their order, one atomic write): no dict per point."""
+        if not len(keys) or any(len(column) != len(keys) for column in columns.values()):
+            raise ValueError("a block's columns must hold one value per key (one key at least)")
+        self.save(BLOCK + str(keys[0]), {"keys": np.array(keys), **columns})
 
     def points(self) -> dict[str, dict[str, np.ndarray]]:
         """Every stored point, key → values, from entries of one point and blocks alike."""
@@ -260,6 +262,25 @@ class PointStore:
             for j, key in enumerate(entry["keys"].tolist()):
                 found[key] = {f: entry[f][j] for f in fields}
         return found
+
+    def columns(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Every stored point as columns, entries of one point and blocks alike: the keys
+        and each field, concatenated over the entries in ``points``' order (a key stored
+        twice: its last row is the one ``points`` gives), the fields of the first entry
+        (another entry lacking one: ``KeyError``). No dict per point."""
+        keys, entries = [], []
+        for name in sorted(self.done()):
+            entry = self.load(name)
+            if name.startswith(BLOCK):
+                keys.append(entry.pop("keys"))
+            else:
+                keys.append(np.array([name]))
+                entry = {f: value[None] for f, value in entry.items()}
+            entries.append(entry)
+        if not entries:
+            return np.array([], dtype=str), {}
+        return np.concatenate(keys), {f: np.concatenate([entry[f] for entry in entries])
+                                      for f in entries[0]}
 
     def keys(self) -> set[str]:
         """The keys of the stored points (a block's own ``keys``, read without its
@@ -298,6 +319,16 @@ class PointStore:
         """Delete the stored points (the sweep is assembled) and release the lock."""
         shutil.rmtree(self.folder, ignore_errors=True)
         self.close()
+
+
+def stacked(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
+    """Points' values (the same fields, each of one shape) as columns: each field stacked
+    over the points (``np.stack`` of ``np.asarray``), what ``PointStore.save_block``
+    stores. ``ValueError`` when the points' fields differ."""
+    fields = rows[0].keys()
+    if any(values.keys() != fields for values in rows):
+        raise ValueError("a block's points must have the same fields")
+    return {name: np.stack([np.asarray(values[name]) for values in rows]) for name in fields}
 
 
 def _atomic_bytes(path: Path, data: bytes) -> None:
