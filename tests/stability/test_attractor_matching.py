@@ -89,8 +89,9 @@ def test_transitions_count_where_each_basins_states_go():
 
 @pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), True])
 def test_the_threshold_is_checked(bad):
-    with pytest.raises(InputError, match="match-threshold: must be a number > 0"):
+    with pytest.raises(InputError, match="match_distance: must be a number > 0") as refused:
         check_threshold(bad)
+    assert refused.value.field == "match_distance"
 
 
 DUFFING = dict(linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1,
