@@ -88,14 +88,20 @@ def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
             # the first PROBE gaps first: a member with one of them >= its limit (or NaN)
             # cannot repeat with period n, and most do not (the max of all is then not
             # needed; the members left get the max over all their gaps, as before)
-            head = part[todo, :n + PROBE]
+            whole = len(todo) == len(part)  # none found yet: a view, not a copy
+            head = part[:, :n + PROBE] if whole else part[todo, :n + PROBE]
             first = np.sqrt(np.max(_norms(head[:, n:] - head[:, :-n]), axis=1))
-            check = todo[first < limit[todo]]
+            check = todo[first < (limit if whole else limit[todo])]
+            if not len(check):
+                continue
             sub = part[check]
             gap = np.sqrt(np.max(_norms(sub[:, n:] - sub[:, :-n]), axis=1))
             hit = check[gap < limit[check]]
             out[hit] = n
-            todo = np.setdiff1d(todo, hit, assume_unique=True)
+            if len(hit):  # todo without hit (both ascending)
+                keep = np.ones(len(todo), dtype=bool)
+                keep[np.searchsorted(todo, hit)] = False
+                todo = todo[keep]
     return found
 
 
@@ -152,16 +158,20 @@ def graph_ratios(points: np.ndarray, phase: np.ndarray, seed: int = 0) -> np.nda
         part = points[lo:lo + chunk]
         order = np.argsort(phase[lo:lo + chunk], axis=1)
         if planes:
-            members, ranks = np.arange(len(part)), order.T
-            neighbours = pairs = None
+            width = len(part)
+            flat = (order.T * width + np.arange(width)).ravel()  # plane[order.T, members]
+            pairs, gap, other = np.empty((3, len(i), width))
+            neighbours = None
             for plane in np.ascontiguousarray(part.transpose(2, 1, 0)):  # K × members
-                step = np.diff(plane[ranks, members], axis=0)
+                step = np.diff(np.take(plane.ravel(), flat).reshape(count, width), axis=0)
                 step *= step
-                gap = np.take(plane, i, axis=0)
-                gap -= np.take(plane, j, axis=0)
-                gap *= gap
+                into = gap if neighbours is not None else pairs  # the first plane: pairs
+                np.take(plane, i, axis=0, out=into, mode="clip")  # i, j < K: none clipped
+                np.take(plane, j, axis=0, out=other, mode="clip")
+                into -= other
+                into *= into
                 if neighbours is None:
-                    neighbours, pairs = step, gap
+                    neighbours = step
                 else:
                     neighbours += step
                     pairs += gap
