@@ -17,7 +17,9 @@ definition is refused. When every point is done the sweep assembles the final ne
   definition).
 - **Blocks.** ``save_block`` stores several points as one entry (``block-<first key>``:
   their ``keys`` and each field stacked), whole or absent like a point; ``points`` reads
-  entries of both kinds back point by point, ``point_count`` counts them.
+  entries of both kinds back point by point, ``point_count`` counts them. A caller that
+  holds its points as columns (the chart) writes the same entry with ``save_columns`` and
+  reads every entry back as columns with ``columns``: no dict per point either way.
 - **Resuming is said, not guessed.** ``command`` (beside ``sweep.json``) records the command
   line that started the sweep; a re-run with another definition is refused naming it and
   the fields that differ. A sweep stopped part way (Ctrl-C, SIGTERM, an error) leaves its
