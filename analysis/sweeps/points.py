@@ -750,7 +750,9 @@ bearing (``model.balls_that_fit``): an axis over one of them is planned point by
 
 def chart_grid_points(setting: Setting, names: Sequence[str], values: Sequence[Sequence[float]],
                       device: str | Placement = "cpu", threads: int | None = None, *,
-                      columns: bool = False):
+                      columns: bool = False
+                      ) -> list[dict | SimulationError] | tuple[dict[str, np.ndarray],
+                                                                dict[int, SimulationError]]:
     """``chart_points`` of the grid points of one model and balls at ``values`` (one row of
     values per point, one per axis of ``names``), without a System per point where it can:
     with λ1 the points are planned as arrays (``_grid_batch``: one parameter matrix, one
