@@ -82,15 +82,25 @@ def repeat_periods(points: np.ndarray, size: np.ndarray, rel_tol: float = 1e-3,
         part, out, limit = points[lo:lo + CHUNK], found[lo:lo + CHUNK], \
             rel_tol * size[lo:lo + CHUNK]
         todo = np.arange(len(part))
+        count = points.shape[1]
+        # the first sections one component per plane (sections × n × members), where the
+        # squares add in order (``_sums_in_order``): the probes in long contiguous rows
+        planes = np.ascontiguousarray(part[:, :max_period + PROBE].transpose(1, 2, 0)) \
+            if _sums_in_order(points.shape[2]) else None
         for n in range(1, max_period + 1):
-            if points.shape[1] < 2 * n + 2 or not len(todo):
+            if count < 2 * n + 2 or not len(todo):
                 break
             # the first PROBE gaps first: a member with one of them >= its limit (or NaN)
             # cannot repeat with period n, and most do not (the max of all is then not
             # needed; the members left get the max over all their gaps, as before)
             whole = len(todo) == len(part)  # none found yet: a view, not a copy
-            head = part[:, :n + PROBE] if whole else part[todo, :n + PROBE]
-            first = np.sqrt(np.max(_norms(head[:, n:] - head[:, :-n]), axis=1))
+            if whole and planes is not None:
+                gaps = min(PROBE, count - n)  # P_{k+n} − P_k, k < gaps: the probe's
+                steps = (planes[n:n + gaps] - planes[:gaps]).transpose(1, 0, 2)
+                first = np.sqrt(np.max(_plane_norms(steps), axis=0))
+            else:
+                head = part[:, :n + PROBE] if whole else part[todo, :n + PROBE]
+                first = np.sqrt(np.max(_norms(head[:, n:] - head[:, :-n]), axis=1))
             check = todo[first < (limit if whole else limit[todo])]
             if not len(check):
                 continue

@@ -134,3 +134,28 @@ def test_the_frozen_heap_is_given_back():
             assert gc.get_freeze_count() == 0
     finally:
         gc.enable()
+
+
+@pytest.mark.parametrize("n", [4, 8])
+def test_repeat_periods_equal_classify(n):
+    """Members repeating with periods 1-17, with noise below, near and above the limit, a
+    NaN, constant rows, and records of 4-201 sections: ``repeat_periods`` (its probes by
+    plane for n < 8, by point otherwise) gives ``classify.repeat_period``'s period."""
+    from analysis.stability.classify import repeat_period
+
+    rng = np.random.default_rng(n)
+    m, count = 1020, 201
+    points = rng.normal(size=(m, count, n))
+    for period in range(1, 18):
+        rows = slice((period - 1) * 60, period * 60)
+        base = np.tile(rng.normal(size=(60, period, n)), (1, count // period + 1, 1))[:, :count]
+        noise = rng.choice([0.0, 1e-4, 5e-4, 2e-3], size=(60, 1, 1))
+        points[rows] = base + rng.normal(size=(60, count, n)) * noise
+    points[5, 30, 1] = np.nan
+    points[1000:] = points[1000:, :1]
+    size = np.nan_to_num(np.ptp(points[:, :, 0], axis=1), nan=1.0) + 0.5
+    for sections in (4, 9, 12, 20, 40, count):
+        part = points[:, :sections]
+        want = [repeat_period(part[i], size[i], 1e-3, 16) or 0 for i in range(m)]
+        assert classes.repeat_periods(part, size).tolist() == want, sections
+    assert len(set(want)) > 12  # periods found, and members that do not repeat
