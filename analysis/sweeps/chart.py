@@ -161,18 +161,21 @@ def _chart_groups(setting: Setting, tasks: list[tuple],
     if not setting.lyapunov:
         return [[task] for task in tasks]
     groups: list[list[tuple]] = []
-    previous = None
+    group: list[tuple] = []
+    previous = balls = last = None
     known: dict[tuple, tuple] = {}  # the balls of a point: built once per ball axis value
     by_x = bool(tasks) and axis_bearing(tasks[0][1]) is not None  # one x axis per chart
     for task in tasks:
         key = (task[4], task[2] if by_x else None)
-        if key not in known:
-            known[key] = _task_system(task).structure
-        balls = known[key]
-        if groups and balls == previous and len(groups[-1]) < size:
-            groups[-1].append(task)
+        if key != last:  # the balls looked up where the key changes
+            if key not in known:
+                known[key] = _task_system(task).structure
+            balls, last = known[key], key
+        if group and (balls is previous or balls == previous) and len(group) < size:
+            group.append(task)
         else:
-            groups.append([task])
+            group = [task]
+            groups.append(group)
         previous = balls
     return groups
 

@@ -638,7 +638,7 @@ def _count_columns(batch: _Batch, out, rows: np.ndarray, count: int,
     lam = np.cumsum(logs, axis=1)[:, -1] / (interval[:, 0] * logs.shape[1])
     ci = batch_ci95(logs, interval)
     period = batch.period[rows]
-    times = (0.0 + (batch.first[rows][:, None] + span)) * period[:, None]
+    times = (batch.first[rows][:, None] + span) * period[:, None]  # k·T, k cast exactly
     classes, code, periods, ratios = class_codes(sections, ptp, model.state_names,
                                                  _units(model), period, times,
                                                  batch.graph[rows], batch.vc_hz[rows], lam, ci)
