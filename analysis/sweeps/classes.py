@@ -56,10 +56,10 @@ CHUNK = 256
 (members × K × n doubles) stay in the cache; the values are the same for any chunk."""
 
 
-GRAPH_CHUNK = 64
+GRAPH_CHUNK = 48
 """Members per pass of ``graph_ratios`` taken by component: its K × members planes stay in
-the cache (18 µs a member of K = 201 against 27 µs at ``CHUNK``); any chunk, the same
-values."""
+the cache (13–14 µs a member of K = 201 at 48, 14–15 at 64, 17–18 at 128, three runs
+each); any chunk, the same values."""
 
 
 PROBE = 8
