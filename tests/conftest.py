@@ -50,3 +50,29 @@ def pytest_runtest_makereport(item, call):
     if report.skipped and extras_required() and item.get_closest_marker("needs_extra"):
         report.outcome = "failed"
         report.longrepr = f"{REQUIRE}=1 but the test skipped: {report.longrepr}"
+
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """On xdist's workers (``-n N``), its default ``--dist load`` becomes ``loadgroup``: the
+    tests marked ``xdist_group`` (a module whose fixtures run a catalogue of commands or a
+    long study) run on one worker, so those fixtures run once, not once per worker (the
+    bad-input catalogue's commands ran twice: 4 minutes each); every other test is spread
+    one by one, as with ``load`` (an explicit ``--dist load`` too: the two look alike here;
+    any other ``--dist`` given is kept). A worker parses the command line again, so it
+    learns the mode from its ``workerinput`` (``pytest_configure_node``) and names its
+    grouped tests as ``loadgroup`` does."""
+    if getattr(config.option, "dist", "no") == "load" and not config.option.distload:
+        config.option.dist = "loadgroup"
+    if getattr(config, "workerinput", {}).get(LOADGROUP):
+        config.option.loadgroup = True
+
+
+LOADGROUP = "bearingdyn_loadgroup"
+"""The ``workerinput`` key that tells an xdist worker the controller runs ``loadgroup``."""
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node) -> None:
+    """xdist's controller, before each worker starts: pass it the distribution mode."""
+    node.workerinput[LOADGROUP] = node.config.option.dist == "loadgroup"

@@ -23,6 +23,9 @@ from analysis.cli import app
 from tests.conftest import ROOT
 from tests.extras import install_line, require
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 DOCS = ROOT / "docs"
 PAGES = sorted(DOCS.rglob("*.md"))
 MODEL_CARDS = sorted((ROOT / "generated").glob("*/MODEL.md"))

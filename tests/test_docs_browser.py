@@ -24,6 +24,9 @@ from tests.browser import require_chromium, start_chromium
 from tests.conftest import ROOT
 from tests.extras import require_all
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 MATH_PAGES = ["model.html", "physics.html", "models/vakharia2015.html"]
 TEX_MARKS = ("\\(", "\\)", "\\[", "\\]", "$$", "\\frac", "\\omega")
 

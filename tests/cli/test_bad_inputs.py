@@ -1640,11 +1640,18 @@ def run_cli_cases(root: Path, cases: list[CliCase] = CLI_CASES) -> dict[str, Out
         return {name: future.result() for name, future in futures.items()}
 
 
+ONE_WORKER = pytest.mark.xdist_group("bad-input-commands")
+"""The tests that read ``cli_outcomes`` run on one of xdist's workers (``--dist loadgroup``:
+tests/conftest.py), so the catalogue's commands run once (it was once per worker: twice the
+minutes)."""
+
+
 @pytest.fixture(scope="module")
 def cli_outcomes(tmp_path_factory) -> dict[str, Outcome]:
     return run_cli_cases(tmp_path_factory.mktemp("cli"))
 
 
+@ONE_WORKER
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=c.marks) for c in CLI_CASES])
 def test_bad_command(case: CliCase, cli_outcomes):
     out = cli_outcomes[case.id]
@@ -1658,6 +1665,7 @@ def test_bad_command(case: CliCase, cli_outcomes):
     assert out.after == out.before, "a refused command writes, removes and changes nothing"
 
 
+@ONE_WORKER
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.id) for c in CLI_CASES if c.fixed])
 def test_the_corrected_command_then_runs(case: CliCase, cli_outcomes):
     """Nothing a refusal leaves (a store folder, a temporary) blocks the corrected command,
@@ -1668,6 +1676,7 @@ def test_the_corrected_command_then_runs(case: CliCase, cli_outcomes):
     assert res.returncode == 0, res.stderr
 
 
+@ONE_WORKER
 def test_spec_errors_through_the_command_are_one_line(cli_outcomes):
     """The spec cases above load in-process; these two show the command's side: exit 2."""
     for name in ("spec-unknown-term", "spec-hostile-expression"):
@@ -1877,6 +1886,7 @@ def spec_messages(root: Path) -> dict[str, str]:
     return messages
 
 
+@ONE_WORKER
 def test_docs_table_is_current(cli_outcomes, tmp_path):
     assert DOCS.read_text() == render_docs(spec_messages(tmp_path), cli_outcomes), (
         "docs/bad-inputs.md is stale: run `python -m tests.cli.test_bad_inputs`")

@@ -34,6 +34,9 @@ from analysis.integrate.simulate import simulate
 from analysis.model import System
 from analysis.signal.poincare import poincare_section
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 N_TEST = 65
 STATES = ("x", "y", "vx", "vy")
 AGREEMENT = 1.2e-3

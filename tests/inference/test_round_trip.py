@@ -25,6 +25,9 @@ from analysis.signal.poincare import poincare_section
 from analysis.signal.spectrum import find_peaks
 from analysis.stability.classify import classify_section
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 TRUTH = {"rotor_mass": 1.0, "damping": 300.0}
 N_BALLS = (6, 7, 8, 9, 10)
 SETTINGS = RunSettings(transient_revolutions=30, revolutions=40)

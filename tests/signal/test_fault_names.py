@@ -27,6 +27,9 @@ from analysis.signal.spectrum import (
     run_defects,
 )
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 FS = 5000.0 / 60.0  # the 6205 specs' shaft frequency, Hz
 D_B, D_M, N_B = 4.762e-3, 23.5e-3, 9
 SEEDS = range(5)

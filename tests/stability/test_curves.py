@@ -28,6 +28,9 @@ from analysis.sweeps.chart import stability_chart
 from analysis.sweeps.grid import Axis, Setting
 from tests.conftest import run_cli
 
+pytestmark = pytest.mark.xdist_group(__name__)
+"""This module's tests on one xdist worker (``--dist loadgroup``: tests/conftest.py), so its
+module fixtures run once, not once per worker."""
 RPM = 30 / math.pi
 """rad/s -> rpm."""
 
