@@ -69,7 +69,9 @@ def test_the_probe_separates_a_blocks_start_from_its_states(monkeypatch):
     kernel = (blocks * 30 + 1000 * 10) * 0.001  # member-periods at the wide price
     host = (blocks * 0.3 + 1000 * 0.01) / 2  # the walk, over the workers
     assert seconds == pytest.approx(kernel + host)
-    probed = (0.3 + 2 * 0.01) + (0.3 + 8 * 0.01) + 256 * PROBE_WIDE_PERIODS * 0.001
+    walks = (0.3 + 2 * 0.01) + (0.3 + 8 * 0.01)
+    narrow = (30 + 2 * 10 + 30 + 8 * 10) * 0.004  # the probe blocks' own kernel time
+    probed = walks + narrow + 256 * PROBE_WIDE_PERIODS * 0.001
     assert note == (f"a probe mapped {sum(PROBE_BLOCKS)} states and ran 256 for "
                     f"{PROBE_WIDE_PERIODS} periods in {probed:.2g} s")
 
