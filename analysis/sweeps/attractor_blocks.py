@@ -38,7 +38,13 @@ import xarray as xr
 
 from analysis import errors
 from analysis.errors import InputError, check_count
-from analysis.integrate.cost import COMPILED, KERNELS, CostEstimate, estimate_cost
+from analysis.integrate.cost import (
+    COMPILED,
+    KERNELS,
+    CostEstimate,
+    estimate_cost,
+    process_seconds,
+)
 from analysis.integrate.kernels.placement import Placement
 from analysis.integrate.study import Executor, Progress
 from analysis.model import System, load_model
@@ -279,7 +285,8 @@ def cost_of(study: AttractorStudy, members: int, *, workers: int | None = None,
     if bound and sides and (1 + sum(PROBE_BLOCKS)) * per_state + wide <= PROBE_LIMIT:
         expected, note = recurrence_probe(study, Box(tuple(sides)), members, block,
                                           cost.workers)
-        cost = replace(cost, expected_seconds=expected, probe_note=note)
+        cost = replace(cost, expected_seconds=expected, probe_note=note,
+                       spent=process_seconds() if cost.spent else 0.0)  # the probe's too
     return cost
 
 

@@ -90,12 +90,14 @@ def test_an_expectation_below_the_bound_is_said_beside_it():
                                    "the steps too: the steps' bound does not cap it")
 
 
-def test_a_basin_study_probes_its_own_grid():
+def test_a_basin_study_probes_its_own_grid(monkeypatch):
     system = System.make("duffing", linear_stiffness=1.0, cubic_stiffness=0.5, damping=0.1,
                          forcing_amplitude=0.3, speed_rpm=1.4 * 60 / (2 * 3.141592653589793))
     sides = (Range("x", -2.0, 2.0, 30), Range("vx", -2.0, 2.0, 30))
+    monkeypatch.setattr(attractor_blocks, "process_seconds", lambda: 42.0)
     est = study_cost(system, 900, workers=1, sides=sides)
     assert est.bound and est.expected_seconds is not None
+    assert est.spent == 42.0, "the probe's seconds are in the 'so far' of the whole command"
     assert 0 < est.seconds < est.bound_seconds
     assert "a probe mapped 10 states and ran" in est.lines()[0]
     without = study_cost(system, 900, workers=1)
