@@ -115,14 +115,12 @@ def map_block_task(task: tuple) -> tuple[str, dict]:
 class StoredRunner:
     """A ``study.Runner`` that maps the pending blocks on ``executor`` and stores each in
     ``store``; stored blocks of the same states are read back instead (one that cannot be
-    read is reported to ``on_damaged`` and mapped again). Its n-th call (a continuation's
-    n-th value) keys its blocks ``n-BLOCK``. One pending block, or a serial executor: the
-    blocks are mapped in this process (no worker to start)."""
+    read is reported to the store's ``on_damaged`` and mapped again). Its n-th call (a
+    continuation's n-th value) keys its blocks ``n-BLOCK``. One pending block, or a serial
+    executor: the blocks are mapped in this process (no worker to start)."""
 
-    def __init__(self, store: PointStore, executor: Executor | None = None,
-                 on_damaged: Callable[[str], None] | None = None):
+    def __init__(self, store: PointStore, executor: Executor | None = None):
         self.store, self.executor = store, executor or SerialExecutor()
-        self.on_damaged = on_damaged
         self.calls = 0
 
     def stored(self, key: str, states: np.ndarray, done: set[str]) -> Block | None:
@@ -136,8 +134,8 @@ class StoredRunner:
             same = np.array_equal(data["states"], states)
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
             (self.store.folder / f"{key}.npz").unlink(missing_ok=True)
-            if self.on_damaged:
-                self.on_damaged(key)
+            if self.store.on_damaged:
+                self.store.on_damaged(key)
             return None
         return block if same else None
 
@@ -426,7 +424,7 @@ class AttractorPlan:
     def run(self, store: PointStore, executor: Executor, progress: Progress | None,
             say: Callable[[str], None] | None) -> xr.Dataset:
         """The study's blocks on ``executor``, each stored as it finishes."""
-        return self.work(runner=StoredRunner(store, executor, store.on_damaged),
+        return self.work(runner=StoredRunner(store, executor),
                          progress=say if self.lines else progress)
 
     def stopped(self, store: PointStore, exc: BaseException) -> None:

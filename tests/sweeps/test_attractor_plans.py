@@ -48,7 +48,7 @@ def counted(monkeypatch) -> Counter:
     count_calls(monkeypatch, counts, "scale", study.AttractorStudy.settled_scale,
                 study.AttractorStudy)
     count_calls(monkeypatch, counts, "threshold", continuation.check_threshold,
-                attractor_blocks, continuation, studies)
+                attractor_blocks, continuation)
     return counts
 
 
@@ -94,6 +94,16 @@ def test_the_api_checks_each_thing_once_and_plans_are_study_plans(counted, syste
         assert plan.output.exists() and not plan.output.with_name(
             plan.output.name + ".parts").exists()
     assert counted["study"] == 4 and counted["judge"] == 3 and counted["threshold"] == 1
+
+
+def test_the_api_without_a_plan_checks_the_threshold_once(counted, system):
+    """``studies.global_continuation`` called directly (no plan, no store) checks the
+    matching threshold once, where the values are continued, and makes the study once."""
+    from analysis.stability.attractors.studies import global_continuation
+
+    ds = global_continuation(system, "forcing_amplitude", [0.3, 0.32], BOX, 6)
+    assert ds.sizes["value"] == 2
+    assert counted["threshold"] == 1 and counted["study"] == 1
 
 
 def test_the_plan_run_equals_the_api_of_before(system, tmp_path):

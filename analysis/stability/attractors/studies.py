@@ -23,7 +23,6 @@ from analysis.integrate.flow import Period
 from analysis.model import System
 from analysis.stability.attractors.continuation import (
     MATCH_DISTANCE,
-    check_threshold,
     continue_attractors,
 )
 from analysis.stability.attractors.dataset import (
@@ -137,9 +136,8 @@ def global_continuation(system: System, parameter: str, values: Sequence[float],
     (``continuation.continue_attractors``; ``match_distance``: the matching threshold,
     orbit sizes). ``studies``: the study at each value, checked and made by a plan
     (``analysis.sweeps.attractor_blocks.plan_continuation``), used as they are."""
-    if studies is None:
+    if studies is None:  # the threshold: continue_attractors checks it, before any work
         check_count("samples", samples)
-        check_threshold(match_distance)
         box.check(system)
         study = make_study(system, samples + 16, period=period, dt=dt, options=options,
                            label_options=label_options, mapper=mapper, device=device,
